@@ -1,0 +1,94 @@
+//! Helpers for the workspace's integration tests: build and locate the binaries, drive the
+//! sensor emulator on a real pseudo-terminal.
+
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::{Mutex, OnceLock};
+
+/// Path of a workspace binary, built (once per test process) with the profile of the running
+/// test, so `cargo test` alone is enough.
+pub fn binary(name: &str) -> PathBuf {
+    static BUILT: OnceLock<Mutex<Vec<String>>> = OnceLock::new();
+    let exe = std::env::current_exe().expect("test executable path");
+    // target/<profile>/deps/<test> → target/<profile>
+    let profile_dir = exe.parent().and_then(Path::parent).expect("target/<profile>").to_path_buf();
+    let target_dir = profile_dir.parent().expect("target dir").to_path_buf();
+    let release = profile_dir.file_name().is_some_and(|n| n == "release");
+    let built = BUILT.get_or_init(|| Mutex::new(Vec::new()));
+    let mut built = built.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if !built.iter().any(|b| b == name) {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let mut cmd = Command::new(cargo);
+        cmd.args(["build", "--quiet", "--workspace", "--bin", name, "--target-dir"]).arg(&target_dir);
+        if release {
+            cmd.arg("--release");
+        }
+        cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
+        let status = cmd.status().expect("running cargo build");
+        assert!(status.success(), "cargo build --bin {name} failed");
+        built.push(name.to_string());
+    }
+    profile_dir.join(name)
+}
+
+/// A running `crackbot-sensor-emulator --pty --wait-for-start`.
+pub struct Emulator {
+    child: Child,
+    stdin: Option<ChildStdin>,
+    stdout: BufReader<std::process::ChildStdout>,
+    /// Device path of the pseudo-terminal it writes to.
+    pub pty: String,
+}
+
+impl Emulator {
+    /// Spawns the emulator with extra arguments and waits until it has printed its PTY path.
+    pub fn spawn(args: &[&str]) -> Emulator {
+        let mut child = Command::new(binary("crackbot-sensor-emulator"))
+            .args(["--pty", "--wait-for-start"])
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("spawning the emulator");
+        let stdin = child.stdin.take();
+        let mut stdout = BufReader::new(child.stdout.take().expect("stdout"));
+        let mut line = String::new();
+        stdout.read_line(&mut line).expect("reading the PTY line");
+        let pty = line.trim().strip_prefix("PTY ").unwrap_or_else(|| panic!("unexpected first line {line:?}")).to_string();
+        Emulator { child, stdin, stdout, pty }
+    }
+
+    /// Lets it start streaming.
+    pub fn start(&mut self) {
+        let mut stdin = self.stdin.take().expect("started twice");
+        stdin.write_all(b"go\n").expect("starting the emulator");
+    }
+
+    /// Waits for it to finish; returns its JSON report.
+    pub fn wait(mut self) -> serde_json::Value {
+        let mut line = String::new();
+        self.stdout.read_line(&mut line).expect("reading the report");
+        let status = self.child.wait().expect("waiting for the emulator");
+        assert!(status.success(), "emulator failed: {status}");
+        serde_json::from_str(&line).unwrap_or_else(|e| panic!("bad report {line:?}: {e}"))
+    }
+
+    /// Kills it at once (the PTY disappears).
+    pub fn kill(mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+
+    /// Process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+}
+
+/// Number of data rows (lines after the header) of a CSV file.
+pub fn csv_rows(path: &Path) -> usize {
+    let text = std::fs::read_to_string(path).expect("reading the CSV");
+    text.lines().count().saturating_sub(1)
+}

@@ -1,0 +1,318 @@
+//! Reading frames from a serial port: the reader thread, gap tracking and link statistics.
+
+use std::io::{ErrorKind, Read};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use crackbot_protocol::{Decoder, Flags, Frame, SAMPLE_PERIOD_US};
+use serde::Serialize;
+use tokio::sync::mpsc;
+
+use crate::AcquisitionError;
+
+/// One decoded sensor sample, as the host saw it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sample {
+    /// Sequence number sent by the firmware (wraps at 65 536).
+    pub seq: u16,
+    /// Device clock, µs since the first sample of this stream (unwrapped, monotonic).
+    pub device_time_us: u64,
+    /// Host clock when the bytes of this sample were read, since the stream was opened.
+    pub host_time: Duration,
+    /// Raw ADC counts of D1, D2, D3, P.
+    pub raw: [u16; 4],
+    /// Status flags (saturation per channel, overrun).
+    pub flags: Flags,
+    /// Frames missing immediately before this one (sequence jump), 0 when contiguous.
+    pub missing_before: u32,
+}
+
+/// Counters of a link: decoder counters plus what the host learns from sequence numbers.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct LinkStats {
+    /// Bytes read from the port.
+    pub bytes: u64,
+    /// Valid frames delivered.
+    pub frames: u64,
+    /// Chunks rejected for a CRC mismatch.
+    pub crc_errors: u64,
+    /// Chunks rejected as invalid COBS.
+    pub cobs_errors: u64,
+    /// Chunks shorter than a frame.
+    pub truncated: u64,
+    /// Runs longer than a frame without a delimiter.
+    pub overlong: u64,
+    /// Frames of another protocol version.
+    pub version_errors: u64,
+    /// Times the decoder dropped bytes and resynchronised (sum of the five error counters).
+    pub resyncs: u64,
+    /// Bytes discarded by the decoder.
+    pub discarded_bytes: u64,
+    /// Sequence jumps seen (each one a run of lost frames).
+    pub gaps: u64,
+    /// Frames lost in those jumps.
+    pub missing_frames: u64,
+    /// Frames that carried the firmware's overrun flag.
+    pub overrun_flags: u64,
+    /// Frames with at least one saturated channel.
+    pub saturated_frames: u64,
+}
+
+impl LinkStats {
+    /// Fraction of the frames sent (delivered + missing) that were delivered.
+    pub fn delivery_ratio(&self) -> f64 {
+        let sent = self.frames + self.missing_frames;
+        if sent == 0 {
+            1.0
+        } else {
+            self.frames as f64 / sent as f64
+        }
+    }
+}
+
+/// Turns frames into [`Sample`]s: unwraps the device clock, detects sequence gaps.
+#[derive(Debug, Clone, Default)]
+pub struct SequenceTracker {
+    last: Option<(u16, u32)>,
+    device_time_us: u64,
+}
+
+impl SequenceTracker {
+    /// A tracker that has seen nothing yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Accounts `frame` (received at `host_time`) and returns its sample.
+    ///
+    /// A gap is the number of sequence numbers skipped. Sequence numbers wrap every 65 536
+    /// frames (164 s at 400 Hz); when the device clock says more time passed than the sequence
+    /// jump explains, the clock wins, so an outage longer than a wrap is still counted right.
+    pub fn observe(&mut self, frame: &Frame, host_time: Duration) -> Sample {
+        let missing_before = match self.last {
+            None => 0,
+            Some((seq, ts)) => {
+                let dt = u64::from(frame.timestamp_us.wrapping_sub(ts));
+                self.device_time_us += dt;
+                let by_seq = u64::from(frame.seq.wrapping_sub(seq).wrapping_sub(1));
+                let by_clock = (dt + u64::from(SAMPLE_PERIOD_US) / 2) / u64::from(SAMPLE_PERIOD_US);
+                let by_clock = by_clock.saturating_sub(1);
+                // Within one wrap of the sequence number the two agree; beyond it, add wraps.
+                let wraps = by_clock.saturating_sub(by_seq) / 65_536;
+                (by_seq + wraps * 65_536).min(u64::from(u32::MAX)) as u32
+            }
+        };
+        self.last = Some((frame.seq, frame.timestamp_us));
+        Sample {
+            seq: frame.seq,
+            device_time_us: self.device_time_us,
+            host_time,
+            raw: frame.channels,
+            flags: frame.flags,
+            missing_before,
+        }
+    }
+}
+
+/// Settings of a serial sensor port.
+#[derive(Debug, Clone)]
+pub struct PortConfig {
+    /// Device path, e.g. `/dev/ttyACM0` or a pseudo-terminal `/dev/pts/3`.
+    pub path: String,
+    /// Baud rate (ignored by pseudo-terminals).
+    pub baud: u32,
+    /// How long one read waits for bytes before checking whether to stop.
+    pub poll_interval: Duration,
+}
+
+impl PortConfig {
+    /// The sensor's defaults: 115 200 baud, 50 ms poll interval.
+    pub fn new(path: impl Into<String>) -> Self {
+        PortConfig { path: path.into(), baud: 115_200, poll_interval: Duration::from_millis(50) }
+    }
+}
+
+/// A live stream of samples from a serial port, read by a background thread.
+///
+/// The thread decodes everything it reads and hands the samples over in order; when the port
+/// fails (unplugged, PTY closed) it first delivers every sample already received, then one
+/// [`AcquisitionError::Disconnected`], then the stream ends.
+#[derive(Debug)]
+pub struct SensorStream {
+    rx: mpsc::Receiver<Result<Sample, AcquisitionError>>,
+    stats: Arc<Mutex<LinkStats>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    path: String,
+}
+
+impl SensorStream {
+    /// Opens the port and starts reading.
+    pub fn open(config: &PortConfig) -> Result<Self, AcquisitionError> {
+        if config.path.is_empty() {
+            return Err(AcquisitionError::PortNotFound { path: config.path.clone() });
+        }
+        if !Path::new(&config.path).exists() {
+            return Err(AcquisitionError::PortNotFound { path: config.path.clone() });
+        }
+        if config.baud == 0 {
+            return Err(AcquisitionError::InvalidConfig(format!("baud rate 0 for {}", config.path)));
+        }
+        let port = serialport::new(&config.path, config.baud)
+            .timeout(config.poll_interval)
+            .open()
+            .map_err(|source| AcquisitionError::Open { path: config.path.clone(), source })?;
+        let (tx, rx) = mpsc::channel(8192);
+        let stats = Arc::new(Mutex::new(LinkStats::default()));
+        let stop = Arc::new(AtomicBool::new(false));
+        let reader = Reader { port, path: config.path.clone(), tx, stats: stats.clone(), stop: stop.clone() };
+        let thread = std::thread::Builder::new()
+            .name(format!("sensor-reader {}", config.path))
+            .spawn(move || reader.run())
+            .map_err(|source| AcquisitionError::Thread { source })?;
+        Ok(SensorStream { rx, stats, stop, thread: Some(thread), path: config.path.clone() })
+    }
+
+    /// The device path.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// Next sample; `None` once the stream has ended (after an error or [`Self::stop`]).
+    pub async fn next(&mut self) -> Option<Result<Sample, AcquisitionError>> {
+        self.rx.recv().await
+    }
+
+    /// Next sample, blocking the calling (non-async) thread.
+    pub fn blocking_next(&mut self) -> Option<Result<Sample, AcquisitionError>> {
+        self.rx.blocking_recv()
+    }
+
+    /// Link counters so far.
+    pub fn stats(&self) -> LinkStats {
+        *self.stats.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Asks the reader thread to stop. Samples already read stay available through
+    /// [`Self::next`] until it returns `None`.
+    pub fn stop(&self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
+}
+
+impl Drop for SensorStream {
+    fn drop(&mut self) {
+        self.stop();
+        self.rx.close();
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+struct Reader {
+    port: Box<dyn serialport::SerialPort>,
+    path: String,
+    tx: mpsc::Sender<Result<Sample, AcquisitionError>>,
+    stats: Arc<Mutex<LinkStats>>,
+    stop: Arc<AtomicBool>,
+}
+
+impl Reader {
+    fn run(mut self) {
+        let start = Instant::now();
+        let mut decoder = Decoder::new();
+        let mut tracker = SequenceTracker::new();
+        let mut buf = [0u8; 4096];
+        let mut batch = Vec::with_capacity(256);
+        let mut link = LinkStats::default();
+        while !self.stop.load(Ordering::Relaxed) {
+            let n = match self.port.read(&mut buf) {
+                Ok(0) => {
+                    let _ = self.tx.blocking_send(Err(self.disconnected("end of file".into())));
+                    return;
+                }
+                Ok(n) => n,
+                Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted) => continue,
+                Err(e) => {
+                    let _ = self.tx.blocking_send(Err(self.disconnected(e.to_string())));
+                    return;
+                }
+            };
+            let host_time = start.elapsed();
+            decoder.feed(&buf[..n], |r| match r {
+                Ok(frame) => batch.push(tracker.observe(&frame, host_time)),
+                Err(e) => tracing::debug!(port = %self.path, "dropped bytes: {e}"),
+            });
+            for s in &batch {
+                link.gaps += u64::from(s.missing_before > 0);
+                link.missing_frames += u64::from(s.missing_before);
+                link.overrun_flags += u64::from(s.flags.overrun());
+                link.saturated_frames += u64::from(s.flags.any_saturated());
+            }
+            self.publish(&mut link, decoder.stats());
+            for s in batch.drain(..) {
+                if self.tx.blocking_send(Ok(s)).is_err() {
+                    return; // the consumer is gone
+                }
+            }
+        }
+    }
+
+    fn publish(&self, link: &mut LinkStats, d: &crackbot_protocol::DecoderStats) {
+        link.bytes = d.bytes;
+        link.frames = d.frames;
+        link.crc_errors = d.crc_errors;
+        link.cobs_errors = d.cobs_errors;
+        link.truncated = d.truncated;
+        link.overlong = d.overlong;
+        link.version_errors = d.version_errors;
+        link.resyncs = d.resyncs();
+        link.discarded_bytes = d.discarded_bytes;
+        *self.stats.lock().unwrap_or_else(PoisonError::into_inner) = *link;
+    }
+
+    fn disconnected(&self, reason: String) -> AcquisitionError {
+        AcquisitionError::Disconnected { path: self.path.clone(), reason }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(seq: u16, ts: u32) -> Frame {
+        Frame { seq, timestamp_us: ts, ..Frame::default() }
+    }
+
+    #[test]
+    fn contiguous_frames_have_no_gap_and_monotonic_time() {
+        let mut t = SequenceTracker::new();
+        let s: Vec<Sample> = (0..5u16).map(|k| t.observe(&frame(k, u32::from(k) * 2500), Duration::ZERO)).collect();
+        assert!(s.iter().all(|s| s.missing_before == 0));
+        assert_eq!(s.iter().map(|s| s.device_time_us).collect::<Vec<_>>(), vec![0, 2500, 5000, 7500, 10000]);
+    }
+
+    #[test]
+    fn gaps_and_wraps_are_counted() {
+        let mut t = SequenceTracker::new();
+        t.observe(&frame(65_534, u32::MAX - 2499), Duration::ZERO);
+        // Sequence and clock both wrap; 3 frames lost.
+        let s = t.observe(&frame(3, 10_000), Duration::ZERO);
+        assert_eq!(s.missing_before, 4);
+        assert_eq!(s.device_time_us, 12_500);
+    }
+
+    #[test]
+    fn an_outage_longer_than_a_sequence_wrap_is_counted_from_the_clock() {
+        let mut t = SequenceTracker::new();
+        t.observe(&frame(10, 0), Duration::ZERO);
+        // 70 000 periods later the sequence number has wrapped once.
+        let seq = (10u32 + 70_000) as u16;
+        let s = t.observe(&frame(seq, 70_000 * 2500), Duration::ZERO);
+        assert_eq!(s.missing_before, 69_999);
+    }
+}
