@@ -19,7 +19,12 @@ fn stream() -> Vec<u8> {
             Frame {
                 seq: k16,
                 timestamp_us: (k as u32).wrapping_mul(2500),
-                channels: [650 + k16 % 40, 440 + k16 % 30, 720 - k16 % 50, 250 + k16 % 500],
+                channels: [
+                    650 + k16 % 40,
+                    440 + k16 % 30,
+                    720 - k16 % 50,
+                    250 + k16 % 500,
+                ],
                 flags: Flags::empty(),
             }
             .to_wire()
@@ -87,12 +92,23 @@ fn decode(c: &mut Criterion) {
 }
 
 fn encode(c: &mut Criterion) {
-    let frame = Frame { seq: 1234, timestamp_us: 987_654_321, channels: [660, 440, 720, 500], flags: Flags(0) };
+    let frame = Frame {
+        seq: 1234,
+        timestamp_us: 987_654_321,
+        channels: [660, 440, 720, 500],
+        flags: Flags(0),
+    };
     let mut group = c.benchmark_group("encode");
     group.throughput(Throughput::Elements(1));
-    group.bench_function("Frame::to_wire", |b| b.iter(|| black_box(black_box(&frame).to_wire())));
+    group.bench_function("Frame::to_wire", |b| {
+        b.iter(|| black_box(black_box(&frame).to_wire()))
+    });
     group.bench_function("Frame::to_payload (layout + CRC only)", |b| {
-        b.iter_batched(|| frame, |f| black_box(f.to_payload()), BatchSize::SmallInput)
+        b.iter_batched(
+            || frame,
+            |f| black_box(f.to_payload()),
+            BatchSize::SmallInput,
+        )
     });
     group.finish();
 }

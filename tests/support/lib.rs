@@ -12,15 +12,29 @@ pub fn binary(name: &str) -> PathBuf {
     static BUILT: OnceLock<Mutex<Vec<String>>> = OnceLock::new();
     let exe = std::env::current_exe().expect("test executable path");
     // target/<profile>/deps/<test> → target/<profile>
-    let profile_dir = exe.parent().and_then(Path::parent).expect("target/<profile>").to_path_buf();
+    let profile_dir = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>")
+        .to_path_buf();
     let target_dir = profile_dir.parent().expect("target dir").to_path_buf();
     let release = profile_dir.file_name().is_some_and(|n| n == "release");
     let built = BUILT.get_or_init(|| Mutex::new(Vec::new()));
-    let mut built = built.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let mut built = built
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     if !built.iter().any(|b| b == name) {
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
         let mut cmd = Command::new(cargo);
-        cmd.args(["build", "--quiet", "--workspace", "--bin", name, "--target-dir"]).arg(&target_dir);
+        cmd.args([
+            "build",
+            "--quiet",
+            "--workspace",
+            "--bin",
+            name,
+            "--target-dir",
+        ])
+        .arg(&target_dir);
         if release {
             cmd.arg("--release");
         }
@@ -56,8 +70,17 @@ impl Emulator {
         let mut stdout = BufReader::new(child.stdout.take().expect("stdout"));
         let mut line = String::new();
         stdout.read_line(&mut line).expect("reading the PTY line");
-        let pty = line.trim().strip_prefix("PTY ").unwrap_or_else(|| panic!("unexpected first line {line:?}")).to_string();
-        Emulator { child, stdin, stdout, pty }
+        let pty = line
+            .trim()
+            .strip_prefix("PTY ")
+            .unwrap_or_else(|| panic!("unexpected first line {line:?}"))
+            .to_string();
+        Emulator {
+            child,
+            stdin,
+            stdout,
+            pty,
+        }
     }
 
     /// Lets it start streaming.
@@ -69,7 +92,9 @@ impl Emulator {
     /// Waits for it to finish; returns its JSON report.
     pub fn wait(mut self) -> serde_json::Value {
         let mut line = String::new();
-        self.stdout.read_line(&mut line).expect("reading the report");
+        self.stdout
+            .read_line(&mut line)
+            .expect("reading the report");
         let status = self.child.wait().expect("waiting for the emulator");
         assert!(status.success(), "emulator failed: {status}");
         serde_json::from_str(&line).unwrap_or_else(|e| panic!("bad report {line:?}: {e}"))

@@ -25,7 +25,13 @@ pub struct RecordMeta {
 
 impl Default for RecordMeta {
     fn default() -> Self {
-        RecordMeta { label: 0.0, repetition: 1, x_mm: 0.0, direction: 1, slide: 1 }
+        RecordMeta {
+            label: 0.0,
+            repetition: 1,
+            x_mm: 0.0,
+            direction: 1,
+            slide: 1,
+        }
     }
 }
 
@@ -42,14 +48,32 @@ pub struct SampleRecorder {
 impl SampleRecorder {
     /// Creates (truncates) the CSV file at `path`.
     pub fn create(path: &Path) -> Result<Self, AcquisitionError> {
-        Ok(SampleRecorder { csv: CsvRecorder::create(path, true)?, flush_every: Duration::from_millis(100), last_flush: Instant::now() })
+        Ok(SampleRecorder {
+            csv: CsvRecorder::create(path, true)?,
+            flush_every: Duration::from_millis(100),
+            last_flush: Instant::now(),
+        })
     }
 
     /// Appends one sample.
     pub fn record(&mut self, sample: &Sample, meta: &RecordMeta) -> Result<(), AcquisitionError> {
         let [d1, d2, d3, p] = sample.raw.map(f64::from);
-        let row = Row { x_mm: meta.x_mm, d1, d2, d3, p, direction: meta.direction, slide: meta.slide, label: meta.label, repetition: meta.repetition };
-        let extra = Extra { device_time_us: sample.device_time_us, seq: sample.seq, flags: sample.flags.0 };
+        let row = Row {
+            x_mm: meta.x_mm,
+            d1,
+            d2,
+            d3,
+            p,
+            direction: meta.direction,
+            slide: meta.slide,
+            label: meta.label,
+            repetition: meta.repetition,
+        };
+        let extra = Extra {
+            device_time_us: sample.device_time_us,
+            seq: sample.seq,
+            flags: sample.flags.0,
+        };
         self.csv.append(&row, Some(&extra))?;
         if self.last_flush.elapsed() >= self.flush_every {
             self.flush()?;

@@ -32,7 +32,12 @@ impl Replay {
     /// A replay of `recording` at `speed`. Channel values are rounded to ADC counts and clamped
     /// to `0..=65535`.
     pub fn new(recording: &Recording, speed: ReplaySpeed) -> Self {
-        Replay { samples: samples_of(recording), next: 0, speed, start: None }
+        Replay {
+            samples: samples_of(recording),
+            next: 0,
+            speed,
+            start: None,
+        }
     }
 
     /// Samples left.
@@ -59,7 +64,11 @@ impl Replay {
 /// The samples of a recording, without pacing.
 pub fn samples_of(recording: &Recording) -> Vec<Sample> {
     let to_count = |v: f64| v.round().clamp(0.0, f64::from(u16::MAX)) as u16;
-    let first_time = recording.extra.as_ref().and_then(|e| e.first()).map_or(0, |e| e.device_time_us);
+    let first_time = recording
+        .extra
+        .as_ref()
+        .and_then(|e| e.first())
+        .map_or(0, |e| e.device_time_us);
     recording
         .rows
         .iter()
@@ -67,8 +76,16 @@ pub fn samples_of(recording: &Recording) -> Vec<Sample> {
         .map(|(i, row)| {
             let extra = recording.extra.as_ref().and_then(|e| e.get(i));
             let (seq, device_time_us, flags) = match extra {
-                Some(e) => (e.seq, e.device_time_us.saturating_sub(first_time), Flags(e.flags)),
-                None => (i as u16, i as u64 * u64::from(SAMPLE_PERIOD_US), Flags::empty()),
+                Some(e) => (
+                    e.seq,
+                    e.device_time_us.saturating_sub(first_time),
+                    Flags(e.flags),
+                ),
+                None => (
+                    i as u16,
+                    i as u64 * u64::from(SAMPLE_PERIOD_US),
+                    Flags::empty(),
+                ),
             };
             Sample {
                 seq,

@@ -131,7 +131,11 @@ pub struct PortConfig {
 impl PortConfig {
     /// The sensor's defaults: 115 200 baud, 50 ms poll interval.
     pub fn new(path: impl Into<String>) -> Self {
-        PortConfig { path: path.into(), baud: 115_200, poll_interval: Duration::from_millis(50) }
+        PortConfig {
+            path: path.into(),
+            baud: 115_200,
+            poll_interval: Duration::from_millis(50),
+        }
     }
 }
 
@@ -153,27 +157,49 @@ impl SensorStream {
     /// Opens the port and starts reading.
     pub fn open(config: &PortConfig) -> Result<Self, AcquisitionError> {
         if config.path.is_empty() {
-            return Err(AcquisitionError::PortNotFound { path: config.path.clone() });
+            return Err(AcquisitionError::PortNotFound {
+                path: config.path.clone(),
+            });
         }
         if !Path::new(&config.path).exists() {
-            return Err(AcquisitionError::PortNotFound { path: config.path.clone() });
+            return Err(AcquisitionError::PortNotFound {
+                path: config.path.clone(),
+            });
         }
         if config.baud == 0 {
-            return Err(AcquisitionError::InvalidConfig(format!("baud rate 0 for {}", config.path)));
+            return Err(AcquisitionError::InvalidConfig(format!(
+                "baud rate 0 for {}",
+                config.path
+            )));
         }
         let port = serialport::new(&config.path, config.baud)
             .timeout(config.poll_interval)
             .open()
-            .map_err(|source| AcquisitionError::Open { path: config.path.clone(), source })?;
+            .map_err(|source| AcquisitionError::Open {
+                path: config.path.clone(),
+                source,
+            })?;
         let (tx, rx) = mpsc::channel(8192);
         let stats = Arc::new(Mutex::new(LinkStats::default()));
         let stop = Arc::new(AtomicBool::new(false));
-        let reader = Reader { port, path: config.path.clone(), tx, stats: stats.clone(), stop: stop.clone() };
+        let reader = Reader {
+            port,
+            path: config.path.clone(),
+            tx,
+            stats: stats.clone(),
+            stop: stop.clone(),
+        };
         let thread = std::thread::Builder::new()
             .name(format!("sensor-reader {}", config.path))
             .spawn(move || reader.run())
             .map_err(|source| AcquisitionError::Thread { source })?;
-        Ok(SensorStream { rx, stats, stop, thread: Some(thread), path: config.path.clone() })
+        Ok(SensorStream {
+            rx,
+            stats,
+            stop,
+            thread: Some(thread),
+            path: config.path.clone(),
+        })
     }
 
     /// The device path.
@@ -232,11 +258,20 @@ impl Reader {
         while !self.stop.load(Ordering::Relaxed) {
             let n = match self.port.read(&mut buf) {
                 Ok(0) => {
-                    let _ = self.tx.blocking_send(Err(self.disconnected("end of file".into())));
+                    let _ = self
+                        .tx
+                        .blocking_send(Err(self.disconnected("end of file".into())));
                     return;
                 }
                 Ok(n) => n,
-                Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted) => continue,
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                    ) =>
+                {
+                    continue
+                }
                 Err(e) => {
                     let _ = self.tx.blocking_send(Err(self.disconnected(e.to_string())));
                     return;
@@ -276,7 +311,10 @@ impl Reader {
     }
 
     fn disconnected(&self, reason: String) -> AcquisitionError {
-        AcquisitionError::Disconnected { path: self.path.clone(), reason }
+        AcquisitionError::Disconnected {
+            path: self.path.clone(),
+            reason,
+        }
     }
 }
 
@@ -285,15 +323,24 @@ mod tests {
     use super::*;
 
     fn frame(seq: u16, ts: u32) -> Frame {
-        Frame { seq, timestamp_us: ts, ..Frame::default() }
+        Frame {
+            seq,
+            timestamp_us: ts,
+            ..Frame::default()
+        }
     }
 
     #[test]
     fn contiguous_frames_have_no_gap_and_monotonic_time() {
         let mut t = SequenceTracker::new();
-        let s: Vec<Sample> = (0..5u16).map(|k| t.observe(&frame(k, u32::from(k) * 2500), Duration::ZERO)).collect();
+        let s: Vec<Sample> = (0..5u16)
+            .map(|k| t.observe(&frame(k, u32::from(k) * 2500), Duration::ZERO))
+            .collect();
         assert!(s.iter().all(|s| s.missing_before == 0));
-        assert_eq!(s.iter().map(|s| s.device_time_us).collect::<Vec<_>>(), vec![0, 2500, 5000, 7500, 10000]);
+        assert_eq!(
+            s.iter().map(|s| s.device_time_us).collect::<Vec<_>>(),
+            vec![0, 2500, 5000, 7500, 10000]
+        );
     }
 
     #[test]

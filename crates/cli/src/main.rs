@@ -17,7 +17,8 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use crackbot_acquisition::calibration::Calibration;
 use crackbot_acquisition::{
-    AcquisitionError, LinkStats, PortConfig, RecordMeta, Replay, ReplaySpeed, Sample, SampleRecorder, SensorStream,
+    AcquisitionError, LinkStats, PortConfig, RecordMeta, Replay, ReplaySpeed, Sample,
+    SampleRecorder, SensorStream,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
@@ -118,10 +119,15 @@ enum CalibrationCommand {
 fn main() -> Result<()> {
     tracing_subscriber::fmt()
         .with_writer(std::io::stderr)
-        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()))
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()),
+        )
         .init();
     let cli = Cli::parse();
-    let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build()?;
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()?;
     match cli.command {
         Command::Demo(args) => runtime.block_on(demo(args)),
         Command::Record(args) => runtime.block_on(record(args)),
@@ -179,9 +185,18 @@ impl Summary {
     }
 
     fn to_json(&self, link: &LinkStats, calibration: Option<&Calibration>) -> serde_json::Value {
-        let host_span = self.last_host.saturating_sub(self.first_host.unwrap_or_default()).as_micros() as f64;
+        let host_span = self
+            .last_host
+            .saturating_sub(self.first_host.unwrap_or_default())
+            .as_micros() as f64;
         let device_span = (self.last_device - self.first_device.unwrap_or(0)) as f64;
-        let mean = self.sum.map(|s| if self.samples > 0 { s / self.samples as f64 } else { f64::NAN });
+        let mean = self.sum.map(|s| {
+            if self.samples > 0 {
+                s / self.samples as f64
+            } else {
+                f64::NAN
+            }
+        });
         let physical = calibration.map(|c| {
             let p = c.apply(mean.map(|m| m.round().clamp(0.0, 65535.0) as u16));
             json!({ "sensor": c.sensor_id, "outputs": c.outputs, "units": c.units, "mean": p })
@@ -205,26 +220,40 @@ fn print_summary(title: &str, value: &serde_json::Value, json: bool) {
         println!("{value}");
         return;
     }
-    let f = |k: &str| value[k].as_f64().map_or("-".to_string(), |v| format!("{v:.2}"));
+    let f = |k: &str| {
+        value[k]
+            .as_f64()
+            .map_or("-".to_string(), |v| format!("{v:.2}"))
+    };
     println!("{title}");
     println!("  samples            {}", value["samples"]);
-    println!("  rate (host clock)  {} Hz", f("host_rate_hz"));
-    println!("  rate (device clock){} Hz", f("device_rate_hz"));
-    println!("  device time        {}", if value["device_time_monotonic"] == true { "monotonic" } else { "NOT monotonic" });
+    println!("  rate, host clock   {} Hz", f("host_rate_hz"));
+    println!("  rate, device clock {} Hz", f("device_rate_hz"));
+    println!(
+        "  device time        {}",
+        if value["device_time_monotonic"] == true {
+            "monotonic"
+        } else {
+            "NOT monotonic"
+        }
+    );
     println!("  channel    min    max     mean");
     for (c, name) in ["D1", "D2", "D3", "P"].iter().enumerate() {
         println!(
             "  {name:<7} {:>6} {:>6} {:>8.1}",
-            value["min"][c],
-            value["max"][c],
+            value["min"][c].as_u64().unwrap_or(0),
+            value["max"][c].as_u64().unwrap_or(0),
             value["mean"][c].as_f64().unwrap_or(f64::NAN)
         );
     }
     if let Some(cal) = value["calibrated_mean"].as_object() {
-        println!("  calibrated mean ({}):", cal["sensor"].as_str().unwrap_or("?"));
+        println!(
+            "  calibrated mean ({}):",
+            cal["sensor"].as_str().unwrap_or("?")
+        );
         for i in 0..4 {
             println!(
-                "    {:<28} {:>10.4} {}",
+                "    {:<40} {:>10.4} {}",
                 cal["outputs"][i].as_str().unwrap_or("?"),
                 cal["mean"][i].as_f64().unwrap_or(f64::NAN),
                 cal["units"][i].as_str().unwrap_or("")
@@ -245,8 +274,10 @@ fn progress(total: Option<u64>) -> ProgressBar {
         None => ProgressBar::new_spinner(),
     };
     bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} samples {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} samples {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar
 }
@@ -288,7 +319,9 @@ async fn pump(
     }
     // Whatever the reader thread already received is recorded too.
     stream.stop();
-    while let Ok(Some(Ok(sample))) = tokio::time::timeout(Duration::from_millis(200), stream.next()).await {
+    while let Ok(Some(Ok(sample))) =
+        tokio::time::timeout(Duration::from_millis(200), stream.next()).await
+    {
         recorder.record(&sample, meta)?;
         summary.add(&sample);
     }
@@ -301,8 +334,16 @@ async fn record(args: RecordArgs) -> Result<()> {
     let mut stream = SensorStream::open(&config)?;
     create_parent(&args.out)?;
     let mut recorder = SampleRecorder::create(&args.out)?;
-    let meta = RecordMeta { label: args.label, repetition: args.repetition, ..RecordMeta::default() };
-    let bar = if args.json { ProgressBar::hidden() } else { progress(None) };
+    let meta = RecordMeta {
+        label: args.label,
+        repetition: args.repetition,
+        ..RecordMeta::default()
+    };
+    let bar = if args.json {
+        ProgressBar::hidden()
+    } else {
+        progress(None)
+    };
     let outcome = pump(&mut stream, &mut recorder, &meta, args.seconds, &bar).await;
     bar.finish_and_clear();
     let link = stream.stats();
@@ -313,7 +354,12 @@ async fn record(args: RecordArgs) -> Result<()> {
     eprintln!("recorded {rows} rows to {}", args.out.display());
     print_summary(&format!("recording of {}", args.port), &value, args.json);
     if let Some(e) = ended_by {
-        return Err(e).with_context(|| format!("recording stopped; {rows} rows saved to {}", args.out.display()));
+        return Err(e).with_context(|| {
+            format!(
+                "recording stopped; {rows} rows saved to {}",
+                args.out.display()
+            )
+        });
     }
     Ok(())
 }
@@ -327,11 +373,16 @@ async fn demo(args: DemoArgs) -> Result<()> {
         None => Calibration::from_toml_str(EXAMPLE_CALIBRATION, "built-in example calibration")?,
     };
     let (master, slave) = serialport::TTYPort::pair().context("creating a pseudo-terminal pair")?;
-    let path = slave.name().context("the pseudo-terminal has no device path")?;
+    let path = slave
+        .name()
+        .context("the pseudo-terminal has no device path")?;
     let mut stream = SensorStream::open(&PortConfig::new(&path))?;
     let config = crackbot_emulator::EmulatorConfig {
         ticks: Some((args.seconds * 400.0).round() as u64),
-        corruption: crackbot_emulator::Corruption { flip_rate: args.flip_rate, ..Default::default() },
+        corruption: crackbot_emulator::Corruption {
+            flip_rate: args.flip_rate,
+            ..Default::default()
+        },
         ..Default::default()
     };
     config.corruption.validate()?;
@@ -349,14 +400,30 @@ async fn demo(args: DemoArgs) -> Result<()> {
     });
     create_parent(&args.out)?;
     let mut recorder = SampleRecorder::create(&args.out)?;
-    let bar = if args.json { ProgressBar::hidden() } else { progress(Some((args.seconds * 400.0) as u64)) };
+    let bar = if args.json {
+        ProgressBar::hidden()
+    } else {
+        progress(Some((args.seconds * 400.0) as u64))
+    };
     if !args.json {
-        eprintln!("emulated sensor on {path} (400 Hz, 115200 baud) → acquisition → {}", args.out.display());
+        eprintln!(
+            "emulated sensor on {path} (400 Hz, 115200 baud) → acquisition → {}",
+            args.out.display()
+        );
     }
-    let outcome = pump(&mut stream, &mut recorder, &RecordMeta::default(), Some(args.seconds + 1.0), &bar).await;
+    let outcome = pump(
+        &mut stream,
+        &mut recorder,
+        &RecordMeta::default(),
+        Some(args.seconds + 1.0),
+        &bar,
+    )
+    .await;
     bar.finish_and_clear();
     stop.store(true, Ordering::Relaxed);
-    let report = emulator.join().map_err(|_| anyhow::anyhow!("the emulator thread panicked"))??;
+    let report = emulator
+        .join()
+        .map_err(|_| anyhow::anyhow!("the emulator thread panicked"))??;
     let link = stream.stats();
     let rows = recorder.finish()?;
     let (summary, _) = outcome?;
@@ -364,7 +431,14 @@ async fn demo(args: DemoArgs) -> Result<()> {
     value["recording"] = json!(args.out.display().to_string());
     value["rows_written"] = json!(rows);
     value["emulator"] = serde_json::to_value(&report)?;
-    print_summary(&format!("acquisition demo: {} s of emulated sensor over {path}", args.seconds), &value, args.json);
+    print_summary(
+        &format!(
+            "acquisition demo: {} s of emulated sensor over {path}",
+            args.seconds
+        ),
+        &value,
+        args.json,
+    );
     if !args.json {
         println!("  recording          {} ({rows} rows)", args.out.display());
     }
@@ -384,7 +458,11 @@ async fn replay(args: ReplayArgs) -> Result<()> {
         bail!("--speed must be a positive factor, got {}", args.speed)
     };
     let mut replay = Replay::new(&recording, speed);
-    let bar = if args.json { ProgressBar::hidden() } else { progress(Some(replay.remaining() as u64)) };
+    let bar = if args.json {
+        ProgressBar::hidden()
+    } else {
+        progress(Some(replay.remaining() as u64))
+    };
     let mut summary = Summary::default();
     while let Some(sample) = replay.next().await {
         summary.add(&sample);
@@ -392,13 +470,18 @@ async fn replay(args: ReplayArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     let value = summary.to_json(&LinkStats::default(), None);
-    print_summary(&format!("replay of {}", args.file.display()), &value, args.json);
+    print_summary(
+        &format!("replay of {}", args.file.display()),
+        &value,
+        args.json,
+    );
     Ok(())
 }
 
 fn create_parent(path: &Path) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating folder {}", dir.display()))?;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("creating folder {}", dir.display()))?;
     }
     Ok(())
 }

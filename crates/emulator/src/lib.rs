@@ -68,9 +68,15 @@ pub struct Corruption {
 impl Corruption {
     /// Checks that every rate is a probability.
     pub fn validate(&self) -> Result<(), EmulatorError> {
-        for (name, v) in [("flip rate", self.flip_rate), ("drop rate", self.drop_rate), ("garbage rate", self.garbage_rate)] {
+        for (name, v) in [
+            ("flip rate", self.flip_rate),
+            ("drop rate", self.drop_rate),
+            ("garbage rate", self.garbage_rate),
+        ] {
             if !(0.0..=1.0).contains(&v) {
-                return Err(EmulatorError::Config(format!("{name} {v} is not a probability in [0, 1]")));
+                return Err(EmulatorError::Config(format!(
+                    "{name} {v} is not a probability in [0, 1]"
+                )));
             }
         }
         Ok(())
@@ -199,7 +205,11 @@ impl LineCorruptor {
         let (lead, inner, trail) = (frame[0], &frame[1..WIRE_LEN - 1], frame[WIRE_LEN - 1]);
         self.send(lead, out, true);
         self.close_open_frame();
-        let start_ok = if self.at_start && self.separator.is_empty() { true } else { self.separator.last() == Some(&0) };
+        let start_ok = if self.at_start && self.separator.is_empty() {
+            true
+        } else {
+            self.separator.last() == Some(&0)
+        };
         self.at_start = false;
         let mut inner_ok = true;
         for &b in inner {
@@ -228,7 +238,12 @@ pub struct PacedUart {
 impl PacedUart {
     /// A UART at `baud` bits per second.
     pub fn new(baud: u32) -> Self {
-        PacedUart { baud, now_us: 0, accepted: 0, bytes: Vec::new() }
+        PacedUart {
+            baud,
+            now_us: 0,
+            accepted: 0,
+            bytes: Vec::new(),
+        }
     }
     /// Advances the UART's clock (device time since start, µs).
     pub fn set_time_us(&mut self, now_us: u64) {
@@ -276,7 +291,13 @@ impl<S: SignalSource> SampleAdc for SourceAdc<S> {
         let t = self.tick as f64 / self.rate_hz;
         self.tick += 1;
         let v = self.source.sample(t);
-        Ok(v.map(|x| if x.is_finite() { x.round().clamp(0.0, f64::from(ADC_MAX)) as u16 } else { 0 }))
+        Ok(v.map(|x| {
+            if x.is_finite() {
+                x.round().clamp(0.0, f64::from(ADC_MAX)) as u16
+            } else {
+                0
+            }
+        }))
     }
 }
 
@@ -297,7 +318,13 @@ pub struct EmulatorConfig {
 
 impl Default for EmulatorConfig {
     fn default() -> Self {
-        EmulatorConfig { rate_hz: 400.0, baud: 115_200, ticks: None, corruption: Corruption::default(), seed: 1 }
+        EmulatorConfig {
+            rate_hz: 400.0,
+            baud: 115_200,
+            ticks: None,
+            corruption: Corruption::default(),
+            seed: 1,
+        }
     }
 }
 
@@ -328,13 +355,20 @@ pub fn run<S: SignalSource, W: Write>(
 ) -> Result<EmulatorReport, EmulatorError> {
     config.corruption.validate()?;
     if !(config.rate_hz.is_finite() && config.rate_hz > 0.0 && config.rate_hz <= 100_000.0) {
-        return Err(EmulatorError::Config(format!("rate {} Hz is not in (0, 100000]", config.rate_hz)));
+        return Err(EmulatorError::Config(format!(
+            "rate {} Hz is not in (0, 100000]",
+            config.rate_hz
+        )));
     }
     if config.baud == 0 {
         return Err(EmulatorError::Config("baud rate 0".into()));
     }
     let period = Duration::from_secs_f64(1.0 / config.rate_hz);
-    let adc = SourceAdc { source, tick: 0, rate_hz: config.rate_hz };
+    let adc = SourceAdc {
+        source,
+        tick: 0,
+        rate_hz: config.rate_hz,
+    };
     let mut sampler: Sampler<_, _, TX_RING_BYTES> = Sampler::new(adc, PacedUart::new(config.baud));
     let mut corruptor = LineCorruptor::new(config.corruption, config.seed);
     let mut line = Vec::with_capacity(4 * WIRE_LEN);
@@ -377,14 +411,20 @@ pub fn run<S: SignalSource, W: Write>(
     Ok(report)
 }
 
-fn write_line<W: Write>(port: &mut W, line: &[u8], report: &mut EmulatorReport) -> Result<(), EmulatorError> {
+fn write_line<W: Write>(
+    port: &mut W,
+    line: &[u8],
+    report: &mut EmulatorReport,
+) -> Result<(), EmulatorError> {
     if line.is_empty() {
         return Ok(());
     }
-    port.write_all(line).and_then(|()| port.flush()).map_err(|source| EmulatorError::Write {
-        frames_sent: report.bytes_written / WIRE_LEN as u64,
-        source,
-    })?;
+    port.write_all(line)
+        .and_then(|()| port.flush())
+        .map_err(|source| EmulatorError::Write {
+            frames_sent: report.bytes_written / WIRE_LEN as u64,
+            source,
+        })?;
     report.bytes_written += line.len() as u64;
     Ok(())
 }
@@ -395,7 +435,15 @@ mod tests {
     use crackbot_protocol::Frame;
 
     fn frames(n: u16) -> Vec<u8> {
-        (0..n).flat_map(|seq| Frame { seq, ..Frame::default() }.to_wire()).collect()
+        (0..n)
+            .flat_map(|seq| {
+                Frame {
+                    seq,
+                    ..Frame::default()
+                }
+                .to_wire()
+            })
+            .collect()
     }
 
     #[test]
@@ -415,7 +463,11 @@ mod tests {
     #[test]
     fn corruptor_logs_exactly_the_frames_it_changed() {
         let clean = frames(200);
-        let rates = Corruption { flip_rate: 0.02, drop_rate: 0.02, garbage_rate: 0.1 };
+        let rates = Corruption {
+            flip_rate: 0.02,
+            drop_rate: 0.02,
+            garbage_rate: 0.1,
+        };
         let mut c = LineCorruptor::new(rates, 7);
         let mut out = Vec::new();
         c.process(&clean, &mut out);
@@ -447,7 +499,10 @@ mod tests {
 
     #[test]
     fn bad_rates_are_rejected() {
-        let c = Corruption { flip_rate: 1.5, ..Corruption::default() };
+        let c = Corruption {
+            flip_rate: 1.5,
+            ..Corruption::default()
+        };
         assert!(c.validate().unwrap_err().to_string().contains("flip rate"));
     }
 }

@@ -72,32 +72,51 @@ struct Args {
 }
 
 fn main() -> Result<()> {
-    tracing_subscriber::fmt().with_writer(std::io::stderr).with_env_filter(
-        tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-    ).init();
+    tracing_subscriber::fmt()
+        .with_writer(std::io::stderr)
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
+        )
+        .init();
     let args = Args::parse();
-    let corruption = Corruption { flip_rate: args.flip_rate, drop_rate: args.drop_rate, garbage_rate: args.garbage_rate };
+    let corruption = Corruption {
+        flip_rate: args.flip_rate,
+        drop_rate: args.drop_rate,
+        garbage_rate: args.garbage_rate,
+    };
     corruption.validate()?;
     if !(args.rate.is_finite() && args.rate > 0.0) {
         bail!("--rate must be a positive number of Hz, got {}", args.rate);
     }
     let ticks = match (args.duration, args.frames) {
-        (Some(d), _) if !(d.is_finite() && d >= 0.0) => bail!("--duration must be a non-negative number of seconds, got {d}"),
+        (Some(d), _) if !(d.is_finite() && d >= 0.0) => {
+            bail!("--duration must be a non-negative number of seconds, got {d}")
+        }
         (Some(d), _) => Some((d * args.rate).round() as u64),
         (None, n) => n,
     };
-    let config = EmulatorConfig { rate_hz: args.rate, baud: args.baud, ticks, corruption, seed: args.seed };
+    let config = EmulatorConfig {
+        rate_hz: args.rate,
+        baud: args.baud,
+        ticks,
+        corruption,
+        seed: args.seed,
+    };
 
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
-        ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed)).context("installing the SIGINT/SIGTERM handler")?;
+        ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
+            .context("installing the SIGINT/SIGTERM handler")?;
     }
 
     // Keep the slave side of a PTY open for the whole run so its raw settings stay in force.
     let (mut port, _slave): (Box<dyn SerialPort>, Option<Box<dyn SerialPort>>) = if args.pty {
-        let (master, slave) = serialport::TTYPort::pair().context("creating a pseudo-terminal pair")?;
-        let name = slave.name().context("the pseudo-terminal has no device path")?;
+        let (master, slave) =
+            serialport::TTYPort::pair().context("creating a pseudo-terminal pair")?;
+        let name = slave
+            .name()
+            .context("the pseudo-terminal has no device path")?;
         println!("PTY {name}");
         std::io::stdout().flush()?;
         (Box::new(master), Some(Box::new(slave)))
@@ -115,13 +134,17 @@ fn main() -> Result<()> {
 
     if args.wait_for_start {
         let mut line = String::new();
-        std::io::stdin().lock().read_line(&mut line).context("waiting for the start line on stdin")?;
+        std::io::stdin()
+            .lock()
+            .read_line(&mut line)
+            .context("waiting for the start line on stdin")?;
     }
 
     let result = match &args.replay {
         Some(path) => {
             let rec = crackbot_recording::read_csv(path)?;
-            let source = RecordingSource::new(rec).with_context(|| format!("recording {} has no rows", path.display()))?;
+            let source = RecordingSource::new(rec)
+                .with_context(|| format!("recording {} has no rows", path.display()))?;
             run(&config, source, &mut port, &stop)
         }
         None => {

@@ -1,9 +1,9 @@
 //! Analog front-end stand-ins: what the ADC of the emulated board reads.
 
 use crackbot_recording::{Recording, Row};
+use rand::Rng;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand::Rng;
 use rand_distr::StandardNormal;
 
 /// Something that gives the four channel voltages, in ADC counts (D1, D2, D3, P), at time `t`
@@ -35,7 +35,13 @@ pub struct SyntheticSlide {
 impl SyntheticSlide {
     /// The authors' setup over a 5 mm crack, with 1.5 counts of noise.
     pub fn new(seed: u64) -> Self {
-        SyntheticSlide { crack_width_mm: 5.0, stroke_mm: 16.0, speed_mm_s: 3.89, noise_counts: 1.5, rng: ChaCha8Rng::seed_from_u64(seed) }
+        SyntheticSlide {
+            crack_width_mm: 5.0,
+            stroke_mm: 16.0,
+            speed_mm_s: 3.89,
+            noise_counts: 1.5,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+        }
     }
 
     /// Tip position along the stroke at `t`, mm from the stroke start (triangle wave).
@@ -52,9 +58,17 @@ impl SignalSource for SyntheticSlide {
         let half = self.crack_width_mm / 2.0;
         // Smooth indicator of "tip over the crack" with 0.4 mm rounded edges.
         let edge = |d: f64| 1.0 / (1.0 + (-d / 0.2).exp());
-        let inside = if half > 0.0 { edge(x + half) * edge(half - x) } else { 0.0 };
+        let inside = if half > 0.0 {
+            edge(x + half) * edge(half - x)
+        } else {
+            0.0
+        };
         // Edge slopes drive the lateral channels in opposite directions.
-        let slope = if half > 0.0 { edge(x + half) * (1.0 - edge(x + half)) - edge(half - x) * (1.0 - edge(half - x)) } else { 0.0 };
+        let slope = if half > 0.0 {
+            edge(x + half) * (1.0 - edge(x + half)) - edge(half - x) * (1.0 - edge(half - x))
+        } else {
+            0.0
+        };
         let depth = inside * (self.crack_width_mm / 10.0).min(1.0);
         let sigma = self.noise_counts.max(0.0);
         let mut n = || sigma * self.rng.sample::<f64, _>(StandardNormal);
@@ -77,7 +91,10 @@ pub struct RecordingSource {
 impl RecordingSource {
     /// A source over `recording`; `None` if it has no rows.
     pub fn new(recording: Recording) -> Option<Self> {
-        (!recording.rows.is_empty()).then_some(RecordingSource { rows: recording.rows, next: 0 })
+        (!recording.rows.is_empty()).then_some(RecordingSource {
+            rows: recording.rows,
+            next: 0,
+        })
     }
 }
 
@@ -110,8 +127,21 @@ mod tests {
 
     #[test]
     fn recording_source_loops() {
-        let row = |p| Row { x_mm: 0.0, d1: 1.0, d2: 2.0, d3: 3.0, p, direction: 1, slide: 1, label: 0.0, repetition: 1 };
-        let rec = Recording { rows: vec![row(10.0), row(20.0)], extra: None };
+        let row = |p| Row {
+            x_mm: 0.0,
+            d1: 1.0,
+            d2: 2.0,
+            d3: 3.0,
+            p,
+            direction: 1,
+            slide: 1,
+            label: 0.0,
+            repetition: 1,
+        };
+        let rec = Recording {
+            rows: vec![row(10.0), row(20.0)],
+            extra: None,
+        };
         let mut s = RecordingSource::new(rec).expect("rows");
         let ps: Vec<f64> = (0..5).map(|k| s.sample(k as f64)[3]).collect();
         assert_eq!(ps, vec![10.0, 20.0, 10.0, 20.0, 10.0]);

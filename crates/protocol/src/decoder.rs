@@ -43,11 +43,17 @@ impl fmt::Display for DecodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             DecodeError::Crc { expected, actual } => {
-                write!(f, "CRC mismatch: frame says {expected:#010x}, bytes give {actual:#010x}")
+                write!(
+                    f,
+                    "CRC mismatch: frame says {expected:#010x}, bytes give {actual:#010x}"
+                )
             }
             DecodeError::Cobs => write!(f, "invalid COBS encoding"),
             DecodeError::Truncated { len } => {
-                write!(f, "truncated frame: {len} bytes between delimiters, expected {COBS_LEN}")
+                write!(
+                    f,
+                    "truncated frame: {len} bytes between delimiters, expected {COBS_LEN}"
+                )
             }
             DecodeError::Overlong { len } => {
                 write!(f, "{len} bytes without a delimiter (longer than a {COBS_LEN}-byte frame), discarded")
@@ -57,7 +63,9 @@ impl fmt::Display for DecodeError {
                 "unsupported protocol version {version} (this host speaks version {})",
                 crate::PROTOCOL_VERSION
             ),
-            DecodeError::ReservedFlags { flags } => write!(f, "reserved flag bits set: {flags:#04x}"),
+            DecodeError::ReservedFlags { flags } => {
+                write!(f, "reserved flag bits set: {flags:#04x}")
+            }
         }
     }
 }
@@ -119,16 +127,21 @@ impl Default for Decoder {
 impl Decoder {
     /// A decoder waiting for the first delimiter-bounded chunk.
     pub const fn new() -> Self {
-        Decoder { buf: [0; COBS_LEN], len: 0, overlong: 0, stats: DecoderStats {
-            bytes: 0,
-            frames: 0,
-            crc_errors: 0,
-            cobs_errors: 0,
-            truncated: 0,
+        Decoder {
+            buf: [0; COBS_LEN],
+            len: 0,
             overlong: 0,
-            version_errors: 0,
-            discarded_bytes: 0,
-        } }
+            stats: DecoderStats {
+                bytes: 0,
+                frames: 0,
+                crc_errors: 0,
+                cobs_errors: 0,
+                truncated: 0,
+                overlong: 0,
+                version_errors: 0,
+                discarded_bytes: 0,
+            },
+        }
     }
 
     /// Counters so far.
@@ -197,7 +210,10 @@ impl Decoder {
 
     fn finish_chunk(&mut self) -> Option<Result<Frame, DecodeError>> {
         let (result, len) = if self.overlong > 0 {
-            (Err(DecodeError::Overlong { len: self.overlong }), self.overlong)
+            (
+                Err(DecodeError::Overlong { len: self.overlong }),
+                self.overlong,
+            )
         } else if self.len == 0 {
             return None;
         } else {
@@ -218,7 +234,8 @@ impl Decoder {
         }
         let mut payload = [0u8; PAYLOAD_LEN];
         match cobs::decode(chunk, &mut payload) {
-            Ok(report) if report.frame_size() == PAYLOAD_LEN && report.parsed_size() == COBS_LEN => {}
+            Ok(report)
+                if report.frame_size() == PAYLOAD_LEN && report.parsed_size() == COBS_LEN => {}
             _ => return Err(DecodeError::Cobs),
         }
         Frame::from_payload(&payload)

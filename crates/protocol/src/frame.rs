@@ -1,6 +1,9 @@
 //! The sensor frame and its encoding.
 
-use crate::{crc32c, DecodeError, COBS_LEN, CRC_COVERED_LEN, DELIMITER, PAYLOAD_LEN, PROTOCOL_VERSION, WIRE_LEN};
+use crate::{
+    crc32c, DecodeError, COBS_LEN, CRC_COVERED_LEN, DELIMITER, PAYLOAD_LEN, PROTOCOL_VERSION,
+    WIRE_LEN,
+};
 
 /// Number of ADC channels in a frame.
 pub const CHANNELS: usize = 4;
@@ -155,7 +158,12 @@ mod tests {
 
     #[test]
     fn wire_has_no_inner_zero_and_fixed_length() {
-        let frame = Frame { seq: 0, timestamp_us: 0, channels: [0; 4], flags: Flags(0) };
+        let frame = Frame {
+            seq: 0,
+            timestamp_us: 0,
+            channels: [0; 4],
+            flags: Flags(0),
+        };
         let wire = frame.to_wire();
         assert_eq!(wire[0], 0);
         assert_eq!(wire[WIRE_LEN - 1], 0);

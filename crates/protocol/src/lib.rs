@@ -58,7 +58,8 @@ pub const SAMPLE_RATE_HZ: u32 = 400;
 pub const SAMPLE_PERIOD_US: u32 = 1_000_000 / SAMPLE_RATE_HZ;
 
 /// CRC-32C (iSCSI / Castagnoli), slice-by-16 tables.
-const CRC32C: crc::Crc<u32, crc::Table<16>> = crc::Crc::<u32, crc::Table<16>>::new(&crc::CRC_32_ISCSI);
+const CRC32C: crc::Crc<u32, crc::Table<16>> =
+    crc::Crc::<u32, crc::Table<16>>::new(&crc::CRC_32_ISCSI);
 
 /// CRC-32C of `bytes` (check value of `b"123456789"` is `0xE306_9283`).
 pub fn crc32c(bytes: &[u8]) -> u32 {
@@ -70,6 +71,11 @@ pub fn crc32c(bytes: &[u8]) -> u32 {
 pub const fn min_baud_for_rate(rate_hz: u32) -> u32 {
     rate_hz * WIRE_LEN as u32 * 10
 }
+
+/// The checked-in golden vectors (`golden/frames.json`, written by `golden/generate.py`, an
+/// independent Python implementation of this format). Read by the tests of this crate, of the
+/// firmware and of the host, so the two sides of the link can never drift apart.
+pub const GOLDEN_VECTORS_JSON: &str = include_str!("../golden/frames.json");
 
 #[cfg(test)]
 mod tests {
@@ -87,8 +93,3 @@ mod tests {
         assert!(min_baud_for_rate(400) > 57_600);
     }
 }
-
-/// The checked-in golden vectors (`golden/frames.json`, written by `golden/generate.py`, an
-/// independent Python implementation of this format). Read by the tests of this crate, of the
-/// firmware and of the host, so the two sides of the link can never drift apart.
-pub const GOLDEN_VECTORS_JSON: &str = include_str!("../golden/frames.json");

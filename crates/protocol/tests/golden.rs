@@ -48,7 +48,12 @@ fn hex(s: &str) -> Vec<u8> {
 }
 
 fn frame(g: &GoldenFrame) -> Frame {
-    Frame { seq: g.seq, timestamp_us: g.timestamp_us, channels: g.channels, flags: Flags(g.flags) }
+    Frame {
+        seq: g.seq,
+        timestamp_us: g.timestamp_us,
+        channels: g.channels,
+        flags: Flags(g.flags),
+    }
 }
 
 fn golden() -> Golden {
@@ -72,7 +77,10 @@ fn constants_match_the_golden_file() {
 fn encoder_produces_the_golden_bytes() {
     let g = golden();
     let all = g.valid.iter().map(|v| (&v.name, &v.frame, &v.wire));
-    let fw = g.firmware_sequence.iter().map(|v| (&v.wire, &v.frame, &v.wire));
+    let fw = g
+        .firmware_sequence
+        .iter()
+        .map(|v| (&v.wire, &v.frame, &v.wire));
     for (name, f, wire) in all.chain(fw) {
         assert_eq!(frame(f).to_wire().to_vec(), hex(wire), "vector {name}");
     }

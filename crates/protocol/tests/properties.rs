@@ -4,11 +4,20 @@ use crackbot_protocol::{crc32c, Decoder, Flags, Frame, CRC_COVERED_LEN, PAYLOAD_
 use proptest::prelude::*;
 
 fn arb_frame() -> impl Strategy<Value = Frame> {
-    (any::<u16>(), any::<u32>(), any::<[u16; 4]>(), 0u8..=0x1F)
-        .prop_map(|(seq, timestamp_us, channels, flags)| Frame { seq, timestamp_us, channels, flags: Flags(flags) })
+    (any::<u16>(), any::<u32>(), any::<[u16; 4]>(), 0u8..=0x1F).prop_map(
+        |(seq, timestamp_us, channels, flags)| Frame {
+            seq,
+            timestamp_us,
+            channels,
+            flags: Flags(flags),
+        },
+    )
 }
 
-fn decode_chunks(bytes: &[u8], chunk_ends: &[usize]) -> Vec<Result<Frame, crackbot_protocol::DecodeError>> {
+fn decode_chunks(
+    bytes: &[u8],
+    chunk_ends: &[usize],
+) -> Vec<Result<Frame, crackbot_protocol::DecodeError>> {
     let mut decoder = Decoder::new();
     let mut out = Vec::new();
     let mut start = 0;
