@@ -5,12 +5,15 @@ An independent implementation of the format in crates/protocol (COBS, CRC-32C, l
 Python with no dependencies, so that the Rust encoder, the Rust decoder and the firmware are all
 checked against something they did not produce. Run from anywhere:
 
-    python3 crates/protocol/golden/generate.py
+    python3 crates/protocol/golden/generate.py          # (re)write frames.json
+    python3 crates/protocol/golden/generate.py --check  # fail if frames.json differs
 
-The output is checked in; tests in crates/protocol and firmware/ read it.
+The output is checked in; tests in crates/protocol and firmware/ read it, and the test script
+runs --check so the file can never drift from this reference implementation.
 """
 import json
 import os
+import sys
 import random
 import struct
 
@@ -142,9 +145,16 @@ def main():
         "invalid": invalid,
     }
     out = os.path.join(os.path.dirname(os.path.abspath(__file__)), "frames.json")
+    text = json.dumps(doc, indent=1) + "\n"
+    if "--check" in sys.argv[1:]:
+        with open(out) as fh:
+            if fh.read() != text:
+                sys.exit(f"{out} differs from what generate.py produces: regenerate it and review the diff")
+        print(f"{out}: matches the Python reference ({len(valid)} valid, {len(firmware)} firmware, "
+              f"{len(invalid)} invalid vectors)")
+        return
     with open(out, "w") as fh:
-        json.dump(doc, fh, indent=1)
-        fh.write("\n")
+        fh.write(text)
     print(f"wrote {out}: {len(valid)} valid, {len(firmware)} firmware, {len(invalid)} invalid")
 
 

@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Runs every test of the workspace: unit, property, golden-vector, firmware (mock HAL) and the
+# end-to-end tests over real pseudo-terminals.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
+python3 crates/protocol/golden/generate.py --check
+cargo test --workspace --locked "$@"
