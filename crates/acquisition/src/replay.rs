@@ -98,3 +98,84 @@ pub fn samples_of(recording: &Recording) -> Vec<Sample> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crackbot_recording::{Extra, Row};
+
+    fn recording(n: usize, with_extra: bool) -> Recording {
+        let row = |i: usize| Row {
+            x_mm: 0.0,
+            d1: 660.4,
+            d2: 440.6,
+            d3: 720.0,
+            p: i as f64,
+            direction: 1,
+            slide: 1,
+            label: 1.0,
+            repetition: 1,
+        };
+        Recording {
+            rows: (0..n).map(row).collect(),
+            // A recording that started at device time 1 s, one frame lost at index 5.
+            extra: with_extra.then(|| {
+                (0..n)
+                    .map(|i| {
+                        let k = if i >= 5 { i + 1 } else { i } as u64;
+                        Extra {
+                            device_time_us: 1_000_000 + k * 2500,
+                            seq: k as u16,
+                            flags: 0,
+                        }
+                    })
+                    .collect()
+            }),
+        }
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn original_rate_takes_the_recorded_time() {
+        let rec = recording(401, false);
+        let mut replay = Replay::new(&rec, ReplaySpeed::Original);
+        let start = tokio::time::Instant::now();
+        let mut n = 0;
+        while let Some(s) = replay.next().await {
+            assert_eq!(s.raw[3], n as u16);
+            n += 1;
+        }
+        assert_eq!(n, 401);
+        assert_eq!(start.elapsed(), Duration::from_secs(1));
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn accelerated_rate_is_faster_by_the_factor_and_keeps_the_device_clock() {
+        let rec = recording(401, true);
+        let mut replay = Replay::new(&rec, ReplaySpeed::Factor(4.0));
+        let start = tokio::time::Instant::now();
+        let mut last = None;
+        while let Some(s) = replay.next().await {
+            last = Some(s);
+        }
+        let last = last.expect("samples");
+        // 402 periods of device time (one frame missing), replayed 4x faster.
+        assert_eq!(last.device_time_us, 401 * 2500);
+        // tokio's timer has millisecond resolution.
+        let expected = Duration::from_micros(401 * 2500 / 4);
+        let elapsed = start.elapsed();
+        assert!(elapsed >= expected && elapsed <= expected + Duration::from_millis(1), "{elapsed:?}");
+        assert_eq!(last.raw, [660, 441, 720, 400]);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn unpaced_does_not_wait() {
+        let rec = recording(1000, false);
+        let mut replay = Replay::new(&rec, ReplaySpeed::Unpaced);
+        let start = tokio::time::Instant::now();
+        let mut n = 0;
+        while replay.next().await.is_some() {
+            n += 1;
+        }
+        assert_eq!((n, start.elapsed()), (1000, Duration::ZERO));
+    }
+}
