@@ -163,7 +163,10 @@ mod tests {
         // tokio's timer has millisecond resolution.
         let expected = Duration::from_micros(401 * 2500 / 4);
         let elapsed = start.elapsed();
-        assert!(elapsed >= expected && elapsed <= expected + Duration::from_millis(1), "{elapsed:?}");
+        assert!(
+            elapsed >= expected && elapsed <= expected + Duration::from_millis(1),
+            "{elapsed:?}"
+        );
         assert_eq!(last.raw, [660, 441, 720, 400]);
     }
 
