@@ -80,13 +80,13 @@ fn clean_link_delivers_every_frame_at_400_hz_for_5_s() {
         "{error:?}"
     );
     assert_eq!(samples.len() as u64, frames, "zero lost frames");
-    assert_eq!(stats.frames, frames);
+    assert_eq!(stats.decoder.frames, frames);
     assert_eq!(
         (
             stats.gaps,
             stats.missing_frames,
             stats.resyncs,
-            stats.crc_errors
+            stats.decoder.crc_errors
         ),
         (0, 0, 0, 0)
     );
@@ -137,7 +137,7 @@ fn assert_exact_delivery(samples: &[Sample], stats: &LinkStats, touched: &[u16],
         }
     }
     assert!(stats.resyncs > 0);
-    assert_eq!(stats.frames as usize, samples.len());
+    assert_eq!(stats.decoder.frames as usize, samples.len());
     // Each run of rejected frames shows up as a sequence gap of the right size.
     let lost_between: u64 = samples.iter().map(|s| u64::from(s.missing_before)).sum();
     let leading = u64::from(samples[0].seq);
@@ -158,7 +158,7 @@ fn one_percent_byte_corruption() {
         run_link(frames, &["--flip-rate", "0.01", "--seed", "11"]);
     assert_eq!(report["frames_dropped"], 0);
     assert_exact_delivery(&samples, &stats, &touched, frames);
-    assert!(stats.crc_errors + stats.truncated + stats.overlong > 0);
+    assert!(stats.decoder.crc_errors + stats.decoder.truncated + stats.decoder.overlong > 0);
     // 23 bytes per frame: about 1 − 0.99^23 ≈ 21% of the frames are hit.
     let hit = touched.len() as f64 / frames as f64;
     assert!((0.15..0.28).contains(&hit), "{hit}");
@@ -249,7 +249,7 @@ fn a_port_that_vanishes_mid_stream_ends_the_stream_with_an_error_after_every_sam
         "{error}"
     );
     assert_eq!(
-        stats.frames as usize,
+        stats.decoder.frames as usize,
         samples.len(),
         "every decoded frame was handed over"
     );
@@ -270,12 +270,16 @@ fn a_too_slow_uart_drops_frames_and_the_host_sees_the_gaps_and_overrun_flags() {
     let dropped = report["frames_dropped"].as_u64().expect("dropped");
     assert!(dropped > 200, "57600 baud carries ~63% of 400 Hz: {report}");
     assert_eq!(
-        stats.frames,
+        stats.decoder.frames,
         report["frames_queued"].as_u64().expect("queued"),
         "every queued frame arrives"
     );
     let last = u64::from(samples[samples.len() - 1].seq);
-    assert_eq!(stats.missing_frames + stats.frames, last + 1, "{stats:?}");
+    assert_eq!(
+        stats.missing_frames + stats.decoder.frames,
+        last + 1,
+        "{stats:?}"
+    );
     assert!(stats.gaps > 0 && stats.overrun_flags > 0);
     for s in &samples {
         assert_eq!(

@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use crackbot_protocol::{Decoder, Flags, Frame, SAMPLE_PERIOD_US};
+use crackbot_protocol::{Decoder, DecoderStats, Flags, Frame, SAMPLE_PERIOD_US};
 use serde::Serialize;
 use tokio::sync::mpsc;
 
@@ -30,27 +30,15 @@ pub struct Sample {
     pub missing_before: u32,
 }
 
-/// Counters of a link: decoder counters plus what the host learns from sequence numbers.
+/// Counters of a link: the decoder's counters plus what the host learns from sequence numbers.
+/// Serialised flat (`{"bytes": …, "frames": …, "crc_errors": …, "resyncs": …, "gaps": …}`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct LinkStats {
-    /// Bytes read from the port.
-    pub bytes: u64,
-    /// Valid frames delivered.
-    pub frames: u64,
-    /// Chunks rejected for a CRC mismatch.
-    pub crc_errors: u64,
-    /// Chunks rejected as invalid COBS.
-    pub cobs_errors: u64,
-    /// Chunks shorter than a frame.
-    pub truncated: u64,
-    /// Runs longer than a frame without a delimiter.
-    pub overlong: u64,
-    /// Frames of another protocol version.
-    pub version_errors: u64,
-    /// Times the decoder dropped bytes and resynchronised (sum of the five error counters).
+    /// Bytes, valid frames and the rejected chunks by cause.
+    #[serde(flatten)]
+    pub decoder: DecoderStats,
+    /// Times the decoder dropped bytes and resynchronised ([`DecoderStats::resyncs`]).
     pub resyncs: u64,
-    /// Bytes discarded by the decoder.
-    pub discarded_bytes: u64,
     /// Sequence jumps seen (each one a run of lost frames).
     pub gaps: u64,
     /// Frames lost in those jumps.
@@ -64,11 +52,11 @@ pub struct LinkStats {
 impl LinkStats {
     /// Fraction of the frames sent (delivered + missing) that were delivered.
     pub fn delivery_ratio(&self) -> f64 {
-        let sent = self.frames + self.missing_frames;
+        let sent = self.decoder.frames + self.missing_frames;
         if sent == 0 {
             1.0
         } else {
-            self.frames as f64 / sent as f64
+            self.decoder.frames as f64 / sent as f64
         }
     }
 }
@@ -297,16 +285,9 @@ impl Reader {
         }
     }
 
-    fn publish(&self, link: &mut LinkStats, d: &crackbot_protocol::DecoderStats) {
-        link.bytes = d.bytes;
-        link.frames = d.frames;
-        link.crc_errors = d.crc_errors;
-        link.cobs_errors = d.cobs_errors;
-        link.truncated = d.truncated;
-        link.overlong = d.overlong;
-        link.version_errors = d.version_errors;
+    fn publish(&self, link: &mut LinkStats, d: &DecoderStats) {
+        link.decoder = *d;
         link.resyncs = d.resyncs();
-        link.discarded_bytes = d.discarded_bytes;
         *self.stats.lock().unwrap_or_else(PoisonError::into_inner) = *link;
     }
 

@@ -74,6 +74,7 @@ impl core::error::Error for DecodeError {}
 
 /// Counters kept by a [`Decoder`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct DecoderStats {
     /// Bytes fed, delimiters included.
     pub bytes: u64,
