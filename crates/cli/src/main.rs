@@ -7,6 +7,8 @@
 //!   a time limit, or the port going away; nothing received is lost on any of these.
 //! * `crackbot replay FILE` — plays a recording back at its original or an accelerated rate.
 //! * `crackbot calibration check FILE` — validates a calibration file.
+//! * `crackbot tactile convert INPUT... --out DIR|FILE` — converts tactile recordings between the
+//!   authors' `.mat` files and `.csv`.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -23,6 +25,8 @@ use crackbot_acquisition::{
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use serialport::SerialPort as _;
+
+mod tactile;
 
 /// crackbot: find surface cracks with a camera and a fibre-optic tactile finger.
 #[derive(Debug, Parser)]
@@ -43,6 +47,9 @@ enum Command {
     /// Calibration files.
     #[command(subcommand)]
     Calibration(CalibrationCommand),
+    /// Tactile recordings: convert the authors' .mat files and .csv recordings.
+    #[command(subcommand)]
+    Tactile(tactile::TactileCommand),
 }
 
 #[derive(Debug, Args)]
@@ -132,6 +139,7 @@ fn main() -> Result<()> {
         Command::Demo(args) => runtime.block_on(demo(args)),
         Command::Record(args) => runtime.block_on(record(args)),
         Command::Replay(args) => runtime.block_on(replay(args)),
+        Command::Tactile(cmd) => tactile::run(cmd),
         Command::Calibration(CalibrationCommand::Check { file }) => {
             let cal = Calibration::load(&file)?;
             println!(

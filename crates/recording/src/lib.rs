@@ -6,12 +6,19 @@
 //! or crack width in mm) and the repetition number. crackbot's own recorder may add three more columns
 //! ([`EXTRA_COLUMNS`]: the device timestamp, the frame sequence number and the status flags).
 //!
-//! This crate holds the one in-memory type for such a recording, [`Recording`], and its CSV form:
+//! This crate holds the one in-memory type for such a recording, [`Recording`], its CSV form and the authors' own
+//! MAT-file form:
 //!
 //! * [`read_csv`] / [`read_csv_from`] read a CSV file (header line + one row per line), with errors that name the
 //!   file, the line and the column of the problem;
 //! * [`write_csv`] writes a whole recording;
-//! * [`CsvRecorder`] writes one row at a time, for the live recorder.
+//! * [`CsvRecorder`] writes one row at a time, for the live recorder;
+//! * [`read_mat`] / [`read_mat_from`] read the authors' MAT-files (level 5, compressed or not; the variable
+//!   `synchronized_data`), [`write_mat`] writes one;
+//! * [`read_recording`] / [`write_recording`] pick the form by the file's extension (`.csv` or `.mat`), and
+//!   [`collect_recordings`] loads every recording named by a list of files and folders.
+//!
+//! [`Recording::slides`], [`Recording::label`] and [`Recording::repetition`] give a recording's structure.
 //!
 //! # CSV format
 //!
@@ -23,7 +30,12 @@
 
 use std::fs::File;
 use std::io::{BufWriter, Read, Write};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
+
+mod mat;
+
+pub use mat::{read_mat, read_mat_from, write_mat, MAT_VARIABLE, MAX_INFLATED};
 
 /// The nine columns of a recording, in file order.
 pub const COLUMNS: [&str; 9] = [
@@ -146,6 +158,144 @@ impl Recording {
         }
         Ok(())
     }
+
+    /// The slides of the recording: maximal runs of consecutive rows with the same [`Row::slide`] number, as row
+    /// index ranges, in order. Every row is in exactly one range.
+    ///
+    /// In the authors' files a slide is one stroke there and back (direction 0, then 1), about 2,800 samples;
+    /// each file holds slides 1 to 12, and some (14 of the 30 files of repetitions 1–3) end with one trailing
+    /// sample labelled slide 13, which is kept here as its own one-row range (callers that want whole slides only
+    /// can drop short ranges). A slide number that comes back later starts a new range.
+    pub fn slides(&self) -> Vec<Range<usize>> {
+        let mut out = Vec::new();
+        let mut start = 0;
+        for i in 1..=self.rows.len() {
+            let boundary = match (self.rows.get(i - 1), self.rows.get(i)) {
+                (Some(a), Some(b)) => a.slide != b.slide,
+                _ => true,
+            };
+            if boundary {
+                out.push(start..i);
+                start = i;
+            }
+        }
+        out
+    }
+
+    /// The label ([`Row::label`]) when every row has the same one; `None` when it varies or there are no rows.
+    pub fn label(&self) -> Option<f64> {
+        let first = self.rows.first()?.label;
+        self.rows
+            .iter()
+            .all(|r| r.label.to_bits() == first.to_bits())
+            .then_some(first)
+    }
+
+    /// The repetition number ([`Row::repetition`]) when every row has the same one; `None` when it varies or there
+    /// are no rows.
+    pub fn repetition(&self) -> Option<u32> {
+        let first = self.rows.first()?.repetition;
+        self.rows
+            .iter()
+            .all(|r| r.repetition == first)
+            .then_some(first)
+    }
+}
+
+/// The file forms of a recording, chosen by extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// `.csv`: see the [crate documentation](crate).
+    Csv,
+    /// `.mat`: a MAT-file, level 5 (see [`read_mat`]).
+    Mat,
+}
+
+impl Format {
+    /// The form of `path` by its extension (`.csv` or `.mat`, any case);
+    /// [`RecordingError::UnsupportedExtension`] otherwise.
+    pub fn of_path(path: &Path) -> Result<Format, RecordingError> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("csv") => Ok(Format::Csv),
+            Some("mat") => Ok(Format::Mat),
+            _ => Err(RecordingError::UnsupportedExtension {
+                path: path.to_path_buf(),
+            }),
+        }
+    }
+
+    /// The extension of the form, without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Format::Csv => "csv",
+            Format::Mat => "mat",
+        }
+    }
+}
+
+/// Reads a recording, as CSV ([`read_csv`]) or as a MAT-file ([`read_mat`]) by the file's extension (`.csv` or
+/// `.mat`, any case). Any other extension is refused with [`RecordingError::UnsupportedExtension`].
+pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
+    match Format::of_path(path)? {
+        Format::Csv => read_csv(path),
+        Format::Mat => read_mat(path),
+    }
+}
+
+/// Writes a recording, as CSV ([`write_csv`]) or as a MAT-file ([`write_mat`]) by the file's extension (`.csv` or
+/// `.mat`, any case). Any other extension is refused with [`RecordingError::UnsupportedExtension`] before the file
+/// is touched.
+pub fn write_recording(path: &Path, rec: &Recording) -> Result<(), RecordingError> {
+    match Format::of_path(path)? {
+        Format::Csv => write_csv(path, rec),
+        Format::Mat => write_mat(path, rec),
+    }
+}
+
+/// Loads every recording named by `paths`, in order: each path is a recording file (read with
+/// [`read_recording`], so `.csv` or `.mat`) or a folder, of which every `.csv`/`.mat` file directly inside
+/// (not in sub-folders; any case of the extension) is read, sorted by file name; other files are ignored.
+///
+/// Errors: [`RecordingError::NotFound`] for a path that does not exist, [`RecordingError::NoRecordings`] for a
+/// folder without any recording, and the first error reading a file (which names it).
+pub fn collect_recordings(paths: &[PathBuf]) -> Result<Vec<(PathBuf, Recording)>, RecordingError> {
+    let mut out = Vec::new();
+    for path in paths {
+        let io = |source: std::io::Error| {
+            if source.kind() == std::io::ErrorKind::NotFound {
+                RecordingError::NotFound { path: path.clone() }
+            } else {
+                RecordingError::Io {
+                    path: path.clone(),
+                    source,
+                }
+            }
+        };
+        let meta = std::fs::metadata(path).map_err(io)?;
+        if !meta.is_dir() {
+            out.push((path.clone(), read_recording(path)?));
+            continue;
+        }
+        let mut files = Vec::new();
+        for entry in std::fs::read_dir(path).map_err(io)? {
+            let file = entry.map_err(io)?.path();
+            if Format::of_path(&file).is_ok() && file.is_file() {
+                files.push(file);
+            }
+        }
+        if files.is_empty() {
+            return Err(RecordingError::NoRecordings { path: path.clone() });
+        }
+        files.sort_by(|a, b| a.file_name().cmp(&b.file_name()));
+        for file in files {
+            let rec = read_recording(&file)?;
+            out.push((file, rec));
+        }
+    }
+    Ok(out)
 }
 
 /// Everything that can go wrong reading, writing or checking a recording.
@@ -295,6 +445,126 @@ pub enum RecordingError {
         path: PathBuf,
         /// What is wrong with the data.
         source: Box<RecordingError>,
+    },
+    /// The file does not start like a MAT-file (level 5): no `MATLAB` header text, a bad endian indicator or an
+    /// unknown version.
+    #[error("{}: not a MAT-file: {reason}", path.display())]
+    NotMat {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with its header.
+        reason: String,
+    },
+    /// The file is a MAT-file version 7.3, an HDF5 file, which is not supported.
+    #[error(
+        "{}: MAT-file version 7.3 (HDF5) is not supported: save it as version 7 or older \
+         (MATLAB `save(file, '-v7')`, or `scipy.io.savemat`)",
+        path.display()
+    )]
+    MatV73 {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The MAT-file ends too early: a data element runs past the end of the file, or a zlib stream ends before
+    /// its end.
+    #[error("{}: truncated MAT-file: {what}", path.display())]
+    MatTruncated {
+        /// The file.
+        path: PathBuf,
+        /// Which element, and how much is missing.
+        what: String,
+    },
+    /// The MAT-file is malformed: corrupt zlib data, or elements inconsistent with the format.
+    #[error("{}: corrupt MAT-file: {what}", path.display())]
+    MatCorrupt {
+        /// The file.
+        path: PathBuf,
+        /// Where, and what is wrong.
+        what: String,
+    },
+    /// The MAT-file does not hold the variable wanted.
+    #[error(
+        "{}: no variable `{name}` in the MAT-file; variables found: {}",
+        path.display(),
+        if found.is_empty() { "none".to_string() } else { found.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ") }
+    )]
+    MatMissingVariable {
+        /// The file.
+        path: PathBuf,
+        /// The variable wanted.
+        name: &'static str,
+        /// The names of the variables in the file, in file order.
+        found: Vec<String>,
+    },
+    /// The variable is not a 2-D matrix with one column per recording column.
+    #[error(
+        "{}: variable `{name}` has shape {}, expected N×9 (2-D, one column per recording column)",
+        path.display(),
+        dims.iter().map(i64::to_string).collect::<Vec<_>>().join("×")
+    )]
+    MatShape {
+        /// The file.
+        path: PathBuf,
+        /// The variable.
+        name: &'static str,
+        /// Its dimensions.
+        dims: Vec<i64>,
+    },
+    /// The variable is not a real double (or single) matrix.
+    #[error("{}: variable `{name}` is of class {class}, expected a real double (or single) matrix", path.display())]
+    MatClass {
+        /// The file.
+        path: PathBuf,
+        /// The variable.
+        name: &'static str,
+        /// Its class, e.g. `char`, `int16`, `complex double`.
+        class: String,
+    },
+    /// A value of the variable is invalid for its column.
+    #[error("{}: variable `{name}`, row {row}, column {column} (`{column_name}`): {reason}", path.display())]
+    MatValue {
+        /// The file.
+        path: PathBuf,
+        /// The variable.
+        name: &'static str,
+        /// 1-based row (as in MATLAB).
+        row: usize,
+        /// 1-based column (as in MATLAB).
+        column: usize,
+        /// The column's name in [`COLUMNS`].
+        column_name: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A recording cannot be written as a MAT-file.
+    #[error("{}: cannot write the recording as a MAT-file: {reason}", path.display())]
+    MatUnsupported {
+        /// The file that would have been written.
+        path: PathBuf,
+        /// Why.
+        reason: String,
+    },
+    /// The file's extension is neither `.csv` nor `.mat`.
+    #[error(
+        "{}: unsupported extension {}: expected .csv or .mat",
+        path.display(),
+        path.extension().map_or_else(|| "(none)".to_string(), |e| format!("`.{}`", e.to_string_lossy()))
+    )]
+    UnsupportedExtension {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A path given to [`collect_recordings`] does not exist.
+    #[error("{}: no such file or folder", path.display())]
+    NotFound {
+        /// The path.
+        path: PathBuf,
+    },
+    /// A folder given to [`collect_recordings`] holds no `.csv` or `.mat` file.
+    #[error("{}: the folder holds no recording (.csv or .mat file)", path.display())]
+    NoRecordings {
+        /// The folder.
+        path: PathBuf,
     },
 }
 
