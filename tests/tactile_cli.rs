@@ -186,3 +186,102 @@ fn bad_inputs_are_named_errors_not_panics() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+fn tactile_data(experiment: &str, repetition: u32) -> Vec<String> {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/tactile");
+    let mut files: Vec<String> = std::fs::read_dir(format!("{dir}/{experiment}"))
+        .expect("the authors' recordings beside the clone")
+        .map(|e| e.expect("dir entry").path().display().to_string())
+        .filter(|p| p.ends_with(&format!("_{repetition}.mat")))
+        .collect();
+    files.sort();
+    files
+}
+
+fn eval_json(train: &[String], test: &[String], extra: &[&str]) -> serde_json::Value {
+    let mut args: Vec<&str> = vec!["tactile", "eval", "--json", "--trees", "30", "--train"];
+    args.extend(train.iter().map(String::as_str));
+    args.push("--test");
+    args.extend(test.iter().map(String::as_str));
+    args.extend_from_slice(extra);
+    let out = std::process::Command::new(crackbot_tests::binary("crackbot"))
+        .args(&args)
+        .output()
+        .expect("running crackbot");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+#[test]
+fn eval_recognition_trained_on_one_repetition_tested_on_another() {
+    let train = tactile_data("type", 1);
+    let test = tactile_data("type", 2);
+    assert_eq!((train.len(), test.len()), (4, 4));
+    let r = eval_json(&train, &test, &[]);
+    assert_eq!(r["experiment"], "recognition");
+    let window = r["window_accuracy"].as_f64().expect("window_accuracy");
+    let slide = r["slide_accuracy"].as_f64().expect("slide_accuracy");
+    // Intersession, MAV D1D2+P, 30 trees: ~84% of windows and every slide right (measured);
+    // the bounds leave room for seed noise but fail on a broken pipeline (chance is 25%).
+    assert!(window > 0.75, "window accuracy {window}");
+    assert!(slide >= 0.9, "slide accuracy {slide}");
+    assert_eq!(r["test_slides"], 48);
+    assert!(r["width_mae_mm"].is_null());
+    let confusion = r["window_confusion"].as_array().expect("confusion");
+    let total: u64 = confusion
+        .iter()
+        .flat_map(|row| row.as_array().expect("row").iter())
+        .map(|v| v.as_u64().expect("count"))
+        .sum();
+    assert_eq!(total, r["test_windows"].as_u64().expect("test_windows"));
+}
+
+#[test]
+fn eval_width_reports_regression_error() {
+    let train = tactile_data("width", 1);
+    let test = tactile_data("width", 3);
+    let r = eval_json(&train, &test, &["--classifier", "qda"]);
+    assert_eq!(r["experiment"], "width");
+    assert_eq!(r["classifier"], "QDA");
+    let mae = r["width_mae_mm"].as_f64().expect("width_mae_mm");
+    let slide_mae = r["slide_width_mae_mm"]
+        .as_f64()
+        .expect("slide_width_mae_mm");
+    // Predicting the mean width (4.33 mm) would give an MAE of ~3.4 mm.
+    assert!(
+        mae < 3.0 && slide_mae < 2.5,
+        "MAE {mae} mm per window, {slide_mae} mm per slide"
+    );
+    assert!(r["window_accuracy"].as_f64().expect("acc") > 1.0 / 6.0);
+}
+
+#[test]
+fn eval_rejects_mixed_experiments_and_missing_paths() {
+    let mut train = tactile_data("type", 1);
+    train.extend(tactile_data("width", 1));
+    let out = std::process::Command::new(crackbot_tests::binary("crackbot"))
+        .args(["tactile", "eval", "--train"])
+        .args(&train)
+        .args(["--test", "/nonexistent/recordings"])
+        .output()
+        .expect("running crackbot");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("/nonexistent/recordings"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let test = tactile_data("width", 2);
+    let out = std::process::Command::new(crackbot_tests::binary("crackbot"))
+        .args(["tactile", "eval", "--train"])
+        .args(&train)
+        .arg("--test")
+        .args(&test)
+        .output()
+        .expect("running crackbot");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("neither"), "{err}");
+}

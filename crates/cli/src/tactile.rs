@@ -2,6 +2,9 @@
 //!
 //! * `crackbot tactile convert INPUT... --out DIR|FILE` — converts recordings between `.mat` and `.csv`
 //!   (`.csv` → `.csv` normalises the file). Inputs are files or folders (every `.mat`/`.csv` directly inside).
+//! * `crackbot tactile eval --train PATH... --test PATH...` — trains on some recordings and tests on others:
+//!   window-level and slide-level accuracy, precision, recall, confusion matrix, and for crack widths the
+//!   regression error in mm.
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -19,6 +22,124 @@ pub enum TactileCommand {
     /// With one input recording and `--out` ending in .csv or .mat, writes that file; otherwise `--out` is a
     /// folder (created if needed) and each input becomes `<stem>.<format>` there.
     Convert(ConvertArgs),
+    /// Train on some recordings, test on others: window- and slide-level metrics (and width MAE).
+    ///
+    /// The experiment (surface recognition or crack width) is recognised from the labels.
+    Eval(EvalArgs),
+    /// Reproduce the paper's tables with its intersession protocol: every feature × channel set ×
+    /// classifier, trained on one repetition and tested on each other one. Writes Markdown and JSON.
+    Paper(PaperArgs),
+}
+
+/// Arguments of `crackbot tactile paper`.
+#[derive(Debug, Args)]
+pub struct PaperArgs {
+    /// Folders (or files) of recordings, one experiment per folder, e.g. ../shared/data/tactile/type.
+    #[arg(required = true)]
+    data: Vec<PathBuf>,
+    /// Output folder for paper-tables.md and paper-tables.json.
+    #[arg(long, default_value = "out/tactile-paper")]
+    out: PathBuf,
+    /// Classifiers to run.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [ClassifierArg::Rf, ClassifierArg::Knn, ClassifierArg::Qda])]
+    classifiers: Vec<ClassifierArg>,
+    /// Trees of the random forest.
+    #[arg(long, default_value_t = 100)]
+    trees: usize,
+    /// Slide segmentation before windowing.
+    #[arg(long, value_enum, default_value_t = SegmentationArg::Paper)]
+    segmentation: SegmentationArg,
+    /// Seed of the forests.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+/// Arguments of `crackbot tactile eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// Training recordings (.mat or .csv files, or folders of them).
+    #[arg(long, required = true, num_args = 1..)]
+    train: Vec<PathBuf>,
+    /// Test recordings (.mat or .csv files, or folders of them).
+    #[arg(long, required = true, num_args = 1..)]
+    test: Vec<PathBuf>,
+    /// Windowed feature.
+    #[arg(long, value_enum, default_value_t = FeatureArg::Mav)]
+    feature: FeatureArg,
+    /// Channel set.
+    #[arg(long, value_enum, default_value_t = SetArg::D1d2p)]
+    set: SetArg,
+    /// Classifier.
+    #[arg(long, value_enum, default_value_t = ClassifierArg::Rf)]
+    classifier: ClassifierArg,
+    /// Trees of the random forests (classifier and width regressor).
+    #[arg(long, default_value_t = 100)]
+    trees: usize,
+    /// Slide segmentation before windowing.
+    #[arg(long, value_enum, default_value_t = SegmentationArg::Paper)]
+    segmentation: SegmentationArg,
+    /// Per-recording offset correction.
+    #[arg(long, value_enum, default_value_t = NormaliseArg::None)]
+    normalise: NormaliseArg,
+    /// Experiment, when the labels fit both (only 0, 1, 2).
+    #[arg(long, value_enum)]
+    experiment: Option<ExperimentArg>,
+    /// Seed of the forests.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Print one JSON object (window_accuracy, slide_accuracy, width_mae_mm, …).
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum FeatureArg {
+    Raw,
+    Mav,
+    Rms,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SetArg {
+    /// Proximity only.
+    P,
+    /// D1, D2, D3.
+    D1d2d3,
+    /// D1, D2, D3 and P.
+    D1d2d3p,
+    /// D1, D2 and P.
+    D1d2p,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+enum ClassifierArg {
+    Rf,
+    Knn,
+    Qda,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SegmentationArg {
+    /// Whole slides.
+    None,
+    /// The paper's eq. 2 (faithful reading).
+    Paper,
+    /// crackbot's robust segmentation.
+    Robust,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum NormaliseArg {
+    /// Raw ADC counts.
+    None,
+    /// Subtract each channel's median over the recording.
+    Median,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ExperimentArg {
+    Recognition,
+    Width,
 }
 
 /// Arguments of `crackbot tactile convert`.
@@ -57,6 +178,8 @@ impl From<OutFormat> for Format {
 pub fn run(cmd: TactileCommand) -> Result<()> {
     match cmd {
         TactileCommand::Convert(args) => convert(args),
+        TactileCommand::Eval(args) => eval(args),
+        TactileCommand::Paper(args) => paper(args),
     }
 }
 
@@ -149,5 +272,268 @@ fn create_parent(path: &Path) -> Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("creating folder {}", dir.display()))?;
     }
+    Ok(())
+}
+
+fn eval(args: EvalArgs) -> Result<()> {
+    use crackbot_dsp::{
+        Feature, FeatureSet, FeatureSpec, PaperSegmentation, RobustSegmentation,
+        SegmentationMethod, WindowConfig,
+    };
+    use crackbot_tactile::dataset::{
+        build_windows, detect_experiment, Experiment, Normalisation, PipelineConfig, Segmentation,
+    };
+    use crackbot_tactile::eval::{
+        test_classifier, train_classifier, width_regression, ClassifierKind,
+    };
+
+    if args.trees == 0 {
+        bail!("--trees must be at least 1");
+    }
+    let train = collect_recordings(&args.train)?;
+    let test = collect_recordings(&args.test)?;
+    let experiment = match args.experiment {
+        Some(ExperimentArg::Recognition) => Experiment::Recognition,
+        Some(ExperimentArg::Width) => Experiment::Width,
+        None => {
+            let all: Vec<(PathBuf, Recording)> = train.iter().chain(&test).cloned().collect();
+            detect_experiment(&all)?
+        }
+    };
+    let feature = match args.feature {
+        FeatureArg::Raw => Feature::Raw,
+        FeatureArg::Mav => Feature::Mav,
+        FeatureArg::Rms => Feature::Rms,
+    };
+    let set = match args.set {
+        SetArg::P => FeatureSet::P,
+        SetArg::D1d2d3 => FeatureSet::D1D2D3,
+        SetArg::D1d2d3p => FeatureSet::D1D2D3P,
+        SetArg::D1d2p => FeatureSet::D1D2P,
+    };
+    let config = PipelineConfig {
+        segmentation: match args.segmentation {
+            SegmentationArg::None => Segmentation::None,
+            SegmentationArg::Paper => {
+                Segmentation::Method(SegmentationMethod::Paper(PaperSegmentation::default()))
+            }
+            SegmentationArg::Robust => {
+                Segmentation::Method(SegmentationMethod::Robust(RobustSegmentation::default()))
+            }
+        },
+        window: WindowConfig::default(),
+        spec: FeatureSpec::new(feature, set),
+        normalisation: match args.normalise {
+            NormaliseArg::None => Normalisation::None,
+            NormaliseArg::Median => Normalisation::RecordingMedian,
+        },
+        min_slide_len: 100,
+    };
+    let train_set = build_windows(&train, experiment, &config)?;
+    let test_set = build_windows(&test, experiment, &config)?;
+    let kind = match args.classifier {
+        ClassifierArg::Rf => ClassifierKind::Forest {
+            n_trees: args.trees,
+        },
+        ClassifierArg::Knn => ClassifierKind::Knn,
+        ClassifierArg::Qda => ClassifierKind::Qda,
+    };
+    let quiet = args.json;
+    let started = std::time::Instant::now();
+    let model = train_classifier(&train_set, kind, args.seed, quiet)?;
+    let train_seconds = started.elapsed().as_secs_f64();
+    let outcome = test_classifier(model.as_ref(), &test_set)?;
+    let width = match experiment {
+        Experiment::Width => Some(width_regression(
+            &train_set, &test_set, args.trees, args.seed, quiet,
+        )?),
+        Experiment::Recognition => None,
+    };
+    let w = &outcome.windows;
+    let s = &outcome.slides;
+    let summary = serde_json::json!({
+        "experiment": experiment.name(),
+        "classes": experiment.class_names(),
+        "classifier": kind.name(),
+        "feature": feature.name(),
+        "set": set.name(),
+        "segmentation": config.segmentation.name(),
+        "normalisation": format!("{:?}", config.normalisation),
+        "train_recordings": train.len(),
+        "test_recordings": test.len(),
+        "train_windows": train_set.n_rows(),
+        "test_windows": test_set.n_rows(),
+        "test_slides": s.total(),
+        "train_seconds": train_seconds,
+        "window_accuracy": w.accuracy(),
+        "window_precision": w.weighted_precision(),
+        "window_recall": w.weighted_recall(),
+        "slide_accuracy": s.accuracy(),
+        "slide_precision": s.weighted_precision(),
+        "slide_recall": s.weighted_recall(),
+        "window_confusion": w.rows(),
+        "slide_confusion": s.rows(),
+        "width_mae_mm": width.as_ref().map(|x| x.window_mae_mm),
+        "slide_width_mae_mm": width.as_ref().map(|x| x.slide_mae_mm),
+    });
+    if args.json {
+        println!("{summary}");
+        return Ok(());
+    }
+    println!(
+        "{} experiment, {} on {} {}, segmentation {}: trained on {} windows of {} recordings in {:.2} s, tested on {} windows / {} slides of {} recordings",
+        experiment.name(),
+        kind.name(),
+        feature.name(),
+        set.name(),
+        config.segmentation.name(),
+        train_set.n_rows(),
+        train.len(),
+        train_seconds,
+        test_set.n_rows(),
+        s.total(),
+        test.len()
+    );
+    for (title, m) in [("windows", w), ("slides", s)] {
+        println!(
+            "\n{title}: accuracy {:.2}%, weighted precision {:.2}%, weighted recall {:.2}%",
+            100.0 * m.accuracy(),
+            100.0 * m.weighted_precision(),
+            100.0 * m.weighted_recall()
+        );
+        print_confusion(experiment.class_names(), &m.rows());
+    }
+    if let Some(x) = width {
+        println!(
+            "\nwidth regression ({} trees): MAE {:.2} mm per window, {:.2} mm per slide",
+            args.trees, x.window_mae_mm, x.slide_mae_mm
+        );
+    }
+    Ok(())
+}
+
+fn print_confusion(names: &[&str], rows: &[Vec<u64>]) {
+    const CORNER: &str = "true \\ predicted";
+    let label = names
+        .iter()
+        .map(|n| n.len())
+        .max()
+        .unwrap_or(0)
+        .max(CORNER.len());
+    let cell = names.iter().map(|n| n.len()).max().unwrap_or(0).max(7);
+    print!("  {CORNER:>label$} |");
+    for n in names {
+        print!(" {n:>cell$}");
+    }
+    println!();
+    for (name, row) in names.iter().zip(rows) {
+        print!("  {name:>label$} |");
+        for v in row {
+            print!(" {v:>cell$}");
+        }
+        println!();
+    }
+}
+
+fn segmentation_of(arg: SegmentationArg) -> crackbot_tactile::dataset::Segmentation {
+    use crackbot_dsp::{PaperSegmentation, RobustSegmentation, SegmentationMethod};
+    use crackbot_tactile::dataset::Segmentation;
+    match arg {
+        SegmentationArg::None => Segmentation::None,
+        SegmentationArg::Paper => {
+            Segmentation::Method(SegmentationMethod::Paper(PaperSegmentation::default()))
+        }
+        SegmentationArg::Robust => {
+            Segmentation::Method(SegmentationMethod::Robust(RobustSegmentation::default()))
+        }
+    }
+}
+
+fn classifier_of(arg: ClassifierArg, trees: usize) -> crackbot_tactile::eval::ClassifierKind {
+    use crackbot_tactile::eval::ClassifierKind;
+    match arg {
+        ClassifierArg::Rf => ClassifierKind::Forest { n_trees: trees },
+        ClassifierArg::Knn => ClassifierKind::Knn,
+        ClassifierArg::Qda => ClassifierKind::Qda,
+    }
+}
+
+fn paper(args: PaperArgs) -> Result<()> {
+    use crackbot_dsp::{Feature, FeatureSet, FeatureSpec, WindowConfig};
+    use crackbot_tactile::dataset::{detect_experiment, Normalisation, PipelineConfig};
+    use crackbot_tactile::paper::{by_repetition, run_grid};
+
+    if args.trees == 0 {
+        bail!("--trees must be at least 1");
+    }
+    let classifiers: Vec<_> = args
+        .classifiers
+        .iter()
+        .map(|&c| classifier_of(c, args.trees))
+        .collect();
+    let base = PipelineConfig {
+        segmentation: segmentation_of(args.segmentation),
+        window: WindowConfig::default(),
+        spec: FeatureSpec::new(Feature::Mav, FeatureSet::D1D2P),
+        normalisation: Normalisation::None,
+        min_slide_len: 100,
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let mut markdown =
+        String::from("# The paper's tables, reproduced by `crackbot tactile paper`\n\n");
+    let mut json = Vec::new();
+    for folder in &args.data {
+        let recordings = collect_recordings(std::slice::from_ref(folder))?;
+        let experiment = detect_experiment(&recordings)?;
+        let repetitions = by_repetition(recordings)?;
+        let cells = 3 * 4 * classifiers.len();
+        let bar = indicatif::ProgressBar::new(cells as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{msg} [{elapsed_precise}] {bar:30} {pos}/{len} cells",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar.set_message(experiment.name());
+        let tables = run_grid(
+            experiment,
+            &repetitions,
+            &classifiers,
+            &base,
+            args.seed,
+            |cell| {
+                bar.inc(1);
+                let line = format!(
+                    "{} {:<4} {} {:<9} accuracy {:6.2}% ± {:5.2}  slides {:6.2}%",
+                    experiment.name(),
+                    cell.classifier,
+                    cell.feature,
+                    cell.set,
+                    100.0 * cell.accuracy_mean,
+                    100.0 * cell.accuracy_std,
+                    100.0 * cell.slide_accuracy_mean
+                );
+                if bar.is_hidden() {
+                    eprintln!("{line}");
+                } else {
+                    bar.println(line);
+                }
+            },
+        )?;
+        bar.finish_and_clear();
+        markdown.push_str(&format!("Data: {}\n\n", folder.display()));
+        markdown.push_str(&tables.to_markdown());
+        markdown.push('\n');
+        json.push(tables);
+    }
+    let md_path = args.out.join("paper-tables.md");
+    let json_path = args.out.join("paper-tables.json");
+    std::fs::write(&md_path, &markdown)
+        .with_context(|| format!("writing {}", md_path.display()))?;
+    std::fs::write(&json_path, serde_json::to_string_pretty(&json)?)
+        .with_context(|| format!("writing {}", json_path.display()))?;
+    println!("{markdown}");
+    println!("wrote {} and {}", md_path.display(), json_path.display());
     Ok(())
 }

@@ -1,0 +1,327 @@
+//! From recordings to labelled feature windows: experiment detection, per-slide segmentation,
+//! windowed features, and the bookkeeping that lets window predictions be aggregated per slide.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use crackbot_dsp::{
+    extract_segment_features, FeatureSpec, Segment, SegmentationMethod, WindowConfig,
+};
+use crackbot_recording::Recording;
+use serde::Serialize;
+
+use crate::TactileError;
+
+/// Which of the paper's two experiments a set of recordings belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Experiment {
+    /// Surface type: 0 flat (no crack), 1 crack, 2 bump, 3 wavy pattern.
+    Recognition,
+    /// Crack width: 0, 1, 2, 5, 8, 10 mm.
+    Width,
+}
+
+impl Experiment {
+    /// The label values of the experiment's classes, in class order.
+    pub fn labels(self) -> &'static [f64] {
+        match self {
+            Experiment::Recognition => &[0.0, 1.0, 2.0, 3.0],
+            Experiment::Width => &[0.0, 1.0, 2.0, 5.0, 8.0, 10.0],
+        }
+    }
+
+    /// Human names of the classes.
+    pub fn class_names(self) -> &'static [&'static str] {
+        match self {
+            Experiment::Recognition => &["no crack", "crack", "bump", "wavy"],
+            Experiment::Width => &["0 mm", "1 mm", "2 mm", "5 mm", "8 mm", "10 mm"],
+        }
+    }
+
+    /// Number of classes.
+    pub fn n_classes(self) -> usize {
+        self.labels().len()
+    }
+
+    /// Class index of a label value.
+    pub fn class_of(self, label: f64) -> Option<u32> {
+        self.labels()
+            .iter()
+            .position(|&l| l == label)
+            .map(|i| i as u32)
+    }
+
+    /// `"recognition"` or `"width"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Experiment::Recognition => "recognition",
+            Experiment::Width => "width",
+        }
+    }
+
+    /// Recognises the experiment from the labels found: widths 5, 8 or 10 mm mean the width
+    /// experiment, a wavy pattern (3) means recognition; labels that fit both (only 0, 1, 2) or
+    /// neither are an error that says so.
+    pub fn detect(labels: &[f64]) -> Result<Experiment, TactileError> {
+        let fits = |e: Experiment| labels.iter().all(|&l| e.class_of(l).is_some());
+        let has = |v: &[f64]| labels.iter().any(|l| v.contains(l));
+        match (fits(Experiment::Recognition), fits(Experiment::Width)) {
+            (true, false) => Ok(Experiment::Recognition),
+            (false, true) => Ok(Experiment::Width),
+            (true, true) if has(&[3.0]) => Ok(Experiment::Recognition),
+            (true, true) if has(&[5.0, 8.0, 10.0]) => Ok(Experiment::Width),
+            (true, true) => Err(TactileError::Invalid(format!(
+                "labels {labels:?} fit both experiments (recognition 0–3, width 0/1/2/5/8/10 mm): name it with --experiment"
+            ))),
+            (false, false) => Err(TactileError::Invalid(format!(
+                "labels {labels:?} fit neither experiment (recognition: 0 flat, 1 crack, 2 bump, 3 wavy; width: 0, 1, 2, 5, 8, 10 mm)"
+            ))),
+        }
+    }
+}
+
+/// How slides are cut before windowing.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum Segmentation {
+    /// Keep the whole slide.
+    None,
+    /// A [`SegmentationMethod`] from `crackbot-dsp` (the paper's eq. 2, or the robust one).
+    Method(SegmentationMethod),
+}
+
+impl Segmentation {
+    /// Short name for tables.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Segmentation::None => "none",
+            Segmentation::Method(m) => m.name(),
+        }
+    }
+}
+
+/// Per-recording correction of the slow offsets that the fibres' position and twist put on the
+/// signals (the paper found them to change between recordings).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Normalisation {
+    /// Raw ADC counts, as the paper.
+    None,
+    /// Subtract each channel's median over the recording (its resting level).
+    RecordingMedian,
+}
+
+/// How recordings become feature windows.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PipelineConfig {
+    /// Slide segmentation.
+    pub segmentation: Segmentation,
+    /// Window length and step (10 and 2 samples in the paper).
+    pub window: WindowConfig,
+    /// Features and channel set.
+    pub spec: FeatureSpec,
+    /// Offset correction.
+    pub normalisation: Normalisation,
+    /// Slides shorter than this many samples are skipped (the authors' files end with a one-sample
+    /// "slide 13").
+    pub min_slide_len: usize,
+}
+
+/// One sliding movement in a [`WindowSet`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SlideRef {
+    /// Index of the recording in the input list.
+    pub recording: usize,
+    /// Slide number in the recording (column 7).
+    pub slide: u32,
+    /// Class index.
+    pub class: u32,
+    /// Label value (class id or width in mm).
+    pub label: f64,
+    /// Rows of this slide's windows in the set.
+    pub windows: Range<usize>,
+}
+
+/// Labelled feature windows of a set of recordings.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WindowSet {
+    /// Experiment of the labels.
+    pub experiment: Experiment,
+    /// Row-major features, `n_rows × n_features`.
+    pub x: Vec<f32>,
+    /// Values per row.
+    pub n_features: usize,
+    /// Class index of each row.
+    pub y: Vec<u32>,
+    /// Label value of each row (class id, or crack width in mm).
+    pub label: Vec<f64>,
+    /// The slides, in order; their window ranges tile the rows.
+    pub slides: Vec<SlideRef>,
+    /// The recordings' paths, indexed by [`SlideRef::recording`].
+    pub sources: Vec<PathBuf>,
+}
+
+impl WindowSet {
+    /// Number of windows.
+    pub fn n_rows(&self) -> usize {
+        self.y.len()
+    }
+
+    /// Features of row `i`.
+    pub fn row(&self, i: usize) -> &[f32] {
+        &self.x[i * self.n_features..(i + 1) * self.n_features]
+    }
+}
+
+/// The label shared by every row of a recording, or an error naming the file.
+pub fn recording_label(path: &Path, rec: &Recording) -> Result<f64, TactileError> {
+    rec.label().ok_or_else(|| {
+        TactileError::Invalid(format!(
+            "{}: the label (column 8) is not constant over the recording",
+            path.display()
+        ))
+    })
+}
+
+/// Detects the experiment from the labels of all recordings.
+pub fn detect_experiment(recordings: &[(PathBuf, Recording)]) -> Result<Experiment, TactileError> {
+    let mut labels = Vec::new();
+    for (path, rec) in recordings {
+        let l = recording_label(path, rec)?;
+        if !labels.contains(&l) {
+            labels.push(l);
+        }
+    }
+    labels.sort_by(f64::total_cmp);
+    Experiment::detect(&labels)
+}
+
+fn channel_medians(rec: &Recording) -> [f64; 4] {
+    let mut out = [0.0; 4];
+    for (c, slot) in out.iter_mut().enumerate() {
+        let mut v: Vec<f64> = rec
+            .rows
+            .iter()
+            .map(|r| [r.d1, r.d2, r.d3, r.p][c])
+            .collect();
+        if v.is_empty() {
+            continue;
+        }
+        v.sort_by(f64::total_cmp);
+        *slot = v[v.len() / 2];
+    }
+    out
+}
+
+/// Builds the labelled windows of `recordings` under `experiment`.
+pub fn build_windows(
+    recordings: &[(PathBuf, Recording)],
+    experiment: Experiment,
+    config: &PipelineConfig,
+) -> Result<WindowSet, TactileError> {
+    let mut set = WindowSet {
+        experiment,
+        x: Vec::new(),
+        n_features: config.spec.n_features(),
+        y: Vec::new(),
+        label: Vec::new(),
+        slides: Vec::new(),
+        sources: recordings.iter().map(|(p, _)| p.clone()).collect(),
+    };
+    for (index, (path, rec)) in recordings.iter().enumerate() {
+        let label = recording_label(path, rec)?;
+        let class = experiment.class_of(label).ok_or_else(|| {
+            TactileError::Invalid(format!(
+                "{}: label {label} is not a class of the {} experiment",
+                path.display(),
+                experiment.name()
+            ))
+        })?;
+        let offset = match config.normalisation {
+            Normalisation::None => [0.0; 4],
+            Normalisation::RecordingMedian => channel_medians(rec),
+        };
+        for range in rec.slides() {
+            if range.len() < config.min_slide_len.max(1) {
+                continue;
+            }
+            let rows = &rec.rows[range.clone()];
+            let samples: Vec<[f64; 4]> = rows
+                .iter()
+                .map(|r| {
+                    [
+                        r.d1 - offset[0],
+                        r.d2 - offset[1],
+                        r.d3 - offset[2],
+                        r.p - offset[3],
+                    ]
+                })
+                .collect();
+            let segment = match &config.segmentation {
+                Segmentation::None => Segment {
+                    ranges: std::iter::once(0..samples.len()).collect(),
+                    trial_len: samples.len(),
+                },
+                Segmentation::Method(m) => {
+                    let p: Vec<f64> = rows.iter().map(|r| r.p).collect();
+                    m.segment(&p).map_err(|e| {
+                        TactileError::Invalid(format!(
+                            "{}: slide {}: segmentation failed: {e}",
+                            path.display(),
+                            rows[0].slide
+                        ))
+                    })?
+                }
+            };
+            let m = extract_segment_features(&samples, &segment, &config.spec, config.window)
+                .map_err(|e| {
+                    TactileError::Invalid(format!(
+                        "{}: slide {}: {e}",
+                        path.display(),
+                        rows[0].slide
+                    ))
+                })?;
+            let start = set.y.len();
+            let n = m.n_rows();
+            set.x.extend_from_slice(&m.data);
+            set.y.extend(std::iter::repeat_n(class, n));
+            set.label.extend(std::iter::repeat_n(label, n));
+            set.slides.push(SlideRef {
+                recording: index,
+                slide: rows[0].slide,
+                class,
+                label,
+                windows: start..start + n,
+            });
+        }
+    }
+    if set.y.is_empty() {
+        return Err(TactileError::Invalid(
+            "no feature window: every slide was too short or segmented away".into(),
+        ));
+    }
+    Ok(set)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn experiments_are_recognised_from_labels() {
+        assert_eq!(
+            Experiment::detect(&[0.0, 1.0, 2.0, 3.0]).unwrap(),
+            Experiment::Recognition
+        );
+        assert_eq!(
+            Experiment::detect(&[0.0, 1.0, 2.0, 5.0, 8.0, 10.0]).unwrap(),
+            Experiment::Width
+        );
+        assert_eq!(Experiment::detect(&[3.0]).unwrap(), Experiment::Recognition);
+        assert_eq!(Experiment::detect(&[10.0]).unwrap(), Experiment::Width);
+        let both = Experiment::detect(&[0.0, 1.0]).unwrap_err().to_string();
+        assert!(both.contains("both"), "{both}");
+        let neither = Experiment::detect(&[4.0]).unwrap_err().to_string();
+        assert!(neither.contains("neither"), "{neither}");
+        assert_eq!(Experiment::Width.class_of(5.0), Some(3));
+        assert_eq!(Experiment::Width.class_of(3.0), None);
+    }
+}
