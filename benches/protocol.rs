@@ -113,5 +113,10 @@ fn encode(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, decode, encode);
+criterion_group! {
+    name = benches;
+    // Criterion's own plots need a system font that the workspace's plotters build does not load.
+    config = Criterion::default().without_plots();
+    targets = decode, encode
+}
 criterion_main!(benches);

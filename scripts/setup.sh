@@ -8,8 +8,9 @@ crackbot_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 need_cmd() { command -v "$1" >/dev/null 2>&1; }
 
 # Debian packages the project needs at run or test time. The serial path uses pseudo-terminals from
-# the kernel and serialport without libudev, so nothing is needed yet; later capabilities add here.
-apt_packages=()
+# the kernel and serialport without libudev. The tactile plots (crates/tactile/src/plots.rs) draw
+# their text with DejaVu Sans, read at run time.
+apt_packages=(fonts-dejavu-core valgrind)
 
 missing=()
 for pkg in "${apt_packages[@]}"; do

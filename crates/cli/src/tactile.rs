@@ -5,6 +5,10 @@
 //! * `crackbot tactile eval --train PATH... --test PATH...` — trains on some recordings and tests on others:
 //!   window-level and slide-level accuracy, precision, recall, confusion matrix, and for crack widths the
 //!   regression error in mm.
+//! * `crackbot tactile paper DATA...` — the paper's intersession grid: Markdown and JSON tables, confusion-matrix
+//!   heat maps and accuracy box plots (PNG).
+//! * `crackbot tactile tradeoff --train PATH... --test PATH... --out DIR` — the random forest's accuracy against
+//!   its training time, size and single-window latency, over tree counts × depth limits (table and plot).
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -29,6 +33,50 @@ pub enum TactileCommand {
     /// Reproduce the paper's tables with its intersession protocol: every feature × channel set ×
     /// classifier, trained on one repetition and tested on each other one. Writes Markdown and JSON.
     Paper(PaperArgs),
+    /// Random forest: accuracy against size, training time and single-window latency, for tree
+    /// counts × depth limits. Writes tradeoff.md, tradeoff.json and tradeoff.png.
+    Tradeoff(TradeoffArgs),
+}
+
+/// Arguments of `crackbot tactile tradeoff`.
+#[derive(Debug, Args)]
+pub struct TradeoffArgs {
+    /// Training recordings (.mat or .csv files, or folders of them).
+    #[arg(long, required = true, num_args = 1..)]
+    train: Vec<PathBuf>,
+    /// Test recordings (.mat or .csv files, or folders of them).
+    #[arg(long, required = true, num_args = 1..)]
+    test: Vec<PathBuf>,
+    /// Output folder for tradeoff.md, tradeoff.json and tradeoff.png.
+    #[arg(long, default_value = "out/tactile-tradeoff")]
+    out: PathBuf,
+    /// Tree counts to try.
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2, 5, 10, 20, 50, 100, 200])]
+    trees: Vec<usize>,
+    /// Depth limits to try (`none`: fully grown).
+    #[arg(long, value_delimiter = ',', default_values_t = ["none".to_string(), "20".to_string(), "12".to_string(), "8".to_string()])]
+    depths: Vec<String>,
+    /// Windows per timed batch of the latency measurement.
+    #[arg(long, default_value_t = 1000)]
+    batch: usize,
+    /// Windowed feature.
+    #[arg(long, value_enum, default_value_t = FeatureArg::Mav)]
+    feature: FeatureArg,
+    /// Channel set.
+    #[arg(long, value_enum, default_value_t = SetArg::D1d2p)]
+    set: SetArg,
+    /// Slide segmentation before windowing.
+    #[arg(long, value_enum, default_value_t = SegmentationArg::Paper)]
+    segmentation: SegmentationArg,
+    /// Per-recording offset correction.
+    #[arg(long, value_enum, default_value_t = NormaliseArg::None)]
+    normalise: NormaliseArg,
+    /// Experiment, when the labels fit both (only 0, 1, 2).
+    #[arg(long, value_enum)]
+    experiment: Option<ExperimentArg>,
+    /// Seed of the forests.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 /// Arguments of `crackbot tactile paper`.
@@ -90,6 +138,50 @@ pub struct EvalArgs {
     /// Print one JSON object (window_accuracy, slide_accuracy, width_mae_mm, …).
     #[arg(long)]
     json: bool,
+    /// Window length in samples (10 = 25 ms in the paper).
+    #[arg(long, default_value_t = 10)]
+    window_len: usize,
+    /// Step between windows in samples (2 in the paper).
+    #[arg(long, default_value_t = 2)]
+    window_step: usize,
+    /// Add causal context features to each window: levels relative to the slide's own baseline,
+    /// multi-scale spans (--context-scales), the slide so far and the direction (see
+    /// crackbot_tactile::context). Never the x position.
+    #[arg(long)]
+    context: bool,
+    /// Context span lengths in samples (with --context).
+    #[arg(long, value_delimiter = ',', default_values_t = [40, 200, 800])]
+    context_scales: Vec<usize>,
+    /// Samples at each slide's start whose median is its baseline (with --context).
+    #[arg(long, default_value_t = 40)]
+    context_baseline: usize,
+    /// Leave out the slide-so-far minimum/maximum/range (with --context).
+    #[arg(long)]
+    no_prefix: bool,
+    /// Leave out the sliding direction (with --context).
+    #[arg(long)]
+    no_direction: bool,
+    /// Keep the window's own absolute features beside the context features (with --context).
+    #[arg(long)]
+    keep_window: bool,
+    /// Let the context spans reach back into the previous slides of the same recording (with
+    /// --context): the finger's memory of a continuous exploration.
+    #[arg(long)]
+    across_slides: bool,
+    /// Add shape values per span (with --context): longest run below / above half the span's
+    /// departure from the baseline, and the span's absolute minimum and maximum.
+    #[arg(long)]
+    context_shape: bool,
+    /// Random forests: candidate features per split as a fraction of all (default: sqrt for the
+    /// classifier, all for the width regressor).
+    #[arg(long)]
+    max_features: Option<f64>,
+    /// Random forests: maximum depth (default unlimited).
+    #[arg(long)]
+    max_depth: Option<usize>,
+    /// Random forests: minimum samples per leaf (default 1).
+    #[arg(long)]
+    min_samples_leaf: Option<usize>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -180,6 +272,7 @@ pub fn run(cmd: TactileCommand) -> Result<()> {
         TactileCommand::Convert(args) => convert(args),
         TactileCommand::Eval(args) => eval(args),
         TactileCommand::Paper(args) => paper(args),
+        TactileCommand::Tradeoff(args) => tradeoff(args),
     }
 }
 
@@ -280,11 +373,13 @@ fn eval(args: EvalArgs) -> Result<()> {
         Feature, FeatureSet, FeatureSpec, PaperSegmentation, RobustSegmentation,
         SegmentationMethod, WindowConfig,
     };
+    use crackbot_tactile::context::ContextConfig;
     use crackbot_tactile::dataset::{
         build_windows, detect_experiment, Experiment, Normalisation, PipelineConfig, Segmentation,
     };
     use crackbot_tactile::eval::{
-        test_classifier, train_classifier, width_regression, ClassifierKind,
+        test_classifier, train_classifier_tuned, width_regression_tuned, ClassifierKind,
+        ForestTuning,
     };
 
     if args.trees == 0 {
@@ -321,13 +416,30 @@ fn eval(args: EvalArgs) -> Result<()> {
                 Segmentation::Method(SegmentationMethod::Robust(RobustSegmentation::default()))
             }
         },
-        window: WindowConfig::default(),
+        window: WindowConfig {
+            len: args.window_len,
+            step: args.window_step,
+        },
         spec: FeatureSpec::new(feature, set),
         normalisation: match args.normalise {
             NormaliseArg::None => Normalisation::None,
             NormaliseArg::Median => Normalisation::RecordingMedian,
         },
         min_slide_len: 100,
+        context: args.context.then(|| ContextConfig {
+            scales: args.context_scales.clone(),
+            baseline_len: args.context_baseline,
+            prefix: !args.no_prefix,
+            direction: !args.no_direction,
+            keep_window: args.keep_window,
+            across_slides: args.across_slides,
+            shape: args.context_shape,
+        }),
+    };
+    let tuning = ForestTuning {
+        max_features_fraction: args.max_features,
+        max_depth: args.max_depth,
+        min_samples_leaf: args.min_samples_leaf,
     };
     let train_set = build_windows(&train, experiment, &config)?;
     let test_set = build_windows(&test, experiment, &config)?;
@@ -340,12 +452,12 @@ fn eval(args: EvalArgs) -> Result<()> {
     };
     let quiet = args.json;
     let started = std::time::Instant::now();
-    let model = train_classifier(&train_set, kind, args.seed, quiet)?;
+    let model = train_classifier_tuned(&train_set, kind, tuning, args.seed, quiet)?;
     let train_seconds = started.elapsed().as_secs_f64();
     let outcome = test_classifier(model.as_ref(), &test_set)?;
     let width = match experiment {
-        Experiment::Width => Some(width_regression(
-            &train_set, &test_set, args.trees, args.seed, quiet,
+        Experiment::Width => Some(width_regression_tuned(
+            &train_set, &test_set, args.trees, tuning, args.seed, quiet,
         )?),
         Experiment::Recognition => None,
     };
@@ -359,6 +471,10 @@ fn eval(args: EvalArgs) -> Result<()> {
         "set": set.name(),
         "segmentation": config.segmentation.name(),
         "normalisation": format!("{:?}", config.normalisation),
+        "window": config.window,
+        "context": config.context,
+        "forest_tuning": tuning,
+        "n_features": train_set.n_features,
         "train_recordings": train.len(),
         "test_recordings": test.len(),
         "train_windows": train_set.n_rows(),
@@ -477,7 +593,10 @@ fn paper(args: PaperArgs) -> Result<()> {
         spec: FeatureSpec::new(Feature::Mav, FeatureSet::D1D2P),
         normalisation: Normalisation::None,
         min_slide_len: 100,
+        context: None,
     };
+    // Fail before the long grid, not after it, when the plots cannot draw text.
+    crackbot_tactile::plots::load_font()?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let mut markdown =
@@ -525,6 +644,8 @@ fn paper(args: PaperArgs) -> Result<()> {
         markdown.push_str(&format!("Data: {}\n\n", folder.display()));
         markdown.push_str(&tables.to_markdown());
         markdown.push('\n');
+        let plots = crackbot_tactile::plots::paper_plots(&args.out, &tables)?;
+        markdown.push_str(&crackbot_tactile::plots::plots_markdown(&plots, &args.out));
         json.push(tables);
     }
     let md_path = args.out.join("paper-tables.md");
@@ -535,5 +656,138 @@ fn paper(args: PaperArgs) -> Result<()> {
         .with_context(|| format!("writing {}", json_path.display()))?;
     println!("{markdown}");
     println!("wrote {} and {}", md_path.display(), json_path.display());
+    Ok(())
+}
+
+fn feature_of(arg: FeatureArg) -> crackbot_dsp::Feature {
+    use crackbot_dsp::Feature;
+    match arg {
+        FeatureArg::Raw => Feature::Raw,
+        FeatureArg::Mav => Feature::Mav,
+        FeatureArg::Rms => Feature::Rms,
+    }
+}
+
+fn set_of(arg: SetArg) -> crackbot_dsp::FeatureSet {
+    use crackbot_dsp::FeatureSet;
+    match arg {
+        SetArg::P => FeatureSet::P,
+        SetArg::D1d2d3 => FeatureSet::D1D2D3,
+        SetArg::D1d2d3p => FeatureSet::D1D2D3P,
+        SetArg::D1d2p => FeatureSet::D1D2P,
+    }
+}
+
+fn parse_depth(s: &str) -> Result<Option<usize>> {
+    let s = s.trim();
+    if s.eq_ignore_ascii_case("none") {
+        return Ok(None);
+    }
+    match s.parse::<usize>() {
+        Ok(d) if d >= 1 => Ok(Some(d)),
+        _ => bail!("--depths: {s:?} is neither `none` nor a depth of at least 1"),
+    }
+}
+
+fn tradeoff(args: TradeoffArgs) -> Result<()> {
+    use crackbot_dsp::{FeatureSpec, WindowConfig};
+    use crackbot_tactile::dataset::{
+        build_windows, detect_experiment, Experiment, Normalisation, PipelineConfig,
+    };
+    use crackbot_tactile::tradeoff::{depth_name, run_tradeoff, TradeoffConfig};
+
+    if args.trees.is_empty() || args.trees.contains(&0) {
+        bail!("--trees: every tree count must be at least 1");
+    }
+    if args.batch == 0 {
+        bail!("--batch must be at least 1");
+    }
+    let max_depths: Vec<Option<usize>> = args
+        .depths
+        .iter()
+        .map(|d| parse_depth(d))
+        .collect::<Result<_>>()?;
+    crackbot_tactile::plots::load_font()?;
+    let train = collect_recordings(&args.train)?;
+    let test = collect_recordings(&args.test)?;
+    let experiment = match args.experiment {
+        Some(ExperimentArg::Recognition) => Experiment::Recognition,
+        Some(ExperimentArg::Width) => Experiment::Width,
+        None => {
+            let all: Vec<(PathBuf, Recording)> = train.iter().chain(&test).cloned().collect();
+            detect_experiment(&all)?
+        }
+    };
+    let (feature, set) = (feature_of(args.feature), set_of(args.set));
+    let config = PipelineConfig {
+        segmentation: segmentation_of(args.segmentation),
+        window: WindowConfig::default(),
+        spec: FeatureSpec::new(feature, set),
+        normalisation: match args.normalise {
+            NormaliseArg::None => Normalisation::None,
+            NormaliseArg::Median => Normalisation::RecordingMedian,
+        },
+        min_slide_len: 100,
+        context: None,
+    };
+    let train_set = build_windows(&train, experiment, &config)?;
+    let test_set = build_windows(&test, experiment, &config)?;
+    let grid = TradeoffConfig {
+        n_trees: args.trees.clone(),
+        max_depths,
+        seed: args.seed,
+        latency_batch: args.batch,
+    };
+    let result = run_tradeoff(&train_set, &test_set, &grid, |r| {
+        eprintln!(
+            "max depth {:>4}, {:>3} trees: {:>8} nodes, trained in {:7.3} s, {:8.2} µs/window, window accuracy {:6.2}%, slides {:6.2}%",
+            depth_name(r.max_depth),
+            r.n_trees,
+            r.n_nodes,
+            r.train_seconds,
+            1e6 * r.latency_seconds,
+            100.0 * r.window_accuracy,
+            100.0 * r.slide_accuracy
+        );
+    })?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let png = args.out.join("tradeoff.png");
+    crackbot_tactile::plots::tradeoff_png(&png, &result)?;
+    let files = |paths: &[PathBuf]| {
+        paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let markdown = format!(
+        "# Random forest: accuracy against run time (`crackbot tactile tradeoff`)\n\n\
+         {} on {} {}, segmentation {}; trained on {} ({} recordings), tested on {} ({} recordings); seed {}.\n\n\
+         {}\n![accuracy against latency](tradeoff.png)\n",
+        experiment.name(),
+        feature.name(),
+        set.name(),
+        config.segmentation.name(),
+        files(&args.train),
+        train.len(),
+        files(&args.test),
+        test.len(),
+        args.seed,
+        result.to_markdown()
+    );
+    let md_path = args.out.join("tradeoff.md");
+    let json_path = args.out.join("tradeoff.json");
+    std::fs::write(&md_path, &markdown)
+        .with_context(|| format!("writing {}", md_path.display()))?;
+    std::fs::write(&json_path, serde_json::to_string_pretty(&result)?)
+        .with_context(|| format!("writing {}", json_path.display()))?;
+    println!("{markdown}");
+    println!(
+        "wrote {}, {} and {}",
+        md_path.display(),
+        json_path.display(),
+        png.display()
+    );
     Ok(())
 }

@@ -10,6 +10,7 @@ use crackbot_dsp::{
 use crackbot_recording::Recording;
 use serde::Serialize;
 
+use crate::context::{context_row, slide_baseline, ContextConfig, WindowPlace};
 use crate::TactileError;
 
 /// Which of the paper's two experiments a set of recordings belongs to.
@@ -123,6 +124,19 @@ pub struct PipelineConfig {
     /// Slides shorter than this many samples are skipped (the authors' files end with a one-sample
     /// "slide 13").
     pub min_slide_len: usize,
+    /// Context features of each window (per-slide baseline, multi-scale causal spans, slide so
+    /// far, direction); `None` for the paper's window features only.
+    pub context: Option<ContextConfig>,
+}
+
+impl PipelineConfig {
+    /// Values per feature row.
+    pub fn n_features(&self) -> usize {
+        match &self.context {
+            None => self.spec.n_features(),
+            Some(c) => c.n_features(self.spec.n_features(), self.spec.set.channels().len()),
+        }
+    }
 }
 
 /// One sliding movement in a [`WindowSet`].
@@ -217,10 +231,13 @@ pub fn build_windows(
     experiment: Experiment,
     config: &PipelineConfig,
 ) -> Result<WindowSet, TactileError> {
+    if let Some(c) = &config.context {
+        c.validate().map_err(TactileError::Invalid)?;
+    }
     let mut set = WindowSet {
         experiment,
         x: Vec::new(),
-        n_features: config.spec.n_features(),
+        n_features: config.n_features(),
         y: Vec::new(),
         label: Vec::new(),
         slides: Vec::new(),
@@ -238,6 +255,25 @@ pub fn build_windows(
         let offset = match config.normalisation {
             Normalisation::None => [0.0; 4],
             Normalisation::RecordingMedian => channel_medians(rec),
+        };
+        // The whole recording, offset-corrected, and its directions: what context spans see.
+        let (all_samples, all_directions): (Vec<[f64; 4]>, Vec<u8>) = if config.context.is_some() {
+            rec.rows
+                .iter()
+                .map(|r| {
+                    (
+                        [
+                            r.d1 - offset[0],
+                            r.d2 - offset[1],
+                            r.d3 - offset[2],
+                            r.p - offset[3],
+                        ],
+                        r.direction,
+                    )
+                })
+                .unzip()
+        } else {
+            (Vec::new(), Vec::new())
         };
         for range in rec.slides() {
             if range.len() < config.min_slide_len.max(1) {
@@ -281,7 +317,31 @@ pub fn build_windows(
                 })?;
             let start = set.y.len();
             let n = m.n_rows();
-            set.x.extend_from_slice(&m.data);
+            match &config.context {
+                None => set.x.extend_from_slice(&m.data),
+                Some(c) => {
+                    let baseline = slide_baseline(&samples, c.baseline_len);
+                    for (k, &end) in m.window_ends.iter().enumerate() {
+                        if c.keep_window {
+                            set.x.extend_from_slice(m.row(k).unwrap_or(&[]));
+                        }
+                        let place = WindowPlace {
+                            samples: &all_samples,
+                            directions: &all_directions,
+                            slide_start: range.start,
+                            end: range.start + end,
+                        };
+                        context_row(
+                            c,
+                            place,
+                            config.spec.set.channels(),
+                            config.window.len,
+                            &baseline,
+                            &mut set.x,
+                        );
+                    }
+                }
+            }
             set.y.extend(std::iter::repeat_n(class, n));
             set.label.extend(std::iter::repeat_n(label, n));
             set.slides.push(SlideRef {
@@ -323,5 +383,69 @@ mod tests {
         assert!(neither.contains("neither"), "{neither}");
         assert_eq!(Experiment::Width.class_of(5.0), Some(3));
         assert_eq!(Experiment::Width.class_of(3.0), None);
+    }
+
+    fn synthetic(label: f64) -> Recording {
+        // Two slides of 200 samples; slide 1 has a dip of P at samples 50..70, slide 2 is flat.
+        let rows = (0..400)
+            .map(|i| crackbot_recording::Row {
+                x_mm: 10.0,
+                d1: 650.0,
+                d2: 430.0,
+                d3: 700.0,
+                p: if (50..70).contains(&i) { 300.0 } else { 520.0 },
+                direction: u8::from(i % 200 >= 100),
+                slide: 1 + (i / 200) as u32,
+                label,
+                repetition: 1,
+            })
+            .collect();
+        Recording { rows, extra: None }
+    }
+
+    #[test]
+    fn context_features_are_appended_per_window_and_may_cross_slides() {
+        let recs = vec![(PathBuf::from("a"), synthetic(1.0))];
+        let mut config = PipelineConfig {
+            segmentation: Segmentation::None,
+            window: WindowConfig::default(),
+            spec: FeatureSpec::new(crackbot_dsp::Feature::Mav, crackbot_dsp::FeatureSet::P),
+            normalisation: Normalisation::None,
+            min_slide_len: 100,
+            context: None,
+        };
+        let plain = build_windows(&recs, Experiment::Recognition, &config).unwrap();
+        assert_eq!(plain.n_features, 1);
+        let ctx = ContextConfig {
+            scales: vec![300],
+            baseline_len: 10,
+            prefix: false,
+            direction: true,
+            keep_window: true,
+            across_slides: false,
+            shape: false,
+        };
+        config.context = Some(ctx.clone());
+        let within = build_windows(&recs, Experiment::Recognition, &config).unwrap();
+        assert_eq!(within.n_features, 1 + ctx.n_context(1));
+        assert_eq!(within.n_features, config.n_features());
+        assert_eq!(within.n_rows(), plain.n_rows());
+        // Column 0 is the window's own MAV; then level, mean, std, min − baseline, ...
+        assert_eq!(within.row(0)[0], plain.row(0)[0]);
+        let last = within.slides[1].windows.end - 1;
+        assert_eq!(within.row(last)[4], 0.0, "slide 2 alone never dips");
+        assert_eq!(*within.row(last).last().unwrap(), 1.0, "direction");
+        config.context = Some(ContextConfig {
+            across_slides: true,
+            ..ctx
+        });
+        let across = build_windows(&recs, Experiment::Recognition, &config).unwrap();
+        let first2 = across.slides[1].windows.start;
+        assert_eq!(across.row(first2)[4], -220.0, "slide 1's dip is remembered");
+        config.context = Some(ContextConfig {
+            scales: vec![0],
+            ..ContextConfig::default()
+        });
+        assert!(build_windows(&recs, Experiment::Recognition, &config).is_err());
     }
 }

@@ -2,7 +2,7 @@
 //! slide-level confusion matrices, and crack width by regression.
 
 use crackbot_forest::{
-    Classifier, Dataset, ForestParams, Knn, KnnParams, Qda, QdaParams, RandomForest,
+    Classifier, Dataset, ForestParams, Knn, KnnParams, MaxFeatures, Qda, QdaParams, RandomForest,
     RandomForestRegressor, RegressionDataset,
 };
 use rayon::prelude::*;
@@ -41,10 +41,49 @@ fn forest_error(e: crackbot_forest::ForestError) -> TactileError {
     TactileError::Invalid(e.to_string())
 }
 
+/// Tree settings of the random forests beyond the number of trees; the default is
+/// scikit-learn's (`max_features = sqrt` for classification, unlimited depth, leaves of 1).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct ForestTuning {
+    /// Candidate features per split as a fraction of the features (`None`: square root).
+    pub max_features_fraction: Option<f64>,
+    /// Maximum tree depth (`None`: unlimited).
+    pub max_depth: Option<usize>,
+    /// Minimum samples per leaf (`None`: 1).
+    pub min_samples_leaf: Option<usize>,
+}
+
+impl ForestTuning {
+    /// Applies the settings to `params` (the classifier's or the regressor's defaults).
+    pub fn apply(&self, mut params: ForestParams) -> ForestParams {
+        if let Some(f) = self.max_features_fraction {
+            params = params.max_features(MaxFeatures::Fraction(f));
+        }
+        if let Some(d) = self.max_depth {
+            params = params.max_depth(Some(d));
+        }
+        if let Some(n) = self.min_samples_leaf {
+            params = params.min_samples_leaf(n);
+        }
+        params
+    }
+}
+
 /// Trains `kind` on every window of `train`.
 pub fn train_classifier(
     train: &WindowSet,
     kind: ClassifierKind,
+    seed: u64,
+    quiet: bool,
+) -> Result<Box<dyn Classifier + Send + Sync>, TactileError> {
+    train_classifier_tuned(train, kind, ForestTuning::default(), seed, quiet)
+}
+
+/// [`train_classifier`] with forest settings (ignored by KNN and QDA).
+pub fn train_classifier_tuned(
+    train: &WindowSet,
+    kind: ClassifierKind,
+    tuning: ForestTuning,
     seed: u64,
     quiet: bool,
 ) -> Result<Box<dyn Classifier + Send + Sync>, TactileError> {
@@ -57,10 +96,12 @@ pub fn train_classifier(
     .map_err(forest_error)?;
     Ok(match kind {
         ClassifierKind::Forest { n_trees } => {
-            let params = ForestParams::classifier()
-                .n_trees(n_trees)
-                .seed(seed)
-                .quiet(quiet);
+            let params = tuning.apply(
+                ForestParams::classifier()
+                    .n_trees(n_trees)
+                    .seed(seed)
+                    .quiet(quiet),
+            );
             Box::new(RandomForest::fit(&data, &params).map_err(forest_error)?)
         }
         ClassifierKind::Knn => {
@@ -139,13 +180,28 @@ pub fn width_regression(
     seed: u64,
     quiet: bool,
 ) -> Result<WidthOutcome, TactileError> {
+    width_regression_tuned(train, test, n_trees, ForestTuning::default(), seed, quiet)
+}
+
+/// [`width_regression`] with forest settings (a `max_features` fraction replaces the regressor's
+/// default of every feature).
+pub fn width_regression_tuned(
+    train: &WindowSet,
+    test: &WindowSet,
+    n_trees: usize,
+    tuning: ForestTuning,
+    seed: u64,
+    quiet: bool,
+) -> Result<WidthOutcome, TactileError> {
     let y: Vec<f32> = train.label.iter().map(|&l| l as f32).collect();
     let data =
         RegressionDataset::new(train.x.clone(), train.n_features, y).map_err(forest_error)?;
-    let params = ForestParams::regressor()
-        .n_trees(n_trees)
-        .seed(seed)
-        .quiet(quiet);
+    let params = tuning.apply(
+        ForestParams::regressor()
+            .n_trees(n_trees)
+            .seed(seed)
+            .quiet(quiet),
+    );
     let model = RandomForestRegressor::fit(&data, &params).map_err(forest_error)?;
     let mut estimates = vec![0f32; test.n_rows()];
     model
@@ -171,4 +227,25 @@ pub fn width_regression(
         window_mae_mm,
         slide_mae_mm: mean_absolute_error(&slide_truth, &slide_est),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tuning_overrides_only_what_it_names() {
+        let base = ForestParams::classifier();
+        assert_eq!(ForestTuning::default().apply(base.clone()), base);
+        let t = ForestTuning {
+            max_features_fraction: Some(0.5),
+            max_depth: Some(12),
+            min_samples_leaf: Some(4),
+        };
+        let p = t.apply(base);
+        assert_eq!(p.max_features, MaxFeatures::Fraction(0.5));
+        assert_eq!(p.max_depth, Some(12));
+        assert_eq!(p.min_samples_leaf, 4);
+        assert_eq!(p.n_trees, 100);
+    }
 }

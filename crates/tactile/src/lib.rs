@@ -2,11 +2,14 @@
 //! segmented slides → windowed features → classifiers, the evaluation protocols of the paper
 //! (and stricter ones), metrics, statistics, tables and plots.
 
+pub mod context;
 pub mod dataset;
 pub mod eval;
 pub mod metrics;
 pub mod paper;
+pub mod plots;
 pub mod stats;
+pub mod tradeoff;
 
 /// Errors of the tactile pipeline.
 #[derive(Debug, thiserror::Error)]

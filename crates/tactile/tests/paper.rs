@@ -38,6 +38,7 @@ fn grid_on_two_repetitions_of_the_recognition_experiment() {
         spec: FeatureSpec::new(Feature::Mav, FeatureSet::D1D2P),
         normalisation: Normalisation::None,
         min_slide_len: 100,
+        context: None,
     };
     let mut seen = 0;
     let tables = run_grid(experiment, &reps, &[ClassifierKind::Qda], &base, 1, |_| {

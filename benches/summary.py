@@ -1,0 +1,68 @@
+#!/usr/bin/env python3
+"""Medians and ratios of `cargo bench --bench tactile` from criterion's estimates, next to the numbers of
+`benches/sklearn_ort.py` when `benches/out/sklearn_ort.json` exists.
+
+    python3 benches/summary.py [CRITERION_DIR] [SKLEARN_ORT_JSON]
+
+CRITERION_DIR defaults to `$CARGO_TARGET_DIR/criterion` or `target/criterion`.
+"""
+
+import json
+import os
+import sys
+from pathlib import Path
+
+
+def median_ns(root, group, name):
+    for d in (root / group).iterdir():
+        bench = d / "new" / "benchmark.json"
+        if bench.exists() and json.loads(bench.read_text()).get("function_id") == name:
+            return json.loads((d / "new" / "estimates.json").read_text())["median"]["point_estimate"]
+    return None
+
+
+def main():
+    root = Path(sys.argv[1] if len(sys.argv) > 1 else
+                Path(os.environ.get("CARGO_TARGET_DIR", "target")) / "criterion")
+    skl = Path(sys.argv[2] if len(sys.argv) > 2 else "benches/out/sklearn_ort.json")
+    n_test = None
+    m = {}
+    for group, name in [("per_window", "stream_push"), ("per_window", "forest_predict"),
+                        ("per_window", "stream_push+forest_predict"), ("batch", "predict_batch"),
+                        ("linfa_forest", "linfa_predict_row"), ("linfa_forest", "flat_predict_row"),
+                        ("linfa_forest", "linfa_predict_batch"), ("linfa_forest", "flat_predict_batch")]:
+        m[name] = median_ns(root, group, name)
+    ext = json.loads(skl.read_text()) if skl.exists() else {}
+    n_test = ext.get("n_test")
+
+    def us(name):
+        return f"{m[name] / 1e3:10.3f} µs" if m.get(name) else "       n/a"
+
+    print("median latency per window (one core)")
+    for name in ["stream_push", "forest_predict", "stream_push+forest_predict", "linfa_predict_row",
+                 "flat_predict_row"]:
+        print(f"  {name:30s} {us(name)}")
+    if m.get("linfa_predict_row") and m.get("flat_predict_row"):
+        print(f"  linfa / flat, same forest, one row: {m['linfa_predict_row'] / m['flat_predict_row']:.1f}×")
+    if n_test:
+        print(f"batch throughput ({n_test} windows)")
+        for name in ["predict_batch", "linfa_predict_batch", "flat_predict_batch"]:
+            if m.get(name):
+                print(f"  {name:30s} {n_test / (m[name] / 1e9):12.0f} windows/s")
+        if m.get("linfa_predict_batch") and m.get("flat_predict_batch"):
+            print(f"  flat / linfa, same forest, batch: {m['linfa_predict_batch'] / m['flat_predict_batch']:.1f}×")
+    if ext and m.get("forest_predict"):
+        ours = m["forest_predict"] / 1e3
+        print("scikit-learn / ONNX Runtime (benches/sklearn_ort.py, their own 100-tree forest on the same windows)")
+        print(f"  sklearn one row {ext['sklearn_row_us']:.1f} µs = {ext['sklearn_row_us'] / ours:.0f}× ours; "
+              f"ORT one row {ext['ort_row_us']:.2f} µs = {ext['ort_row_us'] / ours:.1f}× ours")
+        if m.get("predict_batch"):
+            ours_b = n_test / (m["predict_batch"] / 1e9)
+            print(f"  sklearn batch {ext['sklearn_batch_windows_per_s']:.0f} windows/s, ORT batch "
+                  f"{ext['ort_batch_windows_per_s']:.0f} windows/s, ours {ours_b:.0f} windows/s "
+                  f"({ours_b / ext['sklearn_batch_windows_per_s']:.1f}× sklearn, "
+                  f"{ours_b / ext['ort_batch_windows_per_s']:.1f}× ORT)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,208 @@
+//! Tactile inference on one core, on the authors' real recordings (surface-type experiment, MAV of D1, D2,
+//! P over 10-sample windows every 2 samples; forests trained on repetition 1, windows of repetition 2):
+//!
+//! * `per_window/*`: per-window latency of the streaming feature update (`StreamingFeatures::push`, the
+//!   `step` pushes that end a window), of a 100-tree `RandomForest::predict` on a real window, and of both
+//!   together — what the robot pays per window at 400 Hz.
+//! * `batch/predict_batch`: `RandomForest::predict_batch` over all windows of repetition 2, in windows/s.
+//! * `linfa/*`: the baseline in the same run. linfa cannot load our model, so a 100-tree linfa forest is
+//!   trained on the same windows (bagged CART trees, every feature, depth ≤ [`LINFA_MAX_DEPTH`], first
+//!   [`LINFA_MAX_ROWS`] training windows: linfa trains one tree after another and takes seconds per fully
+//!   grown tree) and converted into our flat model (`benches/common/linfa_forest.rs`; the conversion is
+//!   checked by `tests/linfa_flat_conversion.rs`). linfa's own `predict` and our flat predict then run on
+//!   that same forest and the same windows, one row at a time and as a batch.
+//!
+//! `taskset -c 1 cargo bench --bench tactile` (medians and ratios: `python3 benches/summary.py`).
+
+use std::hint::black_box;
+
+use crackbot_dsp::StreamingFeatures;
+use crackbot_forest::{Classifier, ForestParams, RandomForest};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use linfa::prelude::Predict;
+
+#[path = "common/linfa_forest.rs"]
+mod linfa_forest;
+#[path = "common/windows.rs"]
+mod windows;
+
+/// Trees in every forest of this bench (the paper's forest).
+const N_TREES: usize = 100;
+/// Depth cap of the linfa forest (its training time; see the module docs).
+const LINFA_MAX_DEPTH: usize = 20;
+/// Training windows given to linfa.
+const LINFA_MAX_ROWS: usize = 20_000;
+
+/// A stream of real samples feeding [`StreamingFeatures`], wrapping around at the end.
+struct Stream<'a> {
+    features: StreamingFeatures,
+    samples: &'a [[f64; 4]],
+    next: usize,
+    row: [f32; 3],
+}
+
+impl<'a> Stream<'a> {
+    fn new(samples: &'a [[f64; 4]]) -> Self {
+        let cfg = windows::config();
+        Self {
+            features: StreamingFeatures::new(cfg.spec, cfg.window).expect("streaming features"),
+            samples,
+            next: 0,
+            row: [0.0; 3],
+        }
+    }
+
+    /// Pushes samples until a window ends; returns its feature row.
+    #[inline]
+    fn next_window(&mut self) -> &[f32; 3] {
+        loop {
+            let s = self.samples[self.next];
+            self.next += 1;
+            if self.next == self.samples.len() {
+                self.next = 0;
+            }
+            if let Some(r) = self.features.push(s).expect("finite sample") {
+                self.row.copy_from_slice(r);
+                return &self.row;
+            }
+        }
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let real = windows::load(std::path::Path::new(linfa_forest::DATA));
+    let nf = real.test.n_features;
+    let n_test = real.test.n_rows();
+    let n_classes = real.test.experiment.n_classes();
+    let train = crackbot_forest::Dataset::with_classes(
+        real.train.x.clone(),
+        nf,
+        real.train.y.clone(),
+        n_classes,
+    )
+    .expect("training set");
+    let forest = RandomForest::fit(
+        &train,
+        &ForestParams::classifier()
+            .n_trees(N_TREES)
+            .seed(1)
+            .quiet(true),
+    )
+    .expect("forest");
+    eprintln!(
+        "windows: {} train (repetition 1), {n_test} test (repetition 2); our forest: {} trees, {} nodes, depth {}",
+        real.train.n_rows(),
+        forest.n_trees(),
+        forest.n_nodes(),
+        forest.max_depth()
+    );
+
+    let mut g = c.benchmark_group("per_window");
+    g.throughput(Throughput::Elements(1));
+    let mut stream = Stream::new(&real.test_samples);
+    g.bench_function("stream_push", |b| {
+        b.iter(|| black_box(*stream.next_window()))
+    });
+    let mut i = 0;
+    g.bench_function("forest_predict", |b| {
+        b.iter(|| {
+            i = if i + 1 == n_test { 0 } else { i + 1 };
+            forest.predict(black_box(real.test.row(i)))
+        })
+    });
+    let mut stream = Stream::new(&real.test_samples);
+    g.bench_function("stream_push+forest_predict", |b| {
+        b.iter(|| {
+            let row = *stream.next_window();
+            forest.predict(black_box(&row))
+        })
+    });
+    g.finish();
+
+    let mut out = vec![0u32; n_test];
+    let mut g = c.benchmark_group("batch");
+    g.throughput(Throughput::Elements(n_test as u64));
+    g.sample_size(20);
+    g.bench_function("predict_batch", |b| {
+        b.iter(|| {
+            forest
+                .predict_batch(black_box(&real.test.x), nf, &mut out)
+                .expect("batch");
+            black_box(&out);
+        })
+    });
+    g.finish();
+
+    let t0 = std::time::Instant::now();
+    let rf = linfa_forest::train_linfa(
+        &real.train,
+        N_TREES,
+        Some(LINFA_MAX_DEPTH),
+        LINFA_MAX_ROWS,
+        1,
+    );
+    let flat = linfa_forest::linfa_to_flat(&rf, nf, n_classes);
+    let records = linfa_forest::records(&real.test.x, nf);
+    let linfa_pred = rf.predict(&records);
+    let differ: Vec<usize> = (0..n_test)
+        .filter(|&r| flat.predict(real.test.row(r)) as usize != linfa_pred[r])
+        .collect();
+    let not_ties = differ
+        .iter()
+        .filter(|&&r| !linfa_forest::linfa_tie(&rf, real.test.row(r)))
+        .count();
+    assert_eq!(
+        not_ties, 0,
+        "the converted forest differs from linfa off vote ties"
+    );
+    eprintln!(
+        "linfa forest: trained in {:.1} s on {} windows, {} trees, {} nodes, depth {}; the converted model \
+         differs from linfa on {}/{n_test} windows, all exact vote ties",
+        t0.elapsed().as_secs_f64(),
+        real.train.n_rows().min(LINFA_MAX_ROWS),
+        flat.n_trees(),
+        flat.n_nodes(),
+        flat.max_depth(),
+        differ.len()
+    );
+    let single: Vec<_> = (0..n_test)
+        .map(|r| linfa_forest::records(real.test.row(r), nf))
+        .collect();
+    let mut g = c.benchmark_group("linfa_forest");
+    g.throughput(Throughput::Elements(1));
+    let mut i = 0;
+    g.bench_function("linfa_predict_row", |b| {
+        b.iter(|| {
+            i = if i + 1 == n_test { 0 } else { i + 1 };
+            rf.predict(black_box(&single[i]))
+        })
+    });
+    let mut i = 0;
+    g.bench_function("flat_predict_row", |b| {
+        b.iter(|| {
+            i = if i + 1 == n_test { 0 } else { i + 1 };
+            flat.predict(black_box(real.test.row(i)))
+        })
+    });
+    g.throughput(Throughput::Elements(n_test as u64));
+    g.sample_size(10);
+    g.bench_function("linfa_predict_batch", |b| {
+        b.iter(|| rf.predict(black_box(&records)))
+    });
+    g.bench_function("flat_predict_batch", |b| {
+        b.iter(|| {
+            flat.predict_batch(black_box(&real.test.x), nf, &mut out)
+                .expect("batch");
+            black_box(&out);
+        })
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    // No plots: criterion's plotters backend panics without a system font (FontUnavailable) here.
+    config = Criterion::default().without_plots();
+    targets = bench
+}
+criterion_main!(benches);

@@ -1,0 +1,377 @@
+//! Context features: what a decision at one window may know beyond the window's own 25 ms.
+//!
+//! The paper classifies each 10-sample window on its own. Most windows of a slide over a crack
+//! lie on the flat part of the surface and look exactly like the windows of a flat surface, so a
+//! window-level classifier can only separate them through the absolute ADC levels, which drift
+//! between recordings. [`ContextConfig`] adds, for each window, features of the signal **up to the
+//! window's last sample** (causal: a streaming classifier could compute them as it goes):
+//!
+//! * **per-slide baseline**: every level is taken relative to the median of the slide's first
+//!   `baseline_len` samples (the slide's own resting level), which removes the offsets that the
+//!   fibres' position and twist put on each recording without the recording-wide median (which
+//!   depends on how much of the recording the feature occupies);
+//! * **multi-scale windows**: for each length `L` of `scales`, over the last `L` samples (fewer at
+//!   the start of a slide): mean, standard deviation, minimum, maximum (all but the standard
+//!   deviation relative to the baseline) and the slope (last sample − first sample of the span);
+//! * **slide so far** (`prefix`): minimum, maximum and range of the slide from its first sample;
+//! * **direction** (`direction`): the sliding direction of the window's last sample (column 6),
+//!   which the robot knows.
+//!
+//! Not used, on purpose: the x position (column 1) and the time since the slide started. The
+//! surfaces were printed with their feature at one place and the device slides over the same
+//! range every time, so either would let a classifier learn *where* each surface's feature lies
+//! in the authors' set-up rather than what it looks like; neither carries over to a new surface.
+
+use serde::Serialize;
+
+/// Which context features are appended to (or replace) the window's own features.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct ContextConfig {
+    /// Causal context lengths in samples (each ≥ 1), e.g. `[40, 200, 800]` (0.1 s, 0.5 s, 2 s).
+    pub scales: Vec<usize>,
+    /// Samples at the start of each slide whose per-channel median is the slide's baseline
+    /// (≥ 1; clamped to the slide length).
+    pub baseline_len: usize,
+    /// Adds minimum, maximum and range of the slide so far.
+    pub prefix: bool,
+    /// Adds the sliding direction.
+    pub direction: bool,
+    /// Keeps the window's own features (absolute ADC counts) in front of the context features.
+    pub keep_window: bool,
+    /// Lets the spans reach back into the previous slides of the same recording (the finger's
+    /// memory of the last seconds of a continuous exploration); otherwise they stop at the slide's
+    /// first sample.
+    pub across_slides: bool,
+    /// Adds, per channel and scale, the longest runs (in samples) below / above half the span's
+    /// departure from the baseline (how long one crossing of a dip or bump lasts, wherever it
+    /// lies) and the span's absolute minimum and maximum (ADC counts: the depth a crack lets the
+    /// proximity reach, which the baseline-relative values lose).
+    pub shape: bool,
+}
+
+impl Default for ContextConfig {
+    fn default() -> Self {
+        ContextConfig {
+            scales: vec![40, 200, 800],
+            baseline_len: 40,
+            prefix: true,
+            direction: true,
+            keep_window: false,
+            across_slides: false,
+            shape: false,
+        }
+    }
+}
+
+/// Values per channel and scale.
+const PER_SCALE: usize = 7;
+/// Extra values per channel and scale with [`ContextConfig::shape`].
+const PER_SHAPE: usize = 4;
+/// Values per channel of the slide-so-far block.
+const PER_PREFIX: usize = 3;
+
+impl ContextConfig {
+    /// Checks that every scale and the baseline length are at least 1.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.scales.contains(&0) {
+            return Err("context scales must be at least 1 sample".into());
+        }
+        if self.baseline_len == 0 {
+            return Err("the baseline length must be at least 1 sample".into());
+        }
+        Ok(())
+    }
+
+    /// Number of context values (not counting the window's own features) for `n_channels`
+    /// channels: one "current level" per channel, [`PER_SCALE`] per channel and scale,
+    /// [`PER_PREFIX`] per channel for the prefix, 1 for the direction.
+    pub fn n_context(&self, n_channels: usize) -> usize {
+        let per_scale = PER_SCALE + if self.shape { PER_SHAPE } else { 0 };
+        n_channels * (1 + per_scale * self.scales.len())
+            + if self.prefix {
+                PER_PREFIX * n_channels
+            } else {
+                0
+            }
+            + usize::from(self.direction)
+    }
+
+    /// Number of values of a whole row, given the window's own features and channels.
+    pub fn n_features(&self, window_features: usize, n_channels: usize) -> usize {
+        self.n_context(n_channels) + if self.keep_window { window_features } else { 0 }
+    }
+}
+
+/// Median of the first `len` values of each channel (the slide's baseline).
+pub fn slide_baseline(samples: &[[f64; 4]], len: usize) -> [f64; 4] {
+    let n = len.min(samples.len());
+    let mut out = [0.0; 4];
+    if n == 0 {
+        return out;
+    }
+    for (c, slot) in out.iter_mut().enumerate() {
+        let mut v: Vec<f64> = samples[..n].iter().map(|s| s[c]).collect();
+        v.sort_by(f64::total_cmp);
+        *slot = if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            (v[n / 2 - 1] + v[n / 2]) / 2.0
+        };
+    }
+    out
+}
+
+/// Length of the longest run of `true`.
+fn longest_run(flags: impl Iterator<Item = bool>) -> usize {
+    let (mut best, mut run) = (0, 0);
+    for f in flags {
+        run = if f { run + 1 } else { 0 };
+        best = best.max(run);
+    }
+    best
+}
+
+/// Where a window is: the recording's samples, its slide's first sample, its last sample.
+#[derive(Debug, Clone, Copy)]
+pub struct WindowPlace<'a> {
+    /// Every sample of the recording (`[D1, D2, D3, P]`, after any normalisation).
+    pub samples: &'a [[f64; 4]],
+    /// Column 6 of every sample.
+    pub directions: &'a [u8],
+    /// Index of the first sample of the window's slide.
+    pub slide_start: usize,
+    /// Index of the window's last sample (≥ `slide_start`).
+    pub end: usize,
+}
+
+/// The context values of the window at `place`, appended to `out`.
+///
+/// `channels` are the indices of the channels to describe, `window_len` the length of the window
+/// itself (its mean relative to the baseline is the "current level"), `baseline` the slide's
+/// ([`slide_baseline`]). Spans end at `place.end` and start no earlier than the slide's first
+/// sample, or than the recording's first sample with [`ContextConfig::across_slides`]. Appends
+/// exactly [`ContextConfig::n_context`]`(channels.len())` values.
+pub fn context_row(
+    config: &ContextConfig,
+    place: WindowPlace<'_>,
+    channels: &[usize],
+    window_len: usize,
+    baseline: &[f64; 4],
+    out: &mut Vec<f32>,
+) {
+    let samples = place.samples;
+    let end = place.end.min(samples.len().saturating_sub(1));
+    let slide_start = place.slide_start.min(end);
+    let floor = if config.across_slides { 0 } else { slide_start };
+    let span = |len: usize| -> &[[f64; 4]] {
+        let start = (end + 1).saturating_sub(len.max(1)).max(floor);
+        samples.get(start..=end).unwrap_or(&[])
+    };
+    for &c in channels {
+        let b = baseline[c];
+        let w = span(window_len);
+        let level = w.iter().map(|s| s[c]).sum::<f64>() / w.len().max(1) as f64;
+        out.push((level - b) as f32);
+        for &len in &config.scales {
+            let s = span(len);
+            let n = s.len().max(1) as f64;
+            let mean = s.iter().map(|x| x[c]).sum::<f64>() / n;
+            let var = s.iter().map(|x| (x[c] - mean).powi(2)).sum::<f64>() / n;
+            let (lo, hi) = s
+                .iter()
+                .fold((b, b), |(l, h), x| (l.min(x[c]), h.max(x[c])));
+            let slope = match (s.first(), s.last()) {
+                (Some(a), Some(z)) => z[c] - a[c],
+                _ => 0.0,
+            };
+            // How long the span stays beyond half its largest departure below / above the
+            // baseline: the dip's (or bump's) duration, independent of where it lies.
+            let (mid_lo, mid_hi) = ((b + lo) / 2.0, (b + hi) / 2.0);
+            let below = s.iter().filter(|x| x[c] < mid_lo).count() as f64 / n;
+            let above = s.iter().filter(|x| x[c] > mid_hi).count() as f64 / n;
+            if config.shape {
+                out.extend_from_slice(&[
+                    longest_run(s.iter().map(|x| x[c] < mid_lo)) as f32,
+                    longest_run(s.iter().map(|x| x[c] > mid_hi)) as f32,
+                    lo as f32,
+                    hi as f32,
+                ]);
+            }
+            out.extend_from_slice(&[
+                (mean - b) as f32,
+                var.sqrt() as f32,
+                (lo - b) as f32,
+                (hi - b) as f32,
+                slope as f32,
+                below as f32,
+                above as f32,
+            ]);
+        }
+        if config.prefix {
+            let s = samples.get(slide_start..=end).unwrap_or(&[]);
+            let (lo, hi) = s
+                .iter()
+                .fold((b, b), |(l, h), x| (l.min(x[c]), h.max(x[c])));
+            out.extend_from_slice(&[(lo - b) as f32, (hi - b) as f32, (hi - lo) as f32]);
+        }
+    }
+    if config.direction {
+        out.push(f32::from(place.directions.get(end).copied().unwrap_or(0)));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn baseline_is_the_median_of_the_first_samples() {
+        let s: Vec<[f64; 4]> = (0..10).map(|i| [i as f64, 5.0, 0.0, 100.0]).collect();
+        assert_eq!(slide_baseline(&s, 3), [1.0, 5.0, 0.0, 100.0]);
+        assert_eq!(slide_baseline(&s, 4), [1.5, 5.0, 0.0, 100.0]);
+        assert_eq!(slide_baseline(&s, 100), [4.5, 5.0, 0.0, 100.0]);
+        assert_eq!(slide_baseline(&[], 5), [0.0; 4]);
+    }
+
+    #[test]
+    fn context_values_are_causal_relative_and_counted() {
+        // P steps from 500 to 300 at sample 50; D1 is a ramp.
+        let s: Vec<[f64; 4]> = (0..100)
+            .map(|i| [i as f64, 0.0, 0.0, if i < 50 { 500.0 } else { 300.0 }])
+            .collect();
+        let dir: Vec<u8> = (0..100).map(|i| u8::from(i >= 60)).collect();
+        let config = ContextConfig {
+            scales: vec![20],
+            baseline_len: 10,
+            prefix: true,
+            direction: true,
+            keep_window: false,
+            across_slides: false,
+            shape: false,
+        };
+        assert!(config.validate().is_ok());
+        let b = slide_baseline(&s, config.baseline_len);
+        assert_eq!(b[3], 500.0);
+        let place = |end| WindowPlace {
+            samples: &s,
+            directions: &dir,
+            slide_start: 0,
+            end,
+        };
+        let mut row = Vec::new();
+        context_row(&config, place(69), &[0, 3], 10, &b, &mut row);
+        assert_eq!(row.len(), config.n_context(2));
+        assert_eq!(row.len(), 2 * (1 + 7 + 3) + 1);
+        // D1 (baseline 4.5): level = mean(60..=69) − 4.5 = 60; over 50..=69: mean 59.5 − 4.5,
+        // std, min 50 − 4.5, max 69 − 4.5, slope 19, nothing below the baseline, above the
+        // midpoint 36.75 everything; prefix min 0 − 4.5, max 69 − 4.5, range 69.
+        assert_eq!(
+            &row[..11],
+            &[60.0, 55.0, row[2], 0.0, 64.5, 19.0, 0.0, 1.0, -4.5, 64.5, 69.0]
+        );
+        assert!((row[2] - (133.0f32 / 4.0).sqrt()).abs() < 1e-4);
+        // P: a step down of 200 from the baseline, seen in the 20-sample span and the prefix.
+        assert_eq!(
+            &row[11..22],
+            &[-200.0, -200.0, 0.0, -200.0, 0.0, 0.0, 1.0, 0.0, -200.0, 0.0, 200.0]
+        );
+        assert_eq!(row[22], 1.0);
+        // The future (the step) is not seen by a window that ends before it.
+        let mut early = Vec::new();
+        context_row(&config, place(49), &[3], 10, &b, &mut early);
+        assert_eq!(early, vec![0.0; 12]);
+        // Half of a span that straddles the step lies below the midpoint (400).
+        let mut straddle = Vec::new();
+        context_row(&config, place(59), &[3], 10, &b, &mut straddle);
+        assert_eq!(straddle[6], 0.5);
+        // Spans are clamped at the slide's start...
+        let mut first = Vec::new();
+        context_row(&config, place(0), &[0], 10, &b, &mut first);
+        assert_eq!(first.len(), config.n_context(1));
+        assert_eq!(first[0], -4.5);
+        // ...unless they may reach into earlier slides of the recording.
+        let later = WindowPlace {
+            slide_start: 55,
+            ..place(59)
+        };
+        let mut within = Vec::new();
+        context_row(&config, later, &[3], 10, &b, &mut within);
+        assert_eq!(
+            within[1], -200.0,
+            "the span stops at the slide's start, after the step"
+        );
+        let across = ContextConfig {
+            across_slides: true,
+            ..config.clone()
+        };
+        let mut reach = Vec::new();
+        context_row(&across, later, &[3], 10, &b, &mut reach);
+        assert_eq!(
+            reach[1], -100.0,
+            "the span sees 10 samples of 500 before the step"
+        );
+    }
+
+    #[test]
+    fn shape_values_measure_runs_and_absolute_extremes() {
+        assert_eq!(
+            longest_run([true, true, false, true, true, true, false].into_iter()),
+            3
+        );
+        assert_eq!(longest_run(std::iter::empty()), 0);
+        // Two dips of P below the baseline 500: 5 samples to 300, then 8 samples to 200.
+        let s: Vec<[f64; 4]> = (0..60)
+            .map(|i| {
+                let p = match i {
+                    20..=24 => 300.0,
+                    40..=47 => 200.0,
+                    _ => 500.0,
+                };
+                [0.0, 0.0, 0.0, p]
+            })
+            .collect();
+        let dir = vec![0u8; 60];
+        let config = ContextConfig {
+            scales: vec![60],
+            baseline_len: 10,
+            prefix: false,
+            direction: false,
+            keep_window: false,
+            across_slides: false,
+            shape: true,
+        };
+        let b = slide_baseline(&s, 10);
+        let mut row = Vec::new();
+        let place = WindowPlace {
+            samples: &s,
+            directions: &dir,
+            slide_start: 0,
+            end: 59,
+        };
+        context_row(&config, place, &[3], 10, &b, &mut row);
+        assert_eq!(row.len(), config.n_context(1));
+        assert_eq!(row.len(), 1 + 7 + 4);
+        // Midpoint below: (500 + 200) / 2 = 350, so both dips count; the longest lasts 8.
+        assert_eq!(&row[1..5], &[8.0, 0.0, 200.0, 500.0]);
+        assert_eq!(row[5 + 5], 13.0 / 60.0);
+    }
+
+    #[test]
+    fn invalid_configs_are_refused_and_counts_follow_the_options() {
+        let mut c = ContextConfig::default();
+        assert_eq!(c.n_context(3), 3 * (1 + 21 + 3) + 1);
+        assert_eq!(c.n_features(3, 3), c.n_context(3));
+        c.keep_window = true;
+        assert_eq!(c.n_features(3, 3), c.n_context(3) + 3);
+        c.prefix = false;
+        c.direction = false;
+        assert_eq!(c.n_context(1), 22);
+        c.shape = true;
+        assert_eq!(c.n_context(1), 34);
+        c.scales = vec![0];
+        assert!(c.validate().is_err());
+        c.scales = vec![5];
+        c.baseline_len = 0;
+        assert!(c.validate().is_err());
+    }
+}

@@ -1,0 +1,241 @@
+//! Error against run time for the random forest: for a grid of tree counts × depth limits, train on
+//! one [`WindowSet`], test on another, and record the window and slide accuracy, the model size,
+//! the training time and the median single-window prediction latency on one thread.
+//!
+//! Latency is what the robot pays per window when it classifies windows one at a time as they
+//! arrive: [`Classifier::predict`] on one row, on the calling thread. Timing one call would be
+//! dominated by the timer, so the test windows are taken in order in batches (1000 by default),
+//! each batch is timed as a whole and divided by its length, and the median over the batches is
+//! reported. Consecutive windows overlap, like the stream the robot sees, so their paths through
+//! the trees are similar; a shuffled order would be slower on large forests.
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use crackbot_forest::{Classifier, Dataset, ForestParams, RandomForest};
+use serde::Serialize;
+
+use crate::dataset::{Experiment, WindowSet};
+use crate::eval::test_classifier;
+use crate::TactileError;
+
+/// The grid and the measurement settings.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TradeoffConfig {
+    /// Tree counts to try.
+    pub n_trees: Vec<usize>,
+    /// Depth limits to try (`None`: fully grown trees).
+    pub max_depths: Vec<Option<usize>>,
+    /// Seed of the forests. Tree `i` depends on `(seed, i)` only, so a forest of `n` trees holds
+    /// the trees of every smaller forest of the same depth limit.
+    pub seed: u64,
+    /// Windows per timed batch.
+    pub latency_batch: usize,
+}
+
+impl Default for TradeoffConfig {
+    /// Trees 1, 2, 5, 10, 20, 50, 100, 200; depth unlimited, 20, 12, 8; seed 1; batches of 1000.
+    fn default() -> Self {
+        TradeoffConfig {
+            n_trees: vec![1, 2, 5, 10, 20, 50, 100, 200],
+            max_depths: vec![None, Some(20), Some(12), Some(8)],
+            seed: 1,
+            latency_batch: 1000,
+        }
+    }
+}
+
+/// One forest of the grid.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TradeoffRow {
+    /// Number of trees.
+    pub n_trees: usize,
+    /// Depth limit (`None`: unlimited).
+    pub max_depth: Option<usize>,
+    /// Depth of the deepest leaf actually grown.
+    pub depth_reached: usize,
+    /// Total number of nodes of the forest.
+    pub n_nodes: usize,
+    /// Size of the serialised model, bytes.
+    pub model_bytes: usize,
+    /// Training time, seconds (rayon's threads, see [`Tradeoff::train_threads`]).
+    pub train_seconds: f64,
+    /// Median single-window prediction time on one thread, seconds.
+    pub latency_seconds: f64,
+    /// Window-level accuracy on the test set.
+    pub window_accuracy: f64,
+    /// Slide-level accuracy on the test set (mean probability over a slide's windows).
+    pub slide_accuracy: f64,
+}
+
+/// The measured grid.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Tradeoff {
+    /// Experiment of the windows.
+    pub experiment: Experiment,
+    /// Training windows.
+    pub train_windows: usize,
+    /// Test windows.
+    pub test_windows: usize,
+    /// Test slides (with at least one window).
+    pub test_slides: usize,
+    /// Features per window.
+    pub n_features: usize,
+    /// Threads that trained the forests (rayon's global pool).
+    pub train_threads: usize,
+    /// The settings.
+    pub config: TradeoffConfig,
+    /// One row per depth limit × tree count, in the order of the configuration (depth outer).
+    pub rows: Vec<TradeoffRow>,
+}
+
+/// Median over batches of the single-row [`Classifier::predict`] time of `model` on the windows of
+/// `test`, taken in order, `batch` windows per timed batch, on the calling thread; seconds per
+/// window. A first pass over one batch warms the caches and is not counted.
+pub fn median_latency(
+    model: &(dyn Classifier + Send + Sync),
+    test: &WindowSet,
+    batch: usize,
+) -> Result<f64, TactileError> {
+    let n = test.n_rows();
+    if n == 0 || batch == 0 {
+        return Err(TactileError::Invalid(
+            "latency needs at least one test window and a batch of at least one".into(),
+        ));
+    }
+    let time_batch = |start: usize, end: usize| {
+        let t = Instant::now();
+        let mut acc = 0u32;
+        for i in start..end {
+            acc = acc.wrapping_add(model.predict(black_box(test.row(i))));
+        }
+        black_box(acc);
+        t.elapsed().as_secs_f64() / (end - start) as f64
+    };
+    time_batch(0, batch.min(n));
+    let mut per_window: Vec<f64> = (0..n)
+        .step_by(batch)
+        .map(|start| time_batch(start, (start + batch).min(n)))
+        .collect();
+    per_window.sort_by(f64::total_cmp);
+    let mid = per_window.len() / 2;
+    Ok(if per_window.len() % 2 == 1 {
+        per_window[mid]
+    } else {
+        (per_window[mid - 1] + per_window[mid]) / 2.0
+    })
+}
+
+/// Runs the grid: trains on `train`, tests on `test`. `progress` is called after each forest.
+pub fn run_tradeoff(
+    train: &WindowSet,
+    test: &WindowSet,
+    config: &TradeoffConfig,
+    mut progress: impl FnMut(&TradeoffRow),
+) -> Result<Tradeoff, TactileError> {
+    if config.n_trees.is_empty() || config.max_depths.is_empty() {
+        return Err(TactileError::Invalid(
+            "the grid needs at least one tree count and one depth limit".into(),
+        ));
+    }
+    if config.n_trees.contains(&0) || config.max_depths.contains(&Some(0)) {
+        return Err(TactileError::Invalid(
+            "tree counts and depth limits must be at least 1".into(),
+        ));
+    }
+    if train.experiment != test.experiment || train.n_features != test.n_features {
+        return Err(TactileError::Invalid(format!(
+            "training windows ({} experiment, {} features) and test windows ({} experiment, {} features) differ",
+            train.experiment.name(),
+            train.n_features,
+            test.experiment.name(),
+            test.n_features
+        )));
+    }
+    let data = Dataset::with_classes(
+        train.x.clone(),
+        train.n_features,
+        train.y.clone(),
+        train.experiment.n_classes(),
+    )?;
+    let mut rows = Vec::new();
+    for &max_depth in &config.max_depths {
+        for &n_trees in &config.n_trees {
+            let params = ForestParams::classifier()
+                .n_trees(n_trees)
+                .max_depth(max_depth)
+                .seed(config.seed)
+                .quiet(true);
+            let started = Instant::now();
+            let forest = RandomForest::fit(&data, &params)?;
+            let train_seconds = started.elapsed().as_secs_f64();
+            let outcome = test_classifier(&forest, test)?;
+            let latency_seconds = median_latency(&forest, test, config.latency_batch)?;
+            let row = TradeoffRow {
+                n_trees,
+                max_depth,
+                depth_reached: forest.max_depth(),
+                n_nodes: forest.n_nodes(),
+                model_bytes: forest.to_bytes().len(),
+                train_seconds,
+                latency_seconds,
+                window_accuracy: outcome.windows.accuracy(),
+                slide_accuracy: outcome.slides.accuracy(),
+            };
+            progress(&row);
+            rows.push(row);
+        }
+    }
+    Ok(Tradeoff {
+        experiment: train.experiment,
+        train_windows: train.n_rows(),
+        test_windows: test.n_rows(),
+        test_slides: test.slides.iter().filter(|s| !s.windows.is_empty()).count(),
+        n_features: train.n_features,
+        train_threads: rayon::current_num_threads(),
+        config: config.clone(),
+        rows,
+    })
+}
+
+/// `"none"` or the depth limit.
+pub fn depth_name(max_depth: Option<usize>) -> String {
+    max_depth.map_or_else(|| "none".to_string(), |d| d.to_string())
+}
+
+impl Tradeoff {
+    /// The table as Markdown, one row per forest, with a line on the data and the measurement.
+    pub fn to_markdown(&self) -> String {
+        let mut md = format!(
+            "{} experiment: trained on {} windows, tested on {} windows ({} slides), {} features per window. \
+             Training on {} threads; latency = median over batches of {} consecutive test windows of the \
+             single-window `predict` time, one thread.\n\n",
+            self.experiment.name(),
+            self.train_windows,
+            self.test_windows,
+            self.test_slides,
+            self.n_features,
+            self.train_threads,
+            self.config.latency_batch
+        );
+        md.push_str(
+            "| max depth | trees | depth reached | nodes | model (KiB) | training (s) | latency (µs/window) | window accuracy (%) | slide accuracy (%) |\n\
+             |---|---|---|---|---|---|---|---|---|\n",
+        );
+        for r in &self.rows {
+            md.push_str(&format!(
+                "| {} | {} | {} | {} | {:.1} | {:.3} | {:.2} | {:.2} | {:.2} |\n",
+                depth_name(r.max_depth),
+                r.n_trees,
+                r.depth_reached,
+                r.n_nodes,
+                r.model_bytes as f64 / 1024.0,
+                r.train_seconds,
+                1e6 * r.latency_seconds,
+                100.0 * r.window_accuracy,
+                100.0 * r.slide_accuracy
+            ));
+        }
+        md
+    }
+}
