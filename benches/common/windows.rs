@@ -6,24 +6,12 @@
 
 use std::path::Path;
 
-use crackbot_dsp::{
-    Feature, FeatureSet, FeatureSpec, PaperSegmentation, SegmentationMethod, WindowConfig,
-};
 use crackbot_recording::collect_recordings;
-use crackbot_tactile::dataset::{
-    build_windows, detect_experiment, Normalisation, PipelineConfig, Segmentation, WindowSet,
-};
+use crackbot_tactile::dataset::{build_windows, detect_experiment, PipelineConfig, WindowSet};
 
 /// The paper's pipeline: eq. 2 segmentation, 10-sample windows every 2 samples, MAV of D1, D2, P.
 pub fn config() -> PipelineConfig {
-    PipelineConfig {
-        segmentation: Segmentation::Method(SegmentationMethod::Paper(PaperSegmentation::default())),
-        window: WindowConfig::default(),
-        spec: FeatureSpec::new(Feature::Mav, FeatureSet::D1D2P),
-        normalisation: Normalisation::None,
-        min_slide_len: 100,
-        context: None,
-    }
+    PipelineConfig::default()
 }
 
 /// Real windows and samples of the surface-type experiment.

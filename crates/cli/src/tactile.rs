@@ -575,8 +575,7 @@ fn classifier_of(arg: ClassifierArg, trees: usize) -> crackbot_tactile::eval::Cl
 }
 
 fn paper(args: PaperArgs) -> Result<()> {
-    use crackbot_dsp::{Feature, FeatureSet, FeatureSpec, WindowConfig};
-    use crackbot_tactile::dataset::{detect_experiment, Normalisation, PipelineConfig};
+    use crackbot_tactile::dataset::{detect_experiment, PipelineConfig};
     use crackbot_tactile::paper::{by_repetition, run_grid};
 
     if args.trees == 0 {
@@ -589,11 +588,7 @@ fn paper(args: PaperArgs) -> Result<()> {
         .collect();
     let base = PipelineConfig {
         segmentation: segmentation_of(args.segmentation),
-        window: WindowConfig::default(),
-        spec: FeatureSpec::new(Feature::Mav, FeatureSet::D1D2P),
-        normalisation: Normalisation::None,
-        min_slide_len: 100,
-        context: None,
+        ..PipelineConfig::default()
     };
     // Fail before the long grid, not after it, when the plots cannot draw text.
     crackbot_tactile::plots::load_font()?;

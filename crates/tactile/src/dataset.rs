@@ -129,6 +129,23 @@ pub struct PipelineConfig {
     pub context: Option<ContextConfig>,
 }
 
+impl Default for PipelineConfig {
+    /// The paper's pipeline: eq. 2 segmentation, 10-sample windows every 2 samples, MAV of D1, D2
+    /// and P, raw counts, no context; slides shorter than 100 samples skipped.
+    fn default() -> Self {
+        PipelineConfig {
+            segmentation: Segmentation::Method(crackbot_dsp::SegmentationMethod::Paper(
+                crackbot_dsp::PaperSegmentation::default(),
+            )),
+            window: WindowConfig::default(),
+            spec: FeatureSpec::new(crackbot_dsp::Feature::Mav, crackbot_dsp::FeatureSet::D1D2P),
+            normalisation: Normalisation::None,
+            min_slide_len: 100,
+            context: None,
+        }
+    }
+}
+
 impl PipelineConfig {
     /// Values per feature row.
     pub fn n_features(&self) -> usize {

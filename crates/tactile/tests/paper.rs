@@ -2,13 +2,8 @@
 
 use std::path::PathBuf;
 
-use crackbot_dsp::{
-    Feature, FeatureSet, FeatureSpec, PaperSegmentation, SegmentationMethod, WindowConfig,
-};
 use crackbot_recording::collect_recordings;
-use crackbot_tactile::dataset::{
-    detect_experiment, Experiment, Normalisation, PipelineConfig, Segmentation,
-};
+use crackbot_tactile::dataset::{detect_experiment, Experiment, PipelineConfig};
 use crackbot_tactile::eval::ClassifierKind;
 use crackbot_tactile::paper::{by_repetition, run_grid};
 
@@ -32,14 +27,7 @@ fn grid_on_two_repetitions_of_the_recognition_experiment() {
         reps.iter().map(|(r, v)| (*r, v.len())).collect::<Vec<_>>(),
         vec![(1, 4), (2, 4)]
     );
-    let base = PipelineConfig {
-        segmentation: Segmentation::Method(SegmentationMethod::Paper(PaperSegmentation::default())),
-        window: WindowConfig::default(),
-        spec: FeatureSpec::new(Feature::Mav, FeatureSet::D1D2P),
-        normalisation: Normalisation::None,
-        min_slide_len: 100,
-        context: None,
-    };
+    let base = PipelineConfig::default();
     let mut seen = 0;
     let tables = run_grid(experiment, &reps, &[ClassifierKind::Qda], &base, 1, |_| {
         seen += 1

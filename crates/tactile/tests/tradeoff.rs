@@ -2,13 +2,8 @@
 
 use std::path::PathBuf;
 
-use crackbot_dsp::{
-    Feature, FeatureSet, FeatureSpec, PaperSegmentation, SegmentationMethod, WindowConfig,
-};
 use crackbot_recording::{collect_recordings, Recording};
-use crackbot_tactile::dataset::{
-    build_windows, Experiment, Normalisation, PipelineConfig, Segmentation, WindowSet,
-};
+use crackbot_tactile::dataset::{build_windows, Experiment, PipelineConfig, WindowSet};
 use crackbot_tactile::tradeoff::{median_latency, run_tradeoff, TradeoffConfig};
 
 fn data(file: &str) -> PathBuf {
@@ -32,14 +27,7 @@ fn windows(repetition: u32) -> WindowSet {
         let end = slides.get(3).map_or(rec.rows.len(), |s| s.end);
         rec.rows.truncate(end);
     }
-    let config = PipelineConfig {
-        segmentation: Segmentation::Method(SegmentationMethod::Paper(PaperSegmentation::default())),
-        window: WindowConfig::default(),
-        spec: FeatureSpec::new(Feature::Mav, FeatureSet::D1D2P),
-        normalisation: Normalisation::None,
-        min_slide_len: 100,
-        context: None,
-    };
+    let config = PipelineConfig::default();
     build_windows(&recordings, Experiment::Recognition, &config).expect("windows")
 }
 
