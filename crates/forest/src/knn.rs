@@ -45,6 +45,11 @@ pub struct Knn {
     y: Vec<u32>,
     mean: Vec<f32>,
     inv_std: Vec<f32>,
+    /// Training row indices sorted by their first (standardised) feature, and that feature's
+    /// values in the same order: the search sweeps outwards from the query along feature 0 and
+    /// stops once that coordinate alone is farther than the current k-th neighbour.
+    by_first: Vec<u32>,
+    first: Vec<f32>,
 }
 
 impl Knn {
@@ -91,6 +96,14 @@ impl Knn {
                     .map(|(v, (m, s))| (v - m) * s)
             })
             .collect();
+        let x: Vec<f32> = x;
+        let mut by_first: Vec<u32> = (0..n as u32).collect();
+        by_first.sort_by(|&a, &b| {
+            x[a as usize * nf]
+                .total_cmp(&x[b as usize * nf])
+                .then(a.cmp(&b))
+        });
+        let first = by_first.iter().map(|&r| x[r as usize * nf]).collect();
         Ok(Self {
             k: params.k,
             n_features: nf,
@@ -99,6 +112,8 @@ impl Knn {
             y: data.y().to_vec(),
             mean,
             inv_std,
+            by_first,
+            first,
         })
     }
 
@@ -110,29 +125,69 @@ impl Knn {
     fn vote(&self, q: &[f32], out: &mut [f32]) {
         let nf = self.n_features;
         let k = self.k;
-        // Sorted ascending by (distance, row); `len` valid entries.
+        if q.iter().any(|v| v.is_nan()) {
+            out.iter_mut().for_each(|v| *v = f32::NAN);
+            return;
+        }
+        // Sorted ascending by (distance, row); `len` valid entries. Ties in distance go to the
+        // earlier training row, whatever order the rows are visited in.
         let mut best = [(f32::INFINITY, u32::MAX); MAX_K];
         let mut len = 0usize;
-        for (r, row) in self.x.chunks_exact(nf).enumerate() {
+        let consider = |r: u32, best: &mut [(f32, u32); MAX_K], len: &mut usize| {
+            let row = &self.x[r as usize * nf..(r as usize + 1) * nf];
             let mut d = 0f32;
             for (a, b) in row.iter().zip(q) {
                 let t = a - b;
                 d += t * t;
             }
-            if len == k && d >= best[k - 1].0 {
-                continue; // not nearer than the current k-th (ties: earlier rows win)
-            }
-            if d.is_nan() {
-                out.iter_mut().for_each(|v| *v = f32::NAN);
+            if *len == k && (d, r) >= best[k - 1] {
                 return;
             }
-            let mut i = len.min(k - 1);
-            while i > 0 && best[i - 1].0 > d {
+            let mut i = (*len).min(k - 1);
+            while i > 0 && best[i - 1] > (d, r) {
                 best[i] = best[i - 1];
                 i -= 1;
             }
-            best[i] = (d, r as u32);
-            len = (len + 1).min(k);
+            best[i] = (d, r);
+            *len = (*len + 1).min(k);
+        };
+        // Sweep outwards from the query along feature 0. The squared distance is a sum of
+        // non-negative terms in feature order, so it is never below its first term (rounding is
+        // monotone): once a side's first term exceeds the k-th distance, that side is done.
+        let q0 = q.first().copied().unwrap_or(0.0);
+        let gap = |v: f32| {
+            let t = v - q0;
+            t * t
+        };
+        let mut right = self.first.partition_point(|&v| v < q0);
+        let mut left = right;
+        loop {
+            let kth = if len == k {
+                best[k - 1].0
+            } else {
+                f32::INFINITY
+            };
+            let l = (left > 0)
+                .then(|| gap(self.first[left - 1]))
+                .filter(|&g| g <= kth);
+            let r = (right < self.first.len())
+                .then(|| gap(self.first[right]))
+                .filter(|&g| g <= kth);
+            match (l, r) {
+                (None, None) => break,
+                (Some(gl), Some(gr)) if gl < gr => {
+                    left -= 1;
+                    consider(self.by_first[left], &mut best, &mut len);
+                }
+                (Some(_), None) => {
+                    left -= 1;
+                    consider(self.by_first[left], &mut best, &mut len);
+                }
+                _ => {
+                    consider(self.by_first[right], &mut best, &mut len);
+                    right += 1;
+                }
+            }
         }
         out.iter_mut().for_each(|v| *v = 0.0);
         let w = 1.0 / len.max(1) as f32;
@@ -179,6 +234,52 @@ impl Classifier for Knn {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The plain exhaustive search the sweep must reproduce exactly.
+    fn brute_force(m: &Knn, q: &[f32]) -> Vec<u32> {
+        let nf = m.n_features;
+        let mut d: Vec<(f32, u32)> =
+            m.x.chunks_exact(nf)
+                .enumerate()
+                .map(|(r, row)| {
+                    let mut s = 0f32;
+                    for (a, b) in row.iter().zip(q) {
+                        s += (a - b) * (a - b);
+                    }
+                    (s, r as u32)
+                })
+                .collect();
+        d.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        d[..m.k].iter().map(|&(_, r)| m.y[r as usize]).collect()
+    }
+
+    #[test]
+    fn sweep_matches_exhaustive_search_with_many_ties() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        // Integer-valued features: many exact distance ties.
+        let n = 600;
+        let x: Vec<f32> = (0..n * 3).map(|_| rng.random_range(0..12) as f32).collect();
+        let y: Vec<u32> = (0..n).map(|_| rng.random_range(0..4)).collect();
+        let d = Dataset::new(x, 3, y).unwrap();
+        for standardize in [false, true] {
+            let m = Knn::fit(&d, KnnParams { k: 5, standardize }).unwrap();
+            for _ in 0..400 {
+                let q: Vec<f32> = (0..3)
+                    .map(|_| rng.random_range(-2.0..14.0f32).round())
+                    .collect();
+                let mut sq = q.clone();
+                for (f, v) in sq.iter_mut().enumerate() {
+                    *v = (*v - m.mean[f]) * m.inv_std[f];
+                }
+                let mut expected = vec![0f32; 4];
+                for c in brute_force(&m, &sq) {
+                    expected[c as usize] += 1.0 / 5.0;
+                }
+                assert_eq!(m.predict_proba(&q), expected, "query {q:?}");
+            }
+        }
+    }
 
     #[test]
     fn nearest_neighbours_and_ties() {
