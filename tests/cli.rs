@@ -5,20 +5,9 @@ use std::io::Read;
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
-use crackbot_tests::{binary, csv_rows, Emulator};
+use crackbot_tests::{binary, crackbot, csv_rows, text, Emulator};
 use nix::sys::signal::{kill, Signal};
 use nix::unistd::Pid;
-
-fn crackbot(args: &[&str]) -> Output {
-    Command::new(binary("crackbot"))
-        .args(args)
-        .output()
-        .expect("running crackbot")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
 
 fn json_line(out: &Output) -> serde_json::Value {
     let stdout = text(&out.stdout);

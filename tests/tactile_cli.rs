@@ -1,26 +1,14 @@
 //! `crackbot tactile convert` end to end: the authors' MAT-files to CSV and back, and its errors.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use crackbot_recording::{read_csv, read_mat, Recording, Row};
-use crackbot_tests::binary;
+use crackbot_tests::{crackbot, text};
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/tactile");
 
 fn data(rel: &str) -> PathBuf {
     Path::new(DATA).join(rel)
-}
-
-fn crackbot(args: &[&str]) -> Output {
-    Command::new(binary("crackbot"))
-        .args(args)
-        .output()
-        .expect("running crackbot")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 fn utf8(p: &Path) -> &str {

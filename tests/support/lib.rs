@@ -112,6 +112,19 @@ impl Emulator {
     }
 }
 
+/// Runs the `crackbot` binary with `args` to completion.
+pub fn crackbot(args: &[&str]) -> std::process::Output {
+    Command::new(binary("crackbot"))
+        .args(args)
+        .output()
+        .expect("running crackbot")
+}
+
+/// Lossy UTF-8 of a process's output.
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
 /// Number of data rows (lines after the header) of a CSV file.
 pub fn csv_rows(path: &Path) -> usize {
     let text = std::fs::read_to_string(path).expect("reading the CSV");

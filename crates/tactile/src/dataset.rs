@@ -273,22 +273,17 @@ pub fn build_windows(
             Normalisation::None => [0.0; 4],
             Normalisation::RecordingMedian => channel_medians(rec),
         };
+        let corrected = |r: &crackbot_recording::Row| {
+            [
+                r.d1 - offset[0],
+                r.d2 - offset[1],
+                r.d3 - offset[2],
+                r.p - offset[3],
+            ]
+        };
         // The whole recording, offset-corrected, and its directions: what context spans see.
         let (all_samples, all_directions): (Vec<[f64; 4]>, Vec<u8>) = if config.context.is_some() {
-            rec.rows
-                .iter()
-                .map(|r| {
-                    (
-                        [
-                            r.d1 - offset[0],
-                            r.d2 - offset[1],
-                            r.d3 - offset[2],
-                            r.p - offset[3],
-                        ],
-                        r.direction,
-                    )
-                })
-                .unzip()
+            rec.rows.iter().map(|r| (corrected(r), r.direction)).unzip()
         } else {
             (Vec::new(), Vec::new())
         };
@@ -297,17 +292,7 @@ pub fn build_windows(
                 continue;
             }
             let rows = &rec.rows[range.clone()];
-            let samples: Vec<[f64; 4]> = rows
-                .iter()
-                .map(|r| {
-                    [
-                        r.d1 - offset[0],
-                        r.d2 - offset[1],
-                        r.d3 - offset[2],
-                        r.p - offset[3],
-                    ]
-                })
-                .collect();
+            let samples: Vec<[f64; 4]> = rows.iter().map(corrected).collect();
             let segment = match &config.segmentation {
                 Segmentation::None => Segment {
                     ranges: std::iter::once(0..samples.len()).collect(),
