@@ -140,6 +140,12 @@ impl FlatTrees {
             if end <= start {
                 return bad(format!("tree {t} is empty (nodes {start}..{end})"));
             }
+            if end as usize > self.nodes.len() {
+                return bad(format!(
+                    "tree {t} ends at node {end}, past the {} nodes",
+                    self.nodes.len()
+                ));
+            }
             for i in start..end {
                 let n = self.nodes[i as usize];
                 if n.is_leaf() {

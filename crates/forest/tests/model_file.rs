@@ -216,6 +216,15 @@ fn inconsistent_indices_are_rejected_even_with_a_valid_crc() {
         load_err(dir.path(), "offs.crkf", &b),
         FormatError::Inconsistent(_)
     ));
+    // A middle tree offset past the node count (found by the proptest below: it used to index
+    // out of bounds instead of being rejected).
+    let mut b = f.to_bytes();
+    put_u32(&mut b, offsets_at + 4, f.n_nodes() as u32 + 64);
+    fix_crc(&mut b);
+    assert!(matches!(
+        load_err(dir.path(), "offs-past.crkf", &b),
+        FormatError::Inconsistent(_)
+    ));
     // A NaN class label.
     let mut b = f.to_bytes();
     b[40..48].copy_from_slice(&f64::NAN.to_le_bytes());
