@@ -146,11 +146,12 @@ pub struct EvalArgs {
     window_step: usize,
     /// Add causal context features to each window: levels relative to the slide's own baseline,
     /// multi-scale spans (--context-scales), the slide so far and the direction (see
-    /// crackbot_tactile::context). Never the x position.
+    /// crackbot_tactile::context). Never the x position. The slide verdicts then also take the
+    /// vote of a forest on the paper's window features (see --slide-vote).
     #[arg(long)]
     context: bool,
     /// Context span lengths in samples (with --context).
-    #[arg(long, value_delimiter = ',', default_values_t = [40, 200, 800])]
+    #[arg(long, value_delimiter = ',', default_values_t = [200, 1200, 2000])]
     context_scales: Vec<usize>,
     /// Samples at each slide's start whose median is its baseline (with --context).
     #[arg(long, default_value_t = 40)]
@@ -164,10 +165,16 @@ pub struct EvalArgs {
     /// Keep the window's own absolute features beside the context features (with --context).
     #[arg(long)]
     keep_window: bool,
-    /// Let the context spans reach back into the previous slides of the same recording (with
-    /// --context): the finger's memory of a continuous exploration.
+    /// Stop the context spans at each slide's first sample (with --context); by default they
+    /// reach back into the previous slides of the same recording, the finger's memory of a
+    /// continuous exploration.
     #[arg(long)]
-    across_slides: bool,
+    within_slides: bool,
+    /// Who decides a slide's verdict (with --context): `both` sums the slide means of the context
+    /// forest and of a forest on the paper's window features; `context` uses the context forest
+    /// alone.
+    #[arg(long, value_enum, default_value_t = SlideVoteArg::Both)]
+    slide_vote: SlideVoteArg,
     /// Add shape values per span (with --context): longest run below / above half the span's
     /// departure from the baseline, and the span's absolute minimum and maximum.
     #[arg(long)]
@@ -182,6 +189,14 @@ pub struct EvalArgs {
     /// Random forests: minimum samples per leaf (default 1).
     #[arg(long)]
     min_samples_leaf: Option<usize>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SlideVoteArg {
+    /// Context forest + paper-feature forest.
+    Both,
+    /// Context forest alone.
+    Context,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -378,8 +393,8 @@ fn eval(args: EvalArgs) -> Result<()> {
         build_windows, detect_experiment, Experiment, Normalisation, PipelineConfig, Segmentation,
     };
     use crackbot_tactile::eval::{
-        test_classifier, train_classifier_tuned, width_regression_tuned, ClassifierKind,
-        ForestTuning,
+        test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
+        width_regression_tuned, ClassifierKind, ForestTuning,
     };
 
     if args.trees == 0 {
@@ -432,7 +447,7 @@ fn eval(args: EvalArgs) -> Result<()> {
             prefix: !args.no_prefix,
             direction: !args.no_direction,
             keep_window: args.keep_window,
-            across_slides: args.across_slides,
+            across_slides: !args.within_slides,
             shape: args.context_shape,
         }),
     };
@@ -453,8 +468,29 @@ fn eval(args: EvalArgs) -> Result<()> {
     let quiet = args.json;
     let started = std::time::Instant::now();
     let model = train_classifier_tuned(&train_set, kind, tuning, args.seed, quiet)?;
+    // With context, a forest on the paper's own window features (same segmentation and windows,
+    // so the same slides) joins the slide verdicts.
+    let voter = if config.context.is_some() && args.slide_vote == SlideVoteArg::Both {
+        let plain = PipelineConfig {
+            context: None,
+            ..config.clone()
+        };
+        let vote_train = build_windows(&train, experiment, &plain)?;
+        let vote_test = build_windows(&test, experiment, &plain)?;
+        let vote_model = train_classifier_tuned(&vote_train, kind, tuning, args.seed, quiet)?;
+        Some((vote_model, vote_test))
+    } else {
+        None
+    };
     let train_seconds = started.elapsed().as_secs_f64();
-    let outcome = test_classifier(model.as_ref(), &test_set)?;
+    let outcome = match &voter {
+        Some((vote_model, vote_test)) => test_classifier_with_slide_voters(
+            model.as_ref(),
+            &test_set,
+            &[(vote_model.as_ref(), vote_test)],
+        )?,
+        None => test_classifier(model.as_ref(), &test_set)?,
+    };
     let width = match experiment {
         Experiment::Width => Some(width_regression_tuned(
             &train_set, &test_set, args.trees, tuning, args.seed, quiet,
@@ -473,6 +509,7 @@ fn eval(args: EvalArgs) -> Result<()> {
         "normalisation": format!("{:?}", config.normalisation),
         "window": config.window,
         "context": config.context,
+        "slide_vote": if voter.is_some() { "context+paper" } else if config.context.is_some() { "context" } else { "paper" },
         "forest_tuning": tuning,
         "n_features": train_set.n_features,
         "train_recordings": train.len(),

@@ -123,38 +123,110 @@ pub struct ClassificationOutcome {
     pub slides: ConfusionMatrix,
 }
 
-/// Tests `model` on `test`.
+/// Tests `model` on `test`: window verdicts and slide verdicts both from `model`.
 pub fn test_classifier(
     model: &(dyn Classifier + Send + Sync),
     test: &WindowSet,
 ) -> Result<ClassificationOutcome, TactileError> {
-    let k = test.experiment.n_classes();
-    if model.n_classes() != k || model.n_features() != test.n_features {
+    let proba = window_probabilities(model, test)?;
+    outcome(test, &proba, &[&proba])
+}
+
+/// Tests `model` on `test` for window verdicts, and lets `voters` join the slide verdicts: a
+/// slide's verdict is the class of highest summed mean probability over `model` and every voter,
+/// each voter classifying its own windows (`(classifier, its window set)`). Every voter's set must
+/// cut the same recordings into the same slides and windows as `test` (same pipeline, other
+/// features), otherwise an error names the first slide that differs.
+///
+/// Why: windows with causal context ([`crate::context`]) are right far more often than the
+/// paper's windows, but the windows of one slide then share their errors; the paper's windows are
+/// wrong more often, but independently, so their mean is a robust slide verdict. Summing both
+/// keeps each one's strength (see the `crate::context` docs for the figures).
+pub fn test_classifier_with_slide_voters(
+    model: &(dyn Classifier + Send + Sync),
+    test: &WindowSet,
+    voters: &[(&(dyn Classifier + Send + Sync), &WindowSet)],
+) -> Result<ClassificationOutcome, TactileError> {
+    let own = window_probabilities(model, test)?;
+    let mut all = vec![own];
+    for (i, (voter, set)) in voters.iter().enumerate() {
+        if set.slides.len() != test.slides.len() || set.experiment != test.experiment {
+            return Err(TactileError::Invalid(format!(
+                "slide voter {i}: {} slides of the {} experiment, the test set has {} of the {}",
+                set.slides.len(),
+                set.experiment.name(),
+                test.slides.len(),
+                test.experiment.name()
+            )));
+        }
+        if let Some((j, (a, b))) = set
+            .slides
+            .iter()
+            .zip(&test.slides)
+            .enumerate()
+            .find(|(_, (a, b))| a.windows != b.windows || a.class != b.class)
+        {
+            return Err(TactileError::Invalid(format!(
+                "slide voter {i}: slide {j} (recording {}, slide {}) has windows {:?}, the test set {:?} (recording {}, slide {})",
+                a.recording, a.slide, a.windows, b.windows, b.recording, b.slide
+            )));
+        }
+        all.push(window_probabilities(*voter, set)?);
+    }
+    let refs: Vec<&[f32]> = all.iter().map(|p| p.as_slice()).collect();
+    outcome(test, &all[0], &refs)
+}
+
+/// Class probabilities of every window of `set` (row-major, `n_rows × n_classes`).
+fn window_probabilities(
+    model: &(dyn Classifier + Send + Sync),
+    set: &WindowSet,
+) -> Result<Vec<f32>, TactileError> {
+    let k = set.experiment.n_classes();
+    if model.n_classes() != k || model.n_features() != set.n_features {
         return Err(TactileError::Invalid(format!(
             "the model has {} classes and {} features, the test set {} and {}",
             model.n_classes(),
             model.n_features(),
             k,
-            test.n_features
+            set.n_features
         )));
     }
-    let mut proba = vec![0f32; test.n_rows() * k];
+    let mut proba = vec![0f32; set.n_rows() * k];
     proba
         .par_chunks_mut(k)
         .enumerate()
-        .for_each(|(i, out)| model.predict_proba_into(test.row(i), out));
+        .for_each(|(i, out)| model.predict_proba_into(set.row(i), out));
+    Ok(proba)
+}
+
+/// Window confusion from `window_proba`; slide confusion from the summed per-slide mean of every
+/// table in `slide_proba` (all `n_rows × n_classes`, rows aligned with `test`).
+fn outcome(
+    test: &WindowSet,
+    window_proba: &[f32],
+    slide_proba: &[&[f32]],
+) -> Result<ClassificationOutcome, TactileError> {
+    let k = test.experiment.n_classes();
     let mut windows = ConfusionMatrix::new(k);
     let mut slides = ConfusionMatrix::new(k);
     for slide in &test.slides {
         if slide.windows.is_empty() {
             continue;
         }
-        let mut mean = vec![0f64; k];
         for i in slide.windows.clone() {
-            let p = &proba[i * k..(i + 1) * k];
-            windows.add(test.y[i], crackbot_forest::argmax(p))?;
-            for (m, &v) in mean.iter_mut().zip(p) {
-                *m += f64::from(v);
+            windows.add(
+                test.y[i],
+                crackbot_forest::argmax(&window_proba[i * k..(i + 1) * k]),
+            )?;
+        }
+        let n = slide.windows.len() as f64;
+        let mut mean = vec![0f64; k];
+        for proba in slide_proba {
+            for i in slide.windows.clone() {
+                for (m, &v) in mean.iter_mut().zip(&proba[i * k..(i + 1) * k]) {
+                    *m += f64::from(v) / n;
+                }
             }
         }
         let mean32: Vec<f32> = mean.iter().map(|&m| m as f32).collect();
@@ -247,5 +319,100 @@ mod tests {
         assert_eq!(p.max_depth, Some(12));
         assert_eq!(p.min_samples_leaf, 4);
         assert_eq!(p.n_trees, 100);
+    }
+
+    /// Reads row `[p0, p1, p2, p3]` as the class probabilities (recognition: 4 classes).
+    struct Echo;
+    impl Classifier for Echo {
+        fn n_classes(&self) -> usize {
+            4
+        }
+        fn n_features(&self) -> usize {
+            4
+        }
+        fn predict_proba_into(&self, x: &[f32], out: &mut [f32]) {
+            out.copy_from_slice(&x[..4]);
+        }
+    }
+
+    fn set(rows: &[[f32; 4]], slides: &[(u32, std::ops::Range<usize>)]) -> WindowSet {
+        use crate::dataset::{Experiment, SlideRef};
+        let mut y = vec![0; rows.len()];
+        for (class, r) in slides {
+            y[r.clone()].fill(*class);
+        }
+        WindowSet {
+            experiment: Experiment::Recognition,
+            x: rows.iter().flatten().copied().collect(),
+            n_features: 4,
+            label: y.iter().map(|&c| f64::from(c)).collect(),
+            y,
+            slides: slides
+                .iter()
+                .enumerate()
+                .map(|(i, (class, r))| SlideRef {
+                    recording: 0,
+                    slide: i as u32 + 1,
+                    class: *class,
+                    label: f64::from(*class),
+                    windows: r.clone(),
+                })
+                .collect(),
+            sources: vec![],
+        }
+    }
+
+    #[test]
+    fn slide_voters_join_the_slide_verdict_but_not_the_windows() {
+        // Slide 1 (crack): the context model is right on 2 of 3 windows, but its one wrong window
+        // is confidently "bump", so its slide mean says bump.
+        let ctx = set(
+            &[
+                [0.0, 0.6, 0.4, 0.0],
+                [0.0, 0.6, 0.4, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+            ],
+            &[(1, 0..3)],
+        );
+        let alone = test_classifier(&Echo, &ctx).unwrap();
+        assert_eq!(alone.windows.accuracy(), 2.0 / 3.0);
+        assert_eq!(alone.slides.accuracy(), 0.0);
+        // The paper-feature voter is right on average (wrong on one window).
+        let paper = set(
+            &[
+                [0.0, 0.9, 0.1, 0.0],
+                [0.4, 0.3, 0.3, 0.0],
+                [0.0, 0.9, 0.1, 0.0],
+            ],
+            &[(1, 0..3)],
+        );
+        let both = test_classifier_with_slide_voters(&Echo, &ctx, &[(&Echo, &paper)]).unwrap();
+        assert_eq!(both.windows, alone.windows, "windows stay the model's own");
+        assert_eq!(both.slides.accuracy(), 1.0);
+        // A voter cut into other slides is refused, naming the slide.
+        let shifted = set(
+            &[
+                [0.0, 0.9, 0.1, 0.0],
+                [0.4, 0.3, 0.3, 0.0],
+                [0.0, 0.9, 0.1, 0.0],
+            ],
+            &[(1, 0..2), (1, 2..3)],
+        );
+        let err = test_classifier_with_slide_voters(&Echo, &ctx, &[(&Echo, &shifted)])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("2 slides"), "{err}");
+        let moved = set(
+            &[
+                [0.0, 0.9, 0.1, 0.0],
+                [0.4, 0.3, 0.3, 0.0],
+                [0.0, 0.9, 0.1, 0.0],
+            ],
+            &[(2, 0..3)],
+        );
+        let err = test_classifier_with_slide_voters(&Echo, &ctx, &[(&Echo, &moved)])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("slide 0"), "{err}");
     }
 }
