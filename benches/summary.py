@@ -13,6 +13,10 @@ import sys
 from pathlib import Path
 
 
+# Depth caps of benches/tactile.rs's `per_window_depth_capped` forests.
+DEPTH_CAPS = [8, 10, 12]
+
+
 def median_ns(root, group, name):
     for d in (root / group).iterdir():
         bench = d / "new" / "benchmark.json"
@@ -32,6 +36,10 @@ def main():
                         ("linfa_forest", "linfa_predict_row"), ("linfa_forest", "flat_predict_row"),
                         ("linfa_forest", "linfa_predict_batch"), ("linfa_forest", "flat_predict_batch")]:
         m[name] = median_ns(root, group, name)
+    for d in DEPTH_CAPS:
+        m[f"depth{d}/stream_push+forest_predict"] = median_ns(
+            root, "per_window_depth_capped", f"depth{d}/stream_push+forest_predict")
+        m[f"depth{d}/predict_batch"] = median_ns(root, "batch", f"depth{d}/predict_batch")
     ext = json.loads(skl.read_text()) if skl.exists() else {}
     n_test = ext.get("n_test")
 
@@ -42,11 +50,15 @@ def main():
     for name in ["stream_push", "forest_predict", "stream_push+forest_predict", "linfa_predict_row",
                  "flat_predict_row"]:
         print(f"  {name:30s} {us(name)}")
+    for d in DEPTH_CAPS:
+        print(f"  {'depth ≤ ' + str(d) + ': stream_push+forest_predict':42s} "
+              f"{us(f'depth{d}/stream_push+forest_predict')}")
     if m.get("linfa_predict_row") and m.get("flat_predict_row"):
         print(f"  linfa / flat, same forest, one row: {m['linfa_predict_row'] / m['flat_predict_row']:.1f}×")
     if n_test:
         print(f"batch throughput ({n_test} windows)")
-        for name in ["predict_batch", "linfa_predict_batch", "flat_predict_batch"]:
+        for name in ["predict_batch"] + [f"depth{d}/predict_batch" for d in DEPTH_CAPS] + [
+                "linfa_predict_batch", "flat_predict_batch"]:
             if m.get(name):
                 print(f"  {name:30s} {n_test / (m[name] / 1e9):12.0f} windows/s")
         if m.get("linfa_predict_batch") and m.get("flat_predict_batch"):

@@ -28,6 +28,10 @@ mod windows;
 
 /// Trees in every forest of this bench (the paper's forest).
 const N_TREES: usize = 100;
+/// Depth caps of the `per_window_depth_capped` forests.
+const DEPTH_CAPS: [usize; 3] = [8, 10, 12];
+/// Windows timed one by one for the latency tail.
+const TAIL_WINDOWS: usize = 200_000;
 /// Depth cap of the linfa forest (its training time; see the module docs).
 const LINFA_MAX_DEPTH: usize = 20;
 /// Training windows given to linfa.
@@ -119,6 +123,74 @@ fn bench(c: &mut Criterion) {
     });
     g.finish();
 
+    // Depth-capped forests of the same 100 trees: what a depth limit buys in latency, with its
+    // accuracy on the same test windows printed beside it (`crackbot tactile tradeoff` has the
+    // full table).
+    let accuracy = |f: &RandomForest| {
+        let right = (0..n_test)
+            .filter(|&r| f.predict(real.test.row(r)) == real.test.y[r])
+            .count();
+        100.0 * right as f64 / n_test as f64
+    };
+    eprintln!(
+        "accuracy (repetition 1 → 2), fully grown: {:.2}%",
+        accuracy(&forest)
+    );
+    let mut capped_forests = Vec::new();
+    let mut g = c.benchmark_group("per_window_depth_capped");
+    g.throughput(Throughput::Elements(1));
+    for depth in DEPTH_CAPS {
+        let capped = RandomForest::fit(
+            &train,
+            &ForestParams::classifier()
+                .n_trees(N_TREES)
+                .max_depth(Some(depth))
+                .seed(1)
+                .quiet(true),
+        )
+        .expect("forest");
+        eprintln!(
+            "depth ≤ {depth}: {} nodes, accuracy (repetition 1 → 2) {:.2}%",
+            capped.n_nodes(),
+            accuracy(&capped)
+        );
+        let mut stream = Stream::new(&real.test_samples);
+        g.bench_function(format!("depth{depth}/stream_push+forest_predict"), |b| {
+            b.iter(|| {
+                let row = *stream.next_window();
+                capped.predict(black_box(&row))
+            })
+        });
+        capped_forests.push((depth, capped));
+    }
+    g.finish();
+
+    // Criterion reports central values; the tail comes from timing windows one by one (each
+    // timing includes the clock read, ~20–30 ns).
+    let tail = |name: &str, f: &RandomForest| {
+        let mut stream = Stream::new(&real.test_samples);
+        let mut ns: Vec<u128> = (0..TAIL_WINDOWS)
+            .map(|_| {
+                let t = std::time::Instant::now();
+                let row = *stream.next_window();
+                black_box(f.predict(black_box(&row)));
+                t.elapsed().as_nanos()
+            })
+            .collect();
+        ns.sort_unstable();
+        let q = |p: f64| ns[((ns.len() - 1) as f64 * p) as usize] as f64 / 1000.0;
+        eprintln!(
+            "{name}: stream_push+forest_predict over {TAIL_WINDOWS} windows one by one: median {:.2} µs, p99 {:.2} µs, p99.9 {:.2} µs",
+            q(0.5),
+            q(0.99),
+            q(0.999)
+        );
+    };
+    tail("fully grown", &forest);
+    for (depth, f) in &capped_forests {
+        tail(&format!("depth ≤ {depth}"), f);
+    }
+
     let mut out = vec![0u32; n_test];
     let mut g = c.benchmark_group("batch");
     g.throughput(Throughput::Elements(n_test as u64));
@@ -131,6 +203,15 @@ fn bench(c: &mut Criterion) {
             black_box(&out);
         })
     });
+    for (depth, f) in &capped_forests {
+        g.bench_function(format!("depth{depth}/predict_batch"), |b| {
+            b.iter(|| {
+                f.predict_batch(black_box(&real.test.x), nf, &mut out)
+                    .expect("batch");
+                black_box(&out);
+            })
+        });
+    }
     g.finish();
 
     let t0 = std::time::Instant::now();

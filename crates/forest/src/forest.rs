@@ -19,7 +19,7 @@ use crate::train::{train, Gini};
 /// batch predictions are bit-identical.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RandomForest {
-    trees: FlatTrees,
+    pub(crate) trees: FlatTrees,
     labels: Vec<f64>,
     importances: Option<Vec<f64>>,
 }
@@ -60,13 +60,14 @@ impl RandomForest {
                 nodes,
                 offsets,
                 leaf_values,
+                walk: None,
             },
             labels,
             importances,
         };
         format::validate_parts(&parts)?;
         Ok(Self {
-            trees: parts.trees,
+            trees: parts.trees.finish(),
             labels: parts.labels,
             importances: parts.importances,
         })

@@ -286,12 +286,16 @@ pub(crate) fn decode(bytes: &[u8], want: Kind) -> Result<Parts, FormatError> {
             nodes,
             offsets,
             leaf_values,
+            walk: None,
         },
         labels,
         importances,
     };
     validate_parts(&parts)?;
-    Ok(parts)
+    Ok(Parts {
+        trees: parts.trees.finish(),
+        ..parts
+    })
 }
 
 /// Writes a model file (to a temporary file in the same folder, then renamed into place).

@@ -43,13 +43,14 @@ impl RandomForestRegressor {
                 nodes,
                 offsets,
                 leaf_values,
+                walk: None,
             },
             labels: Vec::new(),
             importances: None,
         };
         format::validate_parts(&parts)?;
         Ok(Self {
-            trees: parts.trees,
+            trees: parts.trees.finish(),
             importances: None,
         })
     }

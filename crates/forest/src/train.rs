@@ -533,7 +533,9 @@ fn assemble(trees: Vec<TreeOut>, n_features: usize, width: usize) -> Result<(Fla
             nodes,
             offsets,
             leaf_values,
-        },
+            walk: None,
+        }
+        .finish(),
         importances,
     ))
 }
