@@ -33,6 +33,19 @@ if ! need_cmd python3; then
   exit 1
 fi
 
+# ONNX Runtime for the crack detector (crates/vision, `ort` load-dynamic): the shared library of the
+# onnxruntime wheel from PyPI, in a venv outside the clone that crackbot finds by itself
+# (crates/vision/src/onnx.rs; ORT_DYLIB_PATH overrides it).
+ort_version=1.31.1
+crackbot_cache="${CRACKBOT_CACHE_DIR:-$HOME/.cache/crackbot}"
+ort_venv="$crackbot_cache/ort-venv"
+if ! ls "$ort_venv"/lib/python3*/site-packages/onnxruntime/capi/libonnxruntime.so."$ort_version" >/dev/null 2>&1; then
+  echo "crackbot setup: installing onnxruntime==$ort_version into $ort_venv" >&2
+  mkdir -p "$crackbot_cache"
+  python3 -m venv "$ort_venv"
+  "$ort_venv/bin/pip" install --quiet --disable-pip-version-check "onnxruntime==$ort_version"
+fi
+
 # Keep build artefacts outside the clone when CRACKBOT_TARGET_DIR is set (CI does this).
 if [ -n "${CRACKBOT_TARGET_DIR:-}" ]; then
   export CARGO_TARGET_DIR="$CRACKBOT_TARGET_DIR"

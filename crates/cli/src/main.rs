@@ -9,6 +9,9 @@
 //! * `crackbot calibration check FILE` — validates a calibration file.
 //! * `crackbot tactile convert INPUT... --out DIR|FILE` — converts tactile recordings between the
 //!   authors' `.mat` files and `.csv`.
+//! * `crackbot detect IMAGE...` — candidate cracks in camera images (ONNX detector or the
+//!   classical baseline), with surface millimetres given a homography calibration.
+//! * `crackbot eval-detector --coco FILE` — COCO metrics of a detector on any COCO file.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -27,6 +30,7 @@ use serde_json::json;
 use serialport::SerialPort as _;
 
 mod tactile;
+mod vision;
 
 /// crackbot: find surface cracks with a camera and a fibre-optic tactile finger.
 #[derive(Debug, Parser)]
@@ -50,6 +54,15 @@ enum Command {
     /// Tactile recordings: convert the authors' .mat files and .csv recordings.
     #[command(subcommand)]
     Tactile(tactile::TactileCommand),
+    /// Find cracks in camera images (boxes, scores, surface millimetres with a calibration).
+    Detect(vision::DetectArgs),
+    /// COCO metrics (mAP@[.5:.95], mAP@0.5, AR@100) of a detector on any COCO file.
+    EvalDetector(vision::EvalDetectorArgs),
+    /// Detector accuracy against run time: mAP@0.5 vs input size vs ms per frame (table + PNG).
+    DetectorTradeoff(vision::DetectorTradeoffArgs),
+    /// Pixel ↔ surface-millimetre calibration of the camera (homography).
+    #[command(subcommand)]
+    Homography(vision::HomographyCommand),
 }
 
 #[derive(Debug, Args)]
@@ -140,6 +153,10 @@ fn main() -> Result<()> {
         Command::Record(args) => runtime.block_on(record(args)),
         Command::Replay(args) => runtime.block_on(replay(args)),
         Command::Tactile(cmd) => tactile::run(cmd),
+        Command::Detect(args) => vision::detect(args),
+        Command::EvalDetector(args) => vision::eval_detector(args),
+        Command::DetectorTradeoff(args) => vision::detector_tradeoff(args),
+        Command::Homography(cmd) => vision::homography(cmd),
         Command::Calibration(CalibrationCommand::Check { file }) => {
             let cal = Calibration::load(&file)?;
             println!(

@@ -1,0 +1,114 @@
+//! Camera-side costs on one core, on a real validation photo of each dataset
+//! (`../shared/data/cracks/*/val.json`, first image):
+//!
+//! * `detector/onnx_{256,320,416}`: one `detect` call of the trained model (letterbox + ONNX Runtime
+//!   with one thread + NMS) at each input size; `detector/classical`: the edge-based baseline.
+//! * `preprocess/letterbox_*`: the letterbox alone; `postprocess/decode_nms`: decoding the model's
+//!   rows and NMS.
+//! * `homography/pixel_to_surface`: one point through a fitted homography.
+//!
+//! mAP@0.5 of each detector comes from `crackbot detector-tradeoff` (see `benches/README.md`).
+//! `taskset -c 1 cargo bench --bench vision`.
+
+use std::hint::black_box;
+use std::path::{Path, PathBuf};
+
+use crackbot_vision::classical::{ClassicalDetector, ClassicalParams};
+use crackbot_vision::homography::{fit_dlt, PointPair};
+use crackbot_vision::onnx::OnnxDetector;
+use crackbot_vision::preprocess::{letterbox, postprocess, PostprocessParams};
+use crackbot_vision::Detector;
+use criterion::{criterion_group, criterion_main, Criterion};
+
+const CRACKS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/cracks");
+const MODELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/models/detector");
+
+/// The first validation image of `dataset`.
+fn val_image(dataset: &str) -> image::RgbImage {
+    let dir = Path::new(CRACKS).join(dataset);
+    let coco: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("val.json")).expect("val.json"))
+            .expect("JSON");
+    let file = coco["images"][0]["file_name"].as_str().expect("file_name");
+    image::open(dir.join(file)).expect("image").to_rgb8()
+}
+
+fn bench(c: &mut Criterion) {
+    let photos: Vec<(&str, image::RgbImage)> = ["crackforest", "uav75", "quaywall"]
+        .into_iter()
+        .map(|d| (d, val_image(d)))
+        .collect();
+    let uav = &photos[1].1;
+
+    let mut g = c.benchmark_group("detector");
+    for size in [256, 320, 416] {
+        let path: PathBuf = Path::new(MODELS).join(format!("crack-detector-{size}.onnx"));
+        let mut d = OnnxDetector::load(&path, PostprocessParams::default(), 1)
+            .expect("model and runtime (bash scripts/setup.sh)");
+        g.bench_function(format!("onnx_{size}"), |b| {
+            b.iter(|| d.detect(black_box(uav)).expect("detect"))
+        });
+    }
+    let mut classical = ClassicalDetector::new(ClassicalParams::default()).expect("classical");
+    g.bench_function("classical", |b| {
+        b.iter(|| classical.detect(black_box(uav)).expect("detect"))
+    });
+    g.finish();
+
+    let mut g = c.benchmark_group("preprocess");
+    for (name, img) in &photos {
+        g.bench_function(
+            format!("letterbox_{name}_{}x{}", img.width(), img.height()),
+            |b| b.iter(|| letterbox(black_box(img), 320).expect("letterbox")),
+        );
+    }
+    g.finish();
+
+    let mut model = OnnxDetector::load(
+        &Path::new(MODELS).join("crack-detector-320.onnx"),
+        PostprocessParams::default(),
+        1,
+    )
+    .expect("model");
+    let (tensor, lb) = letterbox(uav, 320).expect("letterbox");
+    let rows = model.run_tensor(&tensor).expect("run");
+    let mut g = c.benchmark_group("postprocess");
+    let eval = PostprocessParams {
+        score_threshold: 0.001,
+        ..PostprocessParams::default()
+    };
+    g.bench_function(
+        format!("decode_nms_{}_rows_threshold_0.001", rows.len() / 5),
+        |b| b.iter(|| postprocess(black_box(&rows), &lb, &eval).expect("postprocess")),
+    );
+    g.finish();
+
+    // A camera 400 mm above a 200 × 100 mm plate, slightly tilted: pairs from its exact projection.
+    let project = |x: f64, y: f64| -> (f64, f64) {
+        let (xc, yc, zc) = (x - 100.0 + 0.05 * y, y - 50.0, 400.0 + 0.1 * x);
+        (800.0 * xc / zc + 320.0, 800.0 * yc / zc + 240.0)
+    };
+    let pairs: Vec<PointPair> = [
+        (0.0, 0.0),
+        (200.0, 0.0),
+        (200.0, 100.0),
+        (0.0, 100.0),
+        (100.0, 50.0),
+        (50.0, 20.0),
+    ]
+    .iter()
+    .map(|&(x, y)| {
+        let (u, v) = project(x, y);
+        PointPair::new([u, v], [x, y])
+    })
+    .collect();
+    let h = fit_dlt(&pairs).expect("homography");
+    let mut g = c.benchmark_group("homography");
+    g.bench_function("pixel_to_surface", |b| {
+        b.iter(|| h.pixel_to_surface(black_box([321.5, 250.25])))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,46 @@
+//! Errors of the vision crate.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in `crackbot-vision`.
+#[derive(Debug, thiserror::Error)]
+pub enum VisionError {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// An image could not be decoded or encoded.
+    #[error("{path}: {message}")]
+    Image {
+        /// The image file (empty for in-memory images).
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// A COCO file is malformed or inconsistent.
+    #[error("COCO file {path}: {message}")]
+    Coco {
+        /// The file (empty for in-memory data).
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// Input that cannot be used (degenerate geometry, non-finite values, bad parameters…).
+    #[error("{0}")]
+    Invalid(String),
+    /// A homography calibration file is malformed or degenerate.
+    #[error("calibration {path}: {message}")]
+    Calibration {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The ONNX model or runtime could not be used.
+    #[error("{0}")]
+    Runtime(String),
+}

@@ -1,0 +1,36 @@
+//! Finding candidate cracks in a camera frame and saying where they are on the work surface.
+//!
+//! * [`Detector`]: one trait for every detector, returning [`Detection`]s in image pixels.
+//!   - `onnx` (cargo feature `onnx`): the crack detector trained in `models/detector/`, run through
+//!     ONNX Runtime (`ort`, loaded at run time).
+//!   - [`classical`]: an edge-based baseline (no model, no runtime).
+//! * [`preprocess`]: the letterbox contract shared with the model (`models/detector/MODEL_CARD.md`).
+//! * [`boxes`]: boxes, IoU, non-maximum suppression.
+//! * [`coco`]: COCO files and the COCO detection metrics (mAP@[.5:.95], mAP@0.5, AR@100), as
+//!   pycocotools computes them.
+//! * [`fusion`]: combining detections over several frames of one view.
+//! * [`homography`]: pixel ↔ surface millimetres from point pairs (normalised DLT, RANSAC), and its
+//!   calibration file.
+
+pub mod boxes;
+pub mod classical;
+pub mod coco;
+mod error;
+pub mod fusion;
+pub mod homography;
+#[cfg(feature = "onnx")]
+pub mod onnx;
+pub mod preprocess;
+
+pub use boxes::{BoundingBox, Detection};
+pub use error::VisionError;
+
+/// Anything that finds cracks in an RGB frame.
+pub trait Detector {
+    /// Short name for reports (e.g. `"onnx:crack-detector-320"`, `"classical"`).
+    fn name(&self) -> String;
+
+    /// Candidate cracks in `image`, boxes in the image's pixel coordinates (x right, y down, origin
+    /// at the top-left corner of the top-left pixel), scores in `[0, 1]`, best first.
+    fn detect(&mut self, image: &image::RgbImage) -> Result<Vec<Detection>, VisionError>;
+}

@@ -1,0 +1,252 @@
+//! The crack detector trained in `models/detector/`, run through ONNX Runtime.
+//!
+//! `ort` is built with `load-dynamic`: the binary does not link ONNX Runtime; the shared library
+//! `libonnxruntime.so.1.31.1` (from the `onnxruntime==1.31.1` wheel on PyPI) is loaded on first use
+//! from, in order:
+//! 1. `ORT_DYLIB_PATH` (the library file itself);
+//! 2. the project's own install, which `scripts/setup.sh` makes on first use:
+//!    `$CRACKBOT_CACHE_DIR` (default `~/.cache/crackbot`)`/ort-venv/lib/python3*/site-packages/
+//!    onnxruntime/capi/libonnxruntime.so.*`.
+//!
+//! Missing or mismatched runtimes give a [`VisionError::Runtime`] that names the version expected
+//! and how to get it, never a panic.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use ort::session::Session;
+use ort::value::TensorRef;
+
+use crate::preprocess::{letterbox, postprocess, Letterbox, PostprocessParams};
+use crate::{Detection, Detector, VisionError};
+
+/// The ONNX Runtime version this build expects (the `api-31` feature of `ort` refuses older ones).
+pub const ORT_VERSION: &str = "1.31.1";
+
+/// How to get the runtime, appended to every "runtime not found" error.
+const HOW_TO_FIX: &str =
+    "run `bash scripts/setup.sh` (installs the onnxruntime==1.31.1 wheel into \
+~/.cache/crackbot/ort-venv), or `pip install onnxruntime==1.31.1` and set ORT_DYLIB_PATH to its \
+onnxruntime/capi/libonnxruntime.so.1.31.1";
+
+/// The ONNX Runtime library to load: `ORT_DYLIB_PATH`, else the project's own install.
+pub fn runtime_library() -> Result<PathBuf, VisionError> {
+    if let Some(p) = std::env::var_os("ORT_DYLIB_PATH") {
+        let p = PathBuf::from(p);
+        if p.is_file() {
+            return Ok(p);
+        }
+        return Err(VisionError::Runtime(format!(
+            "ORT_DYLIB_PATH={} is not a file (it must name libonnxruntime.so.{ORT_VERSION} itself); {HOW_TO_FIX}",
+            p.display()
+        )));
+    }
+    let cache = std::env::var_os("CRACKBOT_CACHE_DIR")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/crackbot")));
+    let searched = cache
+        .as_ref()
+        .map(|c| c.join("ort-venv/lib/python3*/site-packages/onnxruntime/capi"));
+    if let Some(found) = cache.as_deref().and_then(find_in_venv) {
+        return Ok(found);
+    }
+    Err(VisionError::Runtime(format!(
+        "ONNX Runtime {ORT_VERSION} not found (ORT_DYLIB_PATH is unset; looked in {}); {HOW_TO_FIX}",
+        searched.map_or_else(|| "no cache folder: HOME unset".into(), |s| s.display().to_string())
+    )))
+}
+
+/// `libonnxruntime.so.*` of the wheel in `<cache>/ort-venv`.
+fn find_in_venv(cache: &Path) -> Option<PathBuf> {
+    let lib = cache.join("ort-venv/lib");
+    for py in std::fs::read_dir(&lib).ok()?.flatten() {
+        let capi = py.path().join("site-packages/onnxruntime/capi");
+        let Ok(entries) = std::fs::read_dir(&capi) else {
+            continue;
+        };
+        let mut libs: Vec<PathBuf> = entries
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| {
+                p.file_name()
+                    .and_then(|n| n.to_str())
+                    .is_some_and(|n| n.starts_with("libonnxruntime.so."))
+            })
+            .collect();
+        libs.sort();
+        if let Some(l) = libs.pop() {
+            return Some(l);
+        }
+    }
+    None
+}
+
+/// The process-wide ONNX Runtime environment. A library that is not found is looked for again on
+/// the next call; once one has been loaded (or failed to load), that outcome is kept: a process
+/// can load ONNX Runtime only once.
+fn environment() -> Result<&'static ort::environment::Environment, VisionError> {
+    static ENV: OnceLock<Result<ort::environment::Environment, String>> = OnceLock::new();
+    if ENV.get().is_none() {
+        runtime_library()?;
+    }
+    ENV.get_or_init(|| {
+        let path = runtime_library().map_err(|e| e.to_string())?;
+        let builder = ort::init_from(&path).map_err(|e| {
+            format!(
+                "loading ONNX Runtime from {}: {e}; this build needs {ORT_VERSION}: {HOW_TO_FIX}",
+                path.display()
+            )
+        })?;
+        builder
+            .with_name("crackbot")
+            .build()
+            .map_err(|e| format!("starting ONNX Runtime from {}: {e}", path.display()))
+    })
+    .as_ref()
+    .map_err(|e| VisionError::Runtime(e.clone()))
+}
+
+/// The trained detector (`models/detector/crack-detector-*.onnx`) behind [`Detector`].
+pub struct OnnxDetector {
+    session: Session,
+    size: usize,
+    params: PostprocessParams,
+    name: String,
+}
+
+impl std::fmt::Debug for OnnxDetector {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OnnxDetector")
+            .field("name", &self.name)
+            .field("size", &self.size)
+            .field("params", &self.params)
+            .finish()
+    }
+}
+
+impl OnnxDetector {
+    /// Loads `model` (one input `images` `[1, 3, S, S]` f32, one output `detections` `[1, N, 5]`
+    /// f32), running it on `threads` intra-op threads.
+    pub fn load(
+        model: &Path,
+        params: PostprocessParams,
+        threads: usize,
+    ) -> Result<Self, VisionError> {
+        let env = environment()?;
+        let bytes = std::fs::read(model).map_err(|source| VisionError::Io {
+            path: model.to_path_buf(),
+            source,
+        })?;
+        let fail = |e: &dyn std::fmt::Display| {
+            VisionError::Runtime(format!("model {}: {e}", model.display()))
+        };
+        let mut builder = Session::builder(env).map_err(|e| fail(&e))?;
+        builder = builder
+            .with_intra_threads(threads.max(1))
+            .map_err(|e| fail(&e))?;
+        let session = builder.commit_from_memory(&bytes).map_err(|e| fail(&e))?;
+        let inputs = session.inputs();
+        let outputs = session.outputs();
+        if inputs.len() != 1 || inputs[0].name() != "images" {
+            return Err(fail(&format!(
+                "expected one input named `images`, found {:?}",
+                inputs.iter().map(|i| i.name()).collect::<Vec<_>>()
+            )));
+        }
+        if outputs.is_empty() || outputs[0].name() != "detections" {
+            return Err(fail(&format!(
+                "expected an output named `detections`, found {:?}",
+                outputs.iter().map(|o| o.name()).collect::<Vec<_>>()
+            )));
+        }
+        let shape: Vec<i64> = inputs[0]
+            .dtype()
+            .tensor_shape()
+            .map(|s| s.iter().copied().collect())
+            .unwrap_or_default();
+        let size = match shape.as_slice() {
+            [1, 3, h, w] if h == w && *h > 0 => *h as usize,
+            _ => {
+                return Err(fail(&format!(
+                    "input `images` has shape {shape:?}, expected [1, 3, S, S] with a fixed S"
+                )))
+            }
+        };
+        let stem = model
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("model");
+        Ok(Self {
+            session,
+            size,
+            params,
+            name: format!("onnx:{stem}"),
+        })
+    }
+
+    /// The model's input side `S` in pixels.
+    pub fn input_size(&self) -> usize {
+        self.size
+    }
+
+    /// Post-processing in use.
+    pub fn params(&self) -> &PostprocessParams {
+        &self.params
+    }
+
+    /// Changes the post-processing (e.g. a lower threshold for mAP evaluation).
+    pub fn set_params(&mut self, params: PostprocessParams) {
+        self.params = params;
+    }
+
+    /// Runs the model on an input tensor (`3·S·S` values, NCHW) and returns the raw `detections`
+    /// rows (`N × 5`).
+    pub fn run_tensor(&mut self, tensor: &[f32]) -> Result<Vec<f32>, VisionError> {
+        let s = self.size;
+        if tensor.len() != 3 * s * s {
+            return Err(VisionError::Invalid(format!(
+                "input tensor has {} values, the model takes 3×{s}×{s}",
+                tensor.len()
+            )));
+        }
+        let fail = |e: ort::Error| VisionError::Runtime(format!("{}: {e}", self.name));
+        let input = TensorRef::from_array_view(([1usize, 3, s, s], tensor)).map_err(fail)?;
+        let name = self.name.clone();
+        let fail = |e: ort::Error| VisionError::Runtime(format!("{name}: {e}"));
+        let outputs = self
+            .session
+            .run(ort::inputs!["images" => input])
+            .map_err(fail)?;
+        let out = outputs
+            .get("detections")
+            .ok_or_else(|| VisionError::Runtime(format!("{name}: no `detections` output")))?;
+        let (shape, data) = out.try_extract_tensor::<f32>().map_err(fail)?;
+        if shape.len() != 3 || shape[2] != 5 {
+            return Err(VisionError::Runtime(format!(
+                "{name}: `detections` has shape {:?}, expected [1, N, 5]",
+                shape.iter().collect::<Vec<_>>()
+            )));
+        }
+        Ok(data.to_vec())
+    }
+
+    /// Letterboxes `image` for this model (see [`crate::preprocess`]).
+    pub fn preprocess(
+        &self,
+        image: &image::RgbImage,
+    ) -> Result<(Vec<f32>, Letterbox), VisionError> {
+        letterbox(image, self.size)
+    }
+}
+
+impl Detector for OnnxDetector {
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+
+    fn detect(&mut self, image: &image::RgbImage) -> Result<Vec<Detection>, VisionError> {
+        let (tensor, lb) = self.preprocess(image)?;
+        let rows = self.run_tensor(&tensor)?;
+        postprocess(&rows, &lb, &self.params)
+    }
+}

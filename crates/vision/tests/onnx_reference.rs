@@ -1,0 +1,178 @@
+//! The Rust inference path (letterbox → ONNX Runtime → decode → NMS) against the Python model's own
+//! outputs, saved next to the model at export time (`models/detector/reference/`, written by
+//! `models/detector/make_reference.py` with onnxruntime in Python), and bad model files.
+#![cfg(feature = "onnx")]
+
+use std::path::{Path, PathBuf};
+
+use crackbot_vision::onnx::OnnxDetector;
+use crackbot_vision::preprocess::{letterbox, PostprocessParams};
+use crackbot_vision::{Detector, VisionError};
+use serde_json::Value;
+
+fn models() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/detector")
+}
+
+fn reference() -> Value {
+    let text =
+        std::fs::read_to_string(models().join("reference/reference.json")).expect("reference.json");
+    serde_json::from_str(&text).expect("JSON")
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().expect("number")
+}
+
+fn close(a: f64, b: f64, rel: f64, abs: f64) -> bool {
+    (a - b).abs() <= abs + rel * b.abs()
+}
+
+#[test]
+fn raw_outputs_match_python_on_the_synthetic_input_at_every_size() {
+    let r = reference();
+    for s in r["synthetic"].as_array().expect("synthetic") {
+        let size = s["S"].as_u64().expect("S") as usize;
+        let model = models().join(s["model"].as_str().expect("model"));
+        let mut d = OnnxDetector::load(&model, PostprocessParams::default(), 1).expect("load");
+        assert_eq!(d.input_size(), size);
+        let mut x = vec![0f32; 3 * size * size];
+        for c in 0..3 {
+            for y in 0..size {
+                for xx in 0..size {
+                    x[(c * size + y) * size + xx] = ((c * 7 + y * 3 + xx * 5) % 17) as f32 / 16.0;
+                }
+            }
+        }
+        let rows = d.run_tensor(&x).expect("run");
+        assert_eq!(
+            rows.len() / 5,
+            s["N"].as_u64().expect("N") as usize,
+            "{}",
+            model.display()
+        );
+        for (i, want) in s["first_rows"].as_array().expect("rows").iter().enumerate() {
+            for (k, w) in want.as_array().expect("row").iter().enumerate() {
+                let got = f64::from(rows[i * 5 + k]);
+                assert!(
+                    close(got, f(w), 1e-4, 1e-4),
+                    "S={size} row {i} value {k}: {got} vs {}",
+                    f(w)
+                );
+            }
+        }
+        let best = s["max_score_index"].as_u64().expect("index") as usize;
+        for (k, w) in s["max_score_row"]
+            .as_array()
+            .expect("row")
+            .iter()
+            .enumerate()
+        {
+            assert!(close(f64::from(rows[best * 5 + k]), f(w), 1e-4, 1e-4));
+        }
+    }
+}
+
+#[test]
+fn detections_match_python_on_real_photos() {
+    let r = reference();
+    let threshold = f(&r["contract"]["threshold"]) as f32;
+    let mut d = OnnxDetector::load(
+        &models().join("crack-detector-320.onnx"),
+        PostprocessParams {
+            score_threshold: threshold,
+            ..PostprocessParams::default()
+        },
+        1,
+    )
+    .expect("load");
+    let mut compared = 0;
+    for im in r["images"].as_array().expect("images") {
+        let file = models()
+            .join("reference")
+            .join(im["file"].as_str().expect("file"));
+        let rgb = image::open(&file).expect("png").to_rgb8();
+        assert_eq!(u64::from(rgb.width()), im["W"].as_u64().expect("W"));
+        // The letterbox is the contract's, value for value.
+        let (x, lb) = letterbox(&rgb, 320).expect("letterbox");
+        assert!(close(f64::from(lb.scale), f(&im["scale"]), 1e-6, 0.0));
+        let sum: f64 = x.iter().map(|&v| f64::from(v)).sum();
+        let want = f(&im["input_checksum"]["sum"]);
+        assert!(
+            close(sum, want, 1e-6, 1e-3),
+            "{}: input sum {sum} vs {want}",
+            file.display()
+        );
+        for (k, w) in im["input_checksum"]["first8_row0_R"]
+            .as_array()
+            .expect("first8")
+            .iter()
+            .enumerate()
+        {
+            assert!(
+                close(f64::from(x[k]), f(w), 0.0, 1e-6),
+                "{}: input[{k}]",
+                file.display()
+            );
+        }
+        let found = d.detect(&rgb).expect("detect");
+        let want = im["detections"].as_array().expect("detections");
+        assert_eq!(found.len(), want.len(), "{}: {found:?}", file.display());
+        for (g, w) in found.iter().zip(want) {
+            let b = w["bbox"].as_array().expect("bbox");
+            for (got, w) in [g.bbox.x0, g.bbox.y0, g.bbox.x1, g.bbox.y1].iter().zip(b) {
+                assert!(
+                    close(f64::from(*got), f(w), 1e-3, 1e-3),
+                    "{}: box {g:?} vs {b:?}",
+                    file.display()
+                );
+            }
+            assert!(close(f64::from(g.score), f(&w["score"]), 1e-3, 1e-5));
+            compared += 1;
+        }
+    }
+    assert!(
+        compared > 0,
+        "the reference images have no detection to compare"
+    );
+}
+
+#[test]
+fn bad_model_files_are_named_errors() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let garbage = dir.path().join("garbage.onnx");
+    std::fs::write(&garbage, b"this is not an ONNX model").expect("write");
+    let err = OnnxDetector::load(&garbage, PostprocessParams::default(), 1).unwrap_err();
+    assert!(matches!(err, VisionError::Runtime(_)), "{err}");
+    assert!(err.to_string().contains("garbage.onnx"), "{err}");
+    let real = std::fs::read(models().join("crack-detector-320.onnx")).expect("model");
+    let truncated = dir.path().join("truncated.onnx");
+    std::fs::write(&truncated, &real[..real.len() / 2]).expect("write");
+    let err = OnnxDetector::load(&truncated, PostprocessParams::default(), 1).unwrap_err();
+    assert!(err.to_string().contains("truncated.onnx"), "{err}");
+    let missing = dir.path().join("missing.onnx");
+    let err = OnnxDetector::load(&missing, PostprocessParams::default(), 1).unwrap_err();
+    assert!(
+        matches!(err, VisionError::Io { .. }) && err.to_string().contains("missing.onnx"),
+        "{err}"
+    );
+}
+
+#[test]
+fn odd_images_and_tensors_never_panic() {
+    let mut d = OnnxDetector::load(
+        &models().join("crack-detector-320.onnx"),
+        PostprocessParams::default(),
+        1,
+    )
+    .expect("load");
+    for (w, h) in [(1, 1), (2000, 3), (3, 900), (320, 320)] {
+        let img = image::RgbImage::from_pixel(w, h, image::Rgb([128, 128, 128]));
+        let found = d.detect(&img).expect("detect");
+        for det in found {
+            assert!(det.bbox.x0 >= 0.0 && det.bbox.x1 <= w as f32 && det.bbox.y1 <= h as f32);
+            assert!((0.0..=1.0).contains(&det.score));
+        }
+    }
+    assert!(d.run_tensor(&[0.0; 10]).is_err());
+}

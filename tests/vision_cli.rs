@@ -1,0 +1,211 @@
+//! `crackbot detect`, `eval-detector` and `homography` end to end: the real binary, the real model
+//! through ONNX Runtime, real photos (`../shared/data/cracks`), and bad input.
+
+use std::path::Path;
+
+use crackbot_tests::{crackbot, text};
+use serde_json::Value;
+
+const CRACKS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/cracks");
+const REFERENCE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/models/detector/reference");
+
+fn ok_json(args: &[&str]) -> Value {
+    let out = crackbot(args);
+    assert!(
+        out.status.success(),
+        "crackbot {args:?}: {}",
+        text(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+fn fails_naming(args: &[&str], what: &str) {
+    let out = crackbot(args);
+    assert!(!out.status.success(), "crackbot {args:?} should fail");
+    let err = text(&out.stderr);
+    assert!(
+        err.contains(what),
+        "crackbot {args:?}: error does not name {what:?}: {err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+/// A top-down camera 600 px wide looking at a 200 × 100 mm plate with a slight tilt: exact
+/// pixel ↔ mm pairs as CSV.
+fn write_pairs(path: &Path, collinear: bool) {
+    let project = |x: f64, y: f64| {
+        let (xc, yc, zc) = (x - 100.0 + 0.05 * y, y - 50.0, 400.0 + 0.1 * x);
+        (800.0 * xc / zc + 320.0, 800.0 * yc / zc + 240.0)
+    };
+    let mut csv = String::from("u,v,x_mm,y_mm\n");
+    for (x, y) in [
+        (0.0, 0.0),
+        (200.0, 0.0),
+        (200.0, 100.0),
+        (0.0, 100.0),
+        (100.0, 50.0),
+        (40.0, 70.0),
+    ] {
+        let y = if collinear { 0.0 } else { y };
+        let (u, v) = project(x, y);
+        csv += &format!("{u},{v},{x},{y}\n");
+    }
+    std::fs::write(path, csv).expect("pairs");
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+#[test]
+fn detect_with_calibration_annotation_and_fusion() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pairs = dir.path().join("pairs.csv");
+    let cal = dir.path().join("camera.toml");
+    write_pairs(&pairs, false);
+    let out = crackbot(&["homography", "fit", s(&pairs), "--out", s(&cal)]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // The plate's centre (100, 50) mm projects to pixel (320 + 800·5/410, 240).
+    let centre_u = 320.0 + 800.0 * 2.5 / 410.0;
+    let check = crackbot(&[
+        "homography",
+        "check",
+        s(&cal),
+        "--pixel",
+        &format!("{centre_u},240"),
+    ]);
+    assert!(check.status.success(), "{}", text(&check.stderr));
+    assert!(
+        text(&check.stdout).contains("(100.000, 50.000) mm"),
+        "{}",
+        text(&check.stdout)
+    );
+
+    let image = format!("{REFERENCE}/ref_uav75.png");
+    let annotated = dir.path().join("annotated");
+    let r = ok_json(&[
+        "detect",
+        &image,
+        &image,
+        &image,
+        "--threshold",
+        "0.05",
+        "--calibration",
+        s(&cal),
+        "--fuse",
+        "--annotate",
+        s(&annotated),
+        "--json",
+    ]);
+    assert!(r["detector"]
+        .as_str()
+        .expect("detector")
+        .starts_with("onnx:"));
+    let images = r["images"].as_array().expect("images");
+    assert_eq!(images.len(), 3);
+    let dets = images[0]["detections"].as_array().expect("detections");
+    assert!(
+        !dets.is_empty(),
+        "the reference photo has detections at 0.05"
+    );
+    for d in dets {
+        assert!(d["score"].as_f64().expect("score") >= 0.05);
+        assert_eq!(d["centre_mm"].as_array().expect("centre_mm").len(), 2);
+    }
+    // Three copies of one frame fuse into the same detections, each seen 3 times.
+    let fused = r["fused"].as_array().expect("fused");
+    assert_eq!(fused.len(), dets.len());
+    assert!(fused.iter().all(|f| f["frames_seen"] == 3));
+    let png = annotated.join("ref_uav75-detections.png");
+    let drawn = image::open(&png).expect("annotated PNG").to_rgb8();
+    let original = image::open(&image).expect("image").to_rgb8();
+    assert_eq!(drawn.dimensions(), original.dimensions());
+    assert_ne!(drawn, original, "boxes are drawn");
+}
+
+#[test]
+fn eval_detector_reports_coco_metrics_for_both_detectors() {
+    let coco = format!("{CRACKS}/crackforest/val.json");
+    let classical = ok_json(&[
+        "eval-detector",
+        "--coco",
+        &coco,
+        "--detector",
+        "classical",
+        "--json",
+    ]);
+    let onnx = ok_json(&["eval-detector", "--coco", &coco, "--json"]);
+    for r in [&classical, &onnx] {
+        for k in ["map", "map50", "ar100"] {
+            let v = r[k].as_f64().expect(k);
+            assert!((0.0..=1.0).contains(&v), "{k} = {v}");
+        }
+        assert_eq!(r["images"], 18);
+        assert!(r["ms_per_image"].as_f64().expect("ms") > 0.0);
+    }
+    // The trained model must beat the edge baseline on real photos it never trained on.
+    assert!(
+        onnx["map50"].as_f64().expect("map50") > classical["map50"].as_f64().expect("map50"),
+        "onnx {} vs classical {}",
+        onnx["map50"],
+        classical["map50"]
+    );
+}
+
+#[test]
+fn bad_input_is_a_named_error() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let missing = dir.path().join("missing.png");
+    fails_naming(&["detect", s(&missing)], "missing.png");
+    let corrupt = dir.path().join("corrupt.png");
+    std::fs::write(&corrupt, b"not a png").expect("write");
+    fails_naming(
+        &["detect", s(&corrupt), "--detector", "classical"],
+        "corrupt.png",
+    );
+    let image = format!("{REFERENCE}/ref_quaywall.png");
+    fails_naming(&["detect", &image, "--threshold", "2"], "--threshold");
+    fails_naming(&["detect", &image, "--model", s(&corrupt)], "corrupt.png");
+    let pairs = dir.path().join("collinear.csv");
+    write_pairs(&pairs, true);
+    fails_naming(
+        &[
+            "homography",
+            "fit",
+            s(&pairs),
+            "--out",
+            s(&dir.path().join("c.toml")),
+        ],
+        "one line",
+    );
+    let bad_cal = dir.path().join("bad.toml");
+    std::fs::write(&bad_cal, "matrix = 3").expect("write");
+    fails_naming(
+        &["detect", &image, "--calibration", s(&bad_cal)],
+        "bad.toml",
+    );
+    let bad_coco = dir.path().join("bad.json");
+    std::fs::write(&bad_coco, "{\"images\": 5}").expect("write");
+    fails_naming(
+        &[
+            "eval-detector",
+            "--coco",
+            s(&bad_coco),
+            "--detector",
+            "classical",
+        ],
+        "bad.json",
+    );
+    let short = dir.path().join("short.csv");
+    std::fs::write(&short, "1,2,3\n").expect("write");
+    fails_naming(
+        &[
+            "homography",
+            "fit",
+            s(&short),
+            "--out",
+            s(&dir.path().join("d.toml")),
+        ],
+        "short.csv",
+    );
+}
