@@ -299,9 +299,9 @@ fn check_side(points: &[[f64; 2]], side: &str) -> Result<(), VisionError> {
     Ok(())
 }
 
-/// Fits the pixel → surface homography to `pairs` by the normalised DLT (least squares in the
-/// algebraic sense; exact for 4 pairs). See the module docs for what is rejected.
-pub fn fit_dlt(pairs: &[PointPair]) -> Result<Homography, VisionError> {
+/// The pixel and surface points of `pairs`, once both sides are checked (at least 4 pairs, see
+/// `check_side`).
+fn checked_sides(pairs: &[PointPair]) -> Result<(Vec<[f64; 2]>, Vec<[f64; 2]>), VisionError> {
     if pairs.len() < 4 {
         return Err(invalid(format!(
             "a homography needs at least 4 point pairs, got {}",
@@ -312,6 +312,13 @@ pub fn fit_dlt(pairs: &[PointPair]) -> Result<Homography, VisionError> {
     let surface: Vec<[f64; 2]> = pairs.iter().map(|p| p.surface).collect();
     check_side(&pixels, "pixel")?;
     check_side(&surface, "surface")?;
+    Ok((pixels, surface))
+}
+
+/// Fits the pixel → surface homography to `pairs` by the normalised DLT (least squares in the
+/// algebraic sense; exact for 4 pairs). See the module docs for what is rejected.
+pub fn fit_dlt(pairs: &[PointPair]) -> Result<Homography, VisionError> {
+    let (pixels, surface) = checked_sides(pairs)?;
     fit_unchecked(&pixels, &surface)
 }
 
@@ -453,16 +460,7 @@ pub fn fit_ransac(
     if iterations == 0 {
         return Err(invalid("RANSAC needs at least one iteration"));
     }
-    if pairs.len() < 4 {
-        return Err(invalid(format!(
-            "a homography needs at least 4 point pairs, got {}",
-            pairs.len()
-        )));
-    }
-    let pixels: Vec<[f64; 2]> = pairs.iter().map(|p| p.pixel).collect();
-    let surface: Vec<[f64; 2]> = pairs.iter().map(|p| p.surface).collect();
-    check_side(&pixels, "pixel")?;
-    check_side(&surface, "surface")?;
+    let (pixels, surface) = checked_sides(pairs)?;
     let pixel_scale = principal_spread(&pixels).0;
     let surface_scale = principal_spread(&surface).0;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);

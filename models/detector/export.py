@@ -1,0 +1,51 @@
+"""Export a trained checkpoint to fixed-size ONNX files (one per input size) and check them with onnxruntime."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import warnings
+
+import numpy as np
+import torch
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from model import CrackDet, num_outputs  # noqa: E402
+
+
+def export(ckpt: str, sizes, out_dir: str):
+    model = CrackDet().eval()
+    model.load_state_dict(torch.load(ckpt, map_location="cpu")["model"])
+    import onnx
+    import onnxruntime as ort
+    paths = []
+    for s in sizes:
+        path = os.path.join(out_dir, f"crack-detector-{s}.onnx")
+        x = torch.rand(1, 3, s, s)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            torch.onnx.export(model, (x,), path, input_names=["images"], output_names=["detections"],
+                              opset_version=17, dynamo=False, do_constant_folding=True)
+        m = onnx.load(path)
+        onnx.checker.check_model(m)
+        m.doc_string = f"crackbot crack detector, input images [1,3,{s},{s}] RGB 0..1, output detections [1,{num_outputs(s)},5]"
+        onnx.save(m, path)
+        sess = ort.InferenceSession(path, providers=["CPUExecutionProvider"])
+        o = sess.run(["detections"], {"images": x.numpy()})[0]
+        with torch.no_grad():
+            t = model(x).numpy()
+        assert o.shape == (1, num_outputs(s), 5), o.shape
+        print(f"{path}: output {o.shape}, max |ort - torch| = {np.abs(o - t).max():.2e} px/score, "
+              f"{os.path.getsize(path) / 1e6:.2f} MB")
+        paths.append(path)
+    return paths
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--ckpt", default=os.path.join(HERE, "runs", "train", "best.pt"))
+    ap.add_argument("--sizes", type=int, nargs="+", default=[320, 256, 416])
+    ap.add_argument("--out", default=HERE)
+    a = ap.parse_args()
+    export(a.ckpt, a.sizes, a.out)

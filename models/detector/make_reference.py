@@ -1,0 +1,77 @@
+"""Reference outputs for the Rust side: 3 val images (one per dataset) as PNG, their post-processed detections
+(threshold 0.05) from the 320 model via onnxruntime + contract.py, and a synthetic-input check per model size."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+from PIL import Image
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import contract  # noqa: E402
+from eval import ort_runner  # noqa: E402
+
+DATA = "/work/shared/data/cracks"
+DATASETS = ["crackforest", "uav75", "quaywall"]
+REF_THRESHOLD = 0.05
+
+
+def synthetic_input(size: int) -> np.ndarray:
+    c = np.arange(3)[:, None, None]
+    y = np.arange(size)[None, :, None]
+    x = np.arange(size)[None, None, :]
+    return (((c * 7 + y * 3 + x * 5) % 17) / 16.0).astype(np.float32)[None]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--models", default=HERE)
+    ap.add_argument("--out", default=os.path.join(HERE, "reference"))
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    run320, size = ort_runner(os.path.join(a.models, "crack-detector-320.onnx"))
+    assert size == 320
+    ref = {"contract": {"S": 320, "pad": 0.5, "threshold": REF_THRESHOLD, "nms_iou": contract.NMS_IOU,
+                        "max_det": contract.MAX_DETECTIONS,
+                        "note": "detections computed with onnxruntime on the PNG via contract.py"},
+           "images": [], "synthetic": []}
+    for ds in DATASETS:
+        with open(os.path.join(DATA, ds, "val.json")) as f:
+            coco = json.load(f)
+        im = sorted(coco["images"], key=lambda r: r["id"])[0]
+        img = np.asarray(Image.open(os.path.join(DATA, ds, im["file_name"])).convert("RGB"))
+        png = f"ref_{ds}.png"
+        Image.fromarray(img).save(os.path.join(a.out, png))
+        img = np.asarray(Image.open(os.path.join(a.out, png)).convert("RGB"))  # round-trip (lossless)
+        h, w = img.shape[:2]
+        x, s = contract.letterbox(img, 320)
+        dets = contract.postprocess(run320(x), s, w, h, REF_THRESHOLD)
+        gts = [a_["bbox"] for a_ in coco["annotations"] if a_["image_id"] == im["id"]]
+        ref["images"].append({
+            "file": png, "dataset": ds, "source_file": f"{ds}/{im['file_name']}", "W": w, "H": h, "S": 320,
+            "scale": s, "input_checksum": {"sum": float(x.astype(np.float64).sum()),
+                                           "first8_row0_R": [float(v) for v in x[0, 0, 0, :8]]},
+            "detections": [{"bbox": [d[0], d[1], d[2], d[3]], "score": d[4]} for d in dets],
+            "ground_truth_xywh": gts})
+        print(f"{png}: {w}x{h}, {len(dets)} detections >= {REF_THRESHOLD}, top: {dets[:1]}")
+    for S in (256, 320, 416):
+        run, size = ort_runner(os.path.join(a.models, f"crack-detector-{S}.onnx"))
+        out = run(synthetic_input(S))[0]
+        best = int(np.argmax(out[:, 4]))
+        ref["synthetic"].append({
+            "model": f"crack-detector-{S}.onnx", "S": S, "N": int(out.shape[0]),
+            "input": "value(c,y,x) = ((c*7 + y*3 + x*5) % 17) / 16.0, float32, [1,3,S,S]",
+            "first_rows": [[float(v) for v in r] for r in out[:64]],
+            "max_score_index": best, "max_score_row": [float(v) for v in out[best]]})
+        print(f"synthetic S={S}: N={out.shape[0]}, max score row {best}: {out[best]}")
+    with open(os.path.join(a.out, "reference.json"), "w") as f:
+        json.dump(ref, f, indent=1)
+    print("wrote", os.path.join(a.out, "reference.json"))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Retrain the crack detector from scratch: setup, train, export (256/320/416), reference outputs, evaluation.
+#   bash models/detector/train.sh            # TRAIN_MINUTES=39 by default (2 CPU cores)
+set -euo pipefail
+HERE="$(cd "$(dirname "$0")" && pwd)"
+cd "$HERE"
+DATA=/work/shared/data/cracks
+MINUTES=${TRAIN_MINUTES:-39}
+bash setup.sh
+PY=.venv/bin/python
+export OMP_NUM_THREADS=2
+RUN=runs/train
+rm -rf "$RUN"; mkdir -p "$RUN" out
+nice -n 10 $PY train.py --minutes "$MINUTES" --eval-every 180 --out "$RUN" | tee "$RUN/stdout.log"
+$PY export.py --ckpt "$RUN/best.pt" --sizes 320 256 416 --out "$HERE"
+$PY make_reference.py --models "$HERE" --out "$HERE/reference"
+for S in 320 256 416; do
+  for ds in crackforest uav75 quaywall; do
+    $PY eval.py --model crack-detector-$S.onnx --ann $DATA/$ds/val.json --json-metrics out/metrics_${S}_$ds.json
+  done
+  $PY eval.py --model crack-detector-$S.onnx --ann $DATA/val_all.json --root $DATA \
+      --results out/dets_${S}_val_all.json --json-metrics out/metrics_${S}_val_all.json
+done
+$PY augmented_set.py --split val --out out/augval --seed 0
+$PY eval.py --model crack-detector-320.onnx --ann out/augval/annotations.json --json-metrics out/metrics_320_augval.json
+echo "models:     $HERE/crack-detector-{256,320,416}.onnx"
+echo "reference:  $HERE/reference/"
+echo "metrics:    $HERE/out/metrics_*.json, training log: $HERE/$RUN/"
