@@ -21,7 +21,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from augment import Augmenter, load_photos  # noqa: E402
 
-DATA = "/work/shared/data/cracks"
+# The crack photos beside the clone (../shared/data/cracks from the repository root); CRACKS_DATA overrides.
+DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "../../../shared/data/cracks")))
 
 
 def main():

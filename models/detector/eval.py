@@ -1,7 +1,7 @@
 """Evaluate a crack-detector ONNX model (onnxruntime + contract.py + pycocotools) on a COCO file.
 
-  python eval.py --model crack-detector-320.onnx --ann /work/shared/data/cracks/val_all.json \
-      --root /work/shared/data/cracks [--size 320] [--results out/dets.json] [--json-metrics out/m.json]
+  python eval.py --model crack-detector-320.onnx --ann ../shared/data/cracks/val_all.json \
+      --root ../shared/data/cracks [--size 320] [--results out/dets.json] [--json-metrics out/m.json]
 
 --size defaults to the model's fixed input size. Score threshold 0.001, NMS 0.5, max 100 (the contract).
 """

@@ -15,7 +15,8 @@ sys.path.insert(0, HERE)
 import contract  # noqa: E402
 from eval import ort_runner  # noqa: E402
 
-DATA = "/work/shared/data/cracks"
+# The crack photos beside the clone (../shared/data/cracks from the repository root); CRACKS_DATA overrides.
+DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "../../../shared/data/cracks")))
 DATASETS = ["crackforest", "uav75", "quaywall"]
 REF_THRESHOLD = 0.05
 

@@ -22,7 +22,8 @@ from augment import Augmenter, load_photos  # noqa: E402
 from model import STRIDES, CrackDet  # noqa: E402
 import eval as ev  # noqa: E402
 
-DATA = "/work/shared/data/cracks"
+# The crack photos beside the clone (../shared/data/cracks from the repository root); CRACKS_DATA overrides.
+DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "../../../shared/data/cracks")))
 RANGES = {16: (0, 192), 32: (64, 1e9)}  # max box side (canvas px) handled by each stride
 RADIUS = 2.5
 

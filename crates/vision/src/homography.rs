@@ -299,9 +299,12 @@ fn check_side(points: &[[f64; 2]], side: &str) -> Result<(), VisionError> {
     Ok(())
 }
 
+/// Points of one side of the pairs.
+type Points = Vec<[f64; 2]>;
+
 /// The pixel and surface points of `pairs`, once both sides are checked (at least 4 pairs, see
 /// `check_side`).
-fn checked_sides(pairs: &[PointPair]) -> Result<(Vec<[f64; 2]>, Vec<[f64; 2]>), VisionError> {
+fn checked_sides(pairs: &[PointPair]) -> Result<(Points, Points), VisionError> {
     if pairs.len() < 4 {
         return Err(invalid(format!(
             "a homography needs at least 4 point pairs, got {}",
