@@ -59,6 +59,13 @@ pub struct TradeoffArgs {
     /// Windows per timed batch of the latency measurement.
     #[arg(long, default_value_t = 1000)]
     batch: usize,
+    #[command(flatten)]
+    pipeline: PipelineArgs,
+}
+
+/// The window pipeline and forest seed shared by `eval` and `tradeoff`.
+#[derive(Debug, Args)]
+pub struct PipelineArgs {
     /// Windowed feature.
     #[arg(long, value_enum, default_value_t = FeatureArg::Mav)]
     feature: FeatureArg,
@@ -77,6 +84,44 @@ pub struct TradeoffArgs {
     /// Seed of the forests.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+}
+
+impl PipelineArgs {
+    /// The experiment: as given, or detected from the labels of all recordings.
+    fn experiment(
+        &self,
+        train: &[(PathBuf, Recording)],
+        test: &[(PathBuf, Recording)],
+    ) -> Result<crackbot_tactile::dataset::Experiment> {
+        use crackbot_tactile::dataset::{detect_experiment, Experiment};
+        Ok(match self.experiment {
+            Some(ExperimentArg::Recognition) => Experiment::Recognition,
+            Some(ExperimentArg::Width) => Experiment::Width,
+            None => {
+                let all: Vec<(PathBuf, Recording)> = train.iter().chain(test).cloned().collect();
+                detect_experiment(&all)?
+            }
+        })
+    }
+
+    /// The paper's pipeline with these choices, windows `window`, no context.
+    fn config(
+        &self,
+        window: crackbot_dsp::WindowConfig,
+    ) -> crackbot_tactile::dataset::PipelineConfig {
+        use crackbot_tactile::dataset::{Normalisation, PipelineConfig};
+        PipelineConfig {
+            segmentation: segmentation_of(self.segmentation),
+            window,
+            spec: crackbot_dsp::FeatureSpec::new(feature_of(self.feature), set_of(self.set)),
+            normalisation: match self.normalise {
+                NormaliseArg::None => Normalisation::None,
+                NormaliseArg::Median => Normalisation::RecordingMedian,
+            },
+            min_slide_len: 100,
+            context: None,
+        }
+    }
 }
 
 /// Arguments of `crackbot tactile paper`.
@@ -111,30 +156,14 @@ pub struct EvalArgs {
     /// Test recordings (.mat or .csv files, or folders of them).
     #[arg(long, required = true, num_args = 1..)]
     test: Vec<PathBuf>,
-    /// Windowed feature.
-    #[arg(long, value_enum, default_value_t = FeatureArg::Mav)]
-    feature: FeatureArg,
-    /// Channel set.
-    #[arg(long, value_enum, default_value_t = SetArg::D1d2p)]
-    set: SetArg,
+    #[command(flatten)]
+    pipeline: PipelineArgs,
     /// Classifier.
     #[arg(long, value_enum, default_value_t = ClassifierArg::Rf)]
     classifier: ClassifierArg,
     /// Trees of the random forests (classifier and width regressor).
     #[arg(long, default_value_t = 100)]
     trees: usize,
-    /// Slide segmentation before windowing.
-    #[arg(long, value_enum, default_value_t = SegmentationArg::Paper)]
-    segmentation: SegmentationArg,
-    /// Per-recording offset correction.
-    #[arg(long, value_enum, default_value_t = NormaliseArg::None)]
-    normalise: NormaliseArg,
-    /// Experiment, when the labels fit both (only 0, 1, 2).
-    #[arg(long, value_enum)]
-    experiment: Option<ExperimentArg>,
-    /// Seed of the forests.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
     /// Print one JSON object (window_accuracy, slide_accuracy, width_mae_mm, …).
     #[arg(long)]
     json: bool,
@@ -384,14 +413,9 @@ fn create_parent(path: &Path) -> Result<()> {
 }
 
 fn eval(args: EvalArgs) -> Result<()> {
-    use crackbot_dsp::{
-        Feature, FeatureSet, FeatureSpec, PaperSegmentation, RobustSegmentation,
-        SegmentationMethod, WindowConfig,
-    };
+    use crackbot_dsp::WindowConfig;
     use crackbot_tactile::context::ContextConfig;
-    use crackbot_tactile::dataset::{
-        build_windows, detect_experiment, Experiment, Normalisation, PipelineConfig, Segmentation,
-    };
+    use crackbot_tactile::dataset::{build_windows, Experiment, PipelineConfig};
     use crackbot_tactile::eval::{
         test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
         width_regression_tuned, ClassifierKind, ForestTuning,
@@ -402,45 +426,9 @@ fn eval(args: EvalArgs) -> Result<()> {
     }
     let train = collect_recordings(&args.train)?;
     let test = collect_recordings(&args.test)?;
-    let experiment = match args.experiment {
-        Some(ExperimentArg::Recognition) => Experiment::Recognition,
-        Some(ExperimentArg::Width) => Experiment::Width,
-        None => {
-            let all: Vec<(PathBuf, Recording)> = train.iter().chain(&test).cloned().collect();
-            detect_experiment(&all)?
-        }
-    };
-    let feature = match args.feature {
-        FeatureArg::Raw => Feature::Raw,
-        FeatureArg::Mav => Feature::Mav,
-        FeatureArg::Rms => Feature::Rms,
-    };
-    let set = match args.set {
-        SetArg::P => FeatureSet::P,
-        SetArg::D1d2d3 => FeatureSet::D1D2D3,
-        SetArg::D1d2d3p => FeatureSet::D1D2D3P,
-        SetArg::D1d2p => FeatureSet::D1D2P,
-    };
+    let experiment = args.pipeline.experiment(&train, &test)?;
+    let (feature, set) = (feature_of(args.pipeline.feature), set_of(args.pipeline.set));
     let config = PipelineConfig {
-        segmentation: match args.segmentation {
-            SegmentationArg::None => Segmentation::None,
-            SegmentationArg::Paper => {
-                Segmentation::Method(SegmentationMethod::Paper(PaperSegmentation::default()))
-            }
-            SegmentationArg::Robust => {
-                Segmentation::Method(SegmentationMethod::Robust(RobustSegmentation::default()))
-            }
-        },
-        window: WindowConfig {
-            len: args.window_len,
-            step: args.window_step,
-        },
-        spec: FeatureSpec::new(feature, set),
-        normalisation: match args.normalise {
-            NormaliseArg::None => Normalisation::None,
-            NormaliseArg::Median => Normalisation::RecordingMedian,
-        },
-        min_slide_len: 100,
         context: args.context.then(|| ContextConfig {
             scales: args.context_scales.clone(),
             baseline_len: args.context_baseline,
@@ -450,6 +438,10 @@ fn eval(args: EvalArgs) -> Result<()> {
             across_slides: !args.within_slides,
             shape: args.context_shape,
         }),
+        ..args.pipeline.config(WindowConfig {
+            len: args.window_len,
+            step: args.window_step,
+        })
     };
     let tuning = ForestTuning {
         max_features_fraction: args.max_features,
@@ -467,7 +459,7 @@ fn eval(args: EvalArgs) -> Result<()> {
     };
     let quiet = args.json;
     let started = std::time::Instant::now();
-    let model = train_classifier_tuned(&train_set, kind, tuning, args.seed, quiet)?;
+    let model = train_classifier_tuned(&train_set, kind, tuning, args.pipeline.seed, quiet)?;
     // With context, a forest on the paper's own window features (same segmentation and windows,
     // so the same slides) joins the slide verdicts.
     let voter = if config.context.is_some() && args.slide_vote == SlideVoteArg::Both {
@@ -477,7 +469,8 @@ fn eval(args: EvalArgs) -> Result<()> {
         };
         let vote_train = build_windows(&train, experiment, &plain)?;
         let vote_test = build_windows(&test, experiment, &plain)?;
-        let vote_model = train_classifier_tuned(&vote_train, kind, tuning, args.seed, quiet)?;
+        let vote_model =
+            train_classifier_tuned(&vote_train, kind, tuning, args.pipeline.seed, quiet)?;
         Some((vote_model, vote_test))
     } else {
         None
@@ -493,7 +486,12 @@ fn eval(args: EvalArgs) -> Result<()> {
     };
     let width = match experiment {
         Experiment::Width => Some(width_regression_tuned(
-            &train_set, &test_set, args.trees, tuning, args.seed, quiet,
+            &train_set,
+            &test_set,
+            args.trees,
+            tuning,
+            args.pipeline.seed,
+            quiet,
         )?),
         Experiment::Recognition => None,
     };
@@ -722,10 +720,8 @@ fn parse_depth(s: &str) -> Result<Option<usize>> {
 }
 
 fn tradeoff(args: TradeoffArgs) -> Result<()> {
-    use crackbot_dsp::{FeatureSpec, WindowConfig};
-    use crackbot_tactile::dataset::{
-        build_windows, detect_experiment, Experiment, Normalisation, PipelineConfig,
-    };
+    use crackbot_dsp::WindowConfig;
+    use crackbot_tactile::dataset::build_windows;
     use crackbot_tactile::tradeoff::{depth_name, run_tradeoff, TradeoffConfig};
 
     if args.trees.is_empty() || args.trees.contains(&0) {
@@ -742,32 +738,15 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
     crackbot_tactile::plots::load_font()?;
     let train = collect_recordings(&args.train)?;
     let test = collect_recordings(&args.test)?;
-    let experiment = match args.experiment {
-        Some(ExperimentArg::Recognition) => Experiment::Recognition,
-        Some(ExperimentArg::Width) => Experiment::Width,
-        None => {
-            let all: Vec<(PathBuf, Recording)> = train.iter().chain(&test).cloned().collect();
-            detect_experiment(&all)?
-        }
-    };
-    let (feature, set) = (feature_of(args.feature), set_of(args.set));
-    let config = PipelineConfig {
-        segmentation: segmentation_of(args.segmentation),
-        window: WindowConfig::default(),
-        spec: FeatureSpec::new(feature, set),
-        normalisation: match args.normalise {
-            NormaliseArg::None => Normalisation::None,
-            NormaliseArg::Median => Normalisation::RecordingMedian,
-        },
-        min_slide_len: 100,
-        context: None,
-    };
+    let experiment = args.pipeline.experiment(&train, &test)?;
+    let (feature, set) = (feature_of(args.pipeline.feature), set_of(args.pipeline.set));
+    let config = args.pipeline.config(WindowConfig::default());
     let train_set = build_windows(&train, experiment, &config)?;
     let test_set = build_windows(&test, experiment, &config)?;
     let grid = TradeoffConfig {
         n_trees: args.trees.clone(),
         max_depths,
-        seed: args.seed,
+        seed: args.pipeline.seed,
         latency_batch: args.batch,
     };
     let result = run_tradeoff(&train_set, &test_set, &grid, |r| {
@@ -805,7 +784,7 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
         train.len(),
         files(&args.test),
         test.len(),
-        args.seed,
+        args.pipeline.seed,
         result.to_markdown()
     );
     let md_path = args.out.join("tradeoff.md");
