@@ -42,7 +42,16 @@ ort_venv="$crackbot_cache/ort-venv"
 if ! ls "$ort_venv"/lib/python3*/site-packages/onnxruntime/capi/libonnxruntime.so."$ort_version" >/dev/null 2>&1; then
   echo "crackbot setup: installing onnxruntime==$ort_version into $ort_venv" >&2
   mkdir -p "$crackbot_cache"
-  python3 -m venv "$ort_venv"
+  if ! python3 -m venv "$ort_venv" 2>/dev/null; then
+    # Debian's own python3 ships venv separately.
+    echo "crackbot setup: installing python3-venv" >&2
+    sudo_cmd=""
+    [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
+    $sudo_cmd apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq python3-venv
+    rm -rf "$ort_venv"
+    python3 -m venv "$ort_venv"
+  fi
   "$ort_venv/bin/pip" install --quiet --disable-pip-version-check "onnxruntime==$ort_version"
 fi
 
