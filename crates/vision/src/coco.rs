@@ -94,10 +94,7 @@ impl CocoDataset {
     /// Reads and validates a COCO ground-truth file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, VisionError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| VisionError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = std::fs::read_to_string(path).map_err(VisionError::io(path))?;
         Self::from_json_str(&text, path)
     }
 
@@ -238,10 +235,7 @@ pub fn load_results(
     gt: &CocoDataset,
 ) -> Result<Vec<CocoResult>, VisionError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| VisionError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(VisionError::io(path))?;
     parse_results(&text, path, gt)
 }
 
@@ -270,10 +264,7 @@ pub fn save_results(path: impl AsRef<Path>, results: &[CocoResult]) -> Result<()
     }
     let text = serde_json::to_string(results)
         .map_err(|e| coco_err(path, format!("cannot encode results: {e}")))?;
-    std::fs::write(path, text).map_err(|source| VisionError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    std::fs::write(path, text).map_err(VisionError::io(path))
 }
 
 /// The twelve numbers of pycocotools' `COCOeval.summarize()` (`-1` where undefined).

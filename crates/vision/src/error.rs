@@ -44,3 +44,13 @@ pub enum VisionError {
     #[error("{0}")]
     Runtime(String),
 }
+
+impl VisionError {
+    /// Maps an I/O failure on `path` (for `map_err`).
+    pub(crate) fn io(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> VisionError + '_ {
+        move |source| VisionError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}

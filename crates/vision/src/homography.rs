@@ -648,10 +648,7 @@ impl HomographyCalibration {
     /// Reads and validates a calibration file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, VisionError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| VisionError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = std::fs::read_to_string(path).map_err(VisionError::io(path))?;
         let cal: Self = toml::from_str(&text).map_err(|e| VisionError::Calibration {
             path: path.to_path_buf(),
             message: format!("not a homography calibration: {e}"),
@@ -667,9 +664,6 @@ impl HomographyCalibration {
             path: path.to_path_buf(),
             message: format!("cannot encode: {e}"),
         })?;
-        std::fs::write(path, text).map_err(|source| VisionError::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        std::fs::write(path, text).map_err(VisionError::io(path))
     }
 }

@@ -133,10 +133,7 @@ impl OnnxDetector {
         threads: usize,
     ) -> Result<Self, VisionError> {
         let env = environment()?;
-        let bytes = std::fs::read(model).map_err(|source| VisionError::Io {
-            path: model.to_path_buf(),
-            source,
-        })?;
+        let bytes = std::fs::read(model).map_err(VisionError::io(model))?;
         let fail = |e: &dyn std::fmt::Display| {
             VisionError::Runtime(format!("model {}: {e}", model.display()))
         };
