@@ -1,0 +1,940 @@
+//! Mechanics of the finger sliding over a surface profile, and the integrators that carry it.
+//!
+//! ## Model (a vertical plane through the slide line)
+//! * The sensor body (mass `M`, the sensor's ~200 g) hangs on the manipulator: it is moved along
+//!   the slide at the commanded position `x_b(t)`, and rests on the surface under its own weight,
+//!   free to move vertically against the arm's viscous damping.
+//! * The tip, a sphere of radius `R` and gram-scale mass `m`, is joined to the body by the
+//!   compliant middle part of the finger: lateral and normal linear spring–dampers. The lateral
+//!   deflection `δx = x_t − x_b` and the normal compression `δz = z_b − z_t` are what the
+//!   deformation fibres D1–D3 see.
+//! * Contact: the sphere meets the surface along its *rolling envelope* `e(x)` (the height of the
+//!   sphere's lowest point when it rests on the profile above `x`), so a crack narrower than the
+//!   tip barely dips it and the tip rolls round edges. The penetration `δ = e(x_t) − z_t` gives a
+//!   penalty force `k_c δ_n + c_c δ̇_n` (`k_c ≥ 1e5 N/m`) along the envelope's normal: its
+//!   horizontal part is what catches the tip on a crack's far edge. Coulomb friction opposes
+//!   sliding along the tangent, regularised as `μ F_n tanh(v/v_ε)`.
+//!
+//! The state is `[x_t, z_t, ẋ_t, ż_t, z_b, ż_b]` in metres and m/s. The contact mode
+//! (`k_c/m ≈ 1e8 s⁻²`, about 1.6 kHz) is far above the 400 Hz output rate: an explicit step of
+//! 2.5 ms is unstable, so the default integrator is the L-stable two-stage SDIRK, which damps the
+//! contact ringing that no sensor resolves and follows the slow motion at second order
+//! (see the work-precision report, `crackbot sim work-precision`).
+
+use nalgebra::{SMatrix, SVector};
+use serde::{Deserialize, Serialize};
+
+use crate::surface::Profile;
+use crate::SimError;
+
+/// Size of the state vector.
+pub const STATE: usize = 6;
+/// The state: `[x_t, z_t, ẋ_t, ż_t, z_b, ż_b]`, SI units.
+pub type State = [f64; STATE];
+
+type Vec6 = SVector<f64, STATE>;
+type Mat6 = SMatrix<f64, STATE, STATE>;
+
+const G: f64 = 9.81;
+
+/// Mechanical parameters of the finger.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FingerParams {
+    /// Radius of the spherical tip, mm.
+    pub tip_radius_mm: f64,
+    /// Mass of the tip, g.
+    pub tip_mass_g: f64,
+    /// Mass of the sensor body resting on the surface, g (the paper: ~200 g).
+    pub body_mass_g: f64,
+    /// Lateral stiffness of the finger's compliant part, N/mm.
+    pub lateral_stiffness_n_mm: f64,
+    /// Normal stiffness of the finger's compliant part, N/mm.
+    pub normal_stiffness_n_mm: f64,
+    /// Damping ratio of the lateral mode (tip mass on the lateral spring).
+    pub lateral_damping_ratio: f64,
+    /// Damping ratio of the normal mode (tip mass on the normal spring).
+    pub normal_damping_ratio: f64,
+    /// Contact penalty stiffness, N/m (stiff: ≥ 1e5).
+    pub contact_stiffness_n_m: f64,
+    /// Damping ratio of the contact mode (tip mass on the contact stiffness).
+    pub contact_damping_ratio: f64,
+    /// Coulomb friction coefficient between tip and surface.
+    pub friction: f64,
+    /// Sliding speed below which friction is regularised, mm/s.
+    pub friction_velocity_mm_s: f64,
+    /// Viscous damping of the arm's vertical axis carrying the body, N·s/m.
+    pub arm_damping_n_s_m: f64,
+}
+
+impl Default for FingerParams {
+    fn default() -> Self {
+        FingerParams {
+            tip_radius_mm: 1.0,
+            tip_mass_g: 2.0,
+            body_mass_g: 200.0,
+            lateral_stiffness_n_mm: 1.0,
+            normal_stiffness_n_mm: 2.0,
+            lateral_damping_ratio: 0.7,
+            normal_damping_ratio: 0.7,
+            contact_stiffness_n_m: 2e5,
+            contact_damping_ratio: 0.3,
+            friction: 0.35,
+            friction_velocity_mm_s: 0.5,
+            arm_damping_n_s_m: 8.0,
+        }
+    }
+}
+
+impl FingerParams {
+    /// Checks every parameter, naming the first bad one.
+    pub fn validate(&self) -> Result<(), SimError> {
+        let positive = [
+            ("sensor.finger.tip_radius_mm", self.tip_radius_mm),
+            ("sensor.finger.tip_mass_g", self.tip_mass_g),
+            ("sensor.finger.body_mass_g", self.body_mass_g),
+            ("sensor.finger.lateral_stiffness_n_mm", self.lateral_stiffness_n_mm),
+            ("sensor.finger.normal_stiffness_n_mm", self.normal_stiffness_n_mm),
+            ("sensor.finger.contact_stiffness_n_m", self.contact_stiffness_n_m),
+            (
+                "sensor.finger.friction_velocity_mm_s",
+                self.friction_velocity_mm_s,
+            ),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(SimError::Invalid(format!(
+                    "{name} must be a positive number, got {v}"
+                )));
+            }
+        }
+        let non_negative = [
+            ("sensor.finger.lateral_damping_ratio", self.lateral_damping_ratio),
+            ("sensor.finger.normal_damping_ratio", self.normal_damping_ratio),
+            ("sensor.finger.contact_damping_ratio", self.contact_damping_ratio),
+            ("sensor.finger.friction", self.friction),
+            ("sensor.finger.arm_damping_n_s_m", self.arm_damping_n_s_m),
+        ];
+        for (name, v) in non_negative {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(SimError::Invalid(format!(
+                    "{name} must be a non-negative number, got {v}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The rolling envelope of a spherical tip over a profile, tabulated with its slope.
+#[derive(Debug, Clone)]
+pub struct Envelope {
+    /// Spacing, m.
+    step: f64,
+    /// Height of the sphere's lowest point, m.
+    height: Vec<f64>,
+    /// Slope `de/dx`, clamped to ±[`MAX_SLOPE`].
+    slope: Vec<f64>,
+    /// Reflectivity along the line (copied from the profile).
+    reflectivity: Vec<f64>,
+    /// Surface height itself (for the proximity fibre), m.
+    surface: Vec<f64>,
+}
+
+/// Largest envelope slope used for the contact normal (about 87°): walls steeper than this are
+/// treated as this steep, which keeps the normal and the Jacobian finite.
+pub const MAX_SLOPE: f64 = 20.0;
+
+impl Envelope {
+    /// The envelope of a sphere of radius `radius_mm` rolling over `profile`.
+    pub fn new(profile: &Profile, radius_mm: f64) -> Self {
+        let n = profile.height.len();
+        let step_mm = profile.step_mm;
+        let reach = (radius_mm / step_mm).floor() as isize;
+        // Offsets and their sphere heights, computed once.
+        let cap: Vec<(isize, f64)> = (-reach..=reach)
+            .map(|k| {
+                let u = k as f64 * step_mm;
+                (k, (radius_mm * radius_mm - u * u).max(0.0).sqrt())
+            })
+            .collect();
+        let mut env = vec![0.0; n];
+        for (i, e) in env.iter_mut().enumerate() {
+            let mut best = f64::NEG_INFINITY;
+            for &(k, c) in &cap {
+                let j = (i as isize + k).clamp(0, n as isize - 1) as usize;
+                let v = profile.height[j] + c;
+                if v > best {
+                    best = v;
+                }
+            }
+            *e = (best - radius_mm) * 1e-3;
+        }
+        let step = step_mm * 1e-3;
+        let slope = (0..n)
+            .map(|i| {
+                let a = env[i.saturating_sub(1)];
+                let b = env[(i + 1).min(n - 1)];
+                let span = ((i + 1).min(n - 1) - i.saturating_sub(1)).max(1) as f64 * step;
+                ((b - a) / span).clamp(-MAX_SLOPE, MAX_SLOPE)
+            })
+            .collect();
+        Envelope {
+            step,
+            height: env,
+            slope,
+            reflectivity: profile.reflectivity.clone(),
+            surface: profile.height.iter().map(|h| h * 1e-3).collect(),
+        }
+    }
+
+    #[inline]
+    fn lookup(values: &[f64], step: f64, x: f64) -> f64 {
+        let last = values.len() - 1;
+        let u = (x / step).clamp(0.0, last as f64);
+        let k = (u as usize).min(last.saturating_sub(1));
+        let f = u - k as f64;
+        if last == 0 {
+            values[0]
+        } else {
+            values[k] + (values[k + 1] - values[k]) * f
+        }
+    }
+
+    /// Envelope height and slope at `x` metres along the line.
+    #[inline]
+    pub fn at(&self, x: f64) -> (f64, f64) {
+        (
+            Self::lookup(&self.height, self.step, x),
+            Self::lookup(&self.slope, self.step, x),
+        )
+    }
+
+    /// Surface height at `x` metres along the line, m.
+    #[inline]
+    pub fn surface_at(&self, x: f64) -> f64 {
+        Self::lookup(&self.surface, self.step, x)
+    }
+
+    /// Reflectivity at `x` metres along the line.
+    #[inline]
+    pub fn reflectivity_at(&self, x: f64) -> f64 {
+        Self::lookup(&self.reflectivity, self.step, x)
+    }
+
+    /// Length of the line, m.
+    pub fn length(&self) -> f64 {
+        self.step * (self.height.len() - 1) as f64
+    }
+}
+
+/// Where the arm puts the sensor body along the line at time `t`: position and velocity, m and
+/// m/s.
+pub trait ArmPath {
+    /// `(x_b, ẋ_b)` at `t` seconds.
+    fn at(&self, t: f64) -> (f64, f64);
+}
+
+/// The arm standing still at `x`, m.
+#[derive(Debug, Clone, Copy)]
+pub struct Still(pub f64);
+
+impl ArmPath for Still {
+    fn at(&self, _t: f64) -> (f64, f64) {
+        (self.0, 0.0)
+    }
+}
+
+/// Back-and-forth strokes between `start` and `start + stroke` (m) at `speed` (m/s), each
+/// reversal smoothed over `ramp` seconds (a cosine velocity blend), starting forwards (or
+/// backwards when `stroke < 0`).
+#[derive(Debug, Clone, Copy)]
+pub struct Strokes {
+    /// Where the first stroke starts, m.
+    pub start: f64,
+    /// Signed stroke length, m.
+    pub stroke: f64,
+    /// Speed, m/s.
+    pub speed: f64,
+    /// Duration of a reversal, s.
+    pub ramp: f64,
+}
+
+impl Strokes {
+    /// Duration of one stroke (one way), s.
+    pub fn stroke_time(&self) -> f64 {
+        self.stroke.abs() / self.speed + self.ramp
+    }
+
+    /// Duration of one slide (forth and back), s.
+    pub fn slide_time(&self) -> f64 {
+        2.0 * self.stroke_time()
+    }
+}
+
+impl ArmPath for Strokes {
+    fn at(&self, t: f64) -> (f64, f64) {
+        // One stroke: ramp up over ramp/2, cruise, ramp down over ramp/2. Displacement of the
+        // ramp halves: speed * ramp/4 each, so cruise covers |stroke| - speed*ramp/2.
+        let t_stroke = self.stroke_time();
+        let dir0 = self.stroke.signum();
+        let n = (t / t_stroke).floor().max(0.0);
+        let tau = t - n * t_stroke;
+        let forward = (n as u64) % 2 == 0;
+        let dir = if forward { dir0 } else { -dir0 };
+        let origin = if forward {
+            self.start
+        } else {
+            self.start + self.stroke
+        };
+        let half = self.ramp / 2.0;
+        let v = self.speed;
+        let len = self.stroke.abs();
+        let (s, ds) = if half <= 0.0 {
+            ((v * tau).min(len), v)
+        } else if tau < half {
+            // Velocity v/2 (1 - cos(pi tau / half)).
+            let w = std::f64::consts::PI / half;
+            (
+                v / 2.0 * (tau - (w * tau).sin() / w),
+                v / 2.0 * (1.0 - (w * tau).cos()),
+            )
+        } else if tau < t_stroke - half {
+            (v * half / 2.0 + v * (tau - half), v)
+        } else {
+            let r = t_stroke - tau;
+            let w = std::f64::consts::PI / half;
+            (
+                len - v / 2.0 * (r - (w * r).sin() / w),
+                v / 2.0 * (1.0 - (w * r).cos()),
+            )
+        };
+        (origin + dir * s, dir * ds)
+    }
+}
+
+/// The finger on one line of the surface: the right-hand side of its equations of motion.
+#[derive(Debug, Clone)]
+pub struct FingerModel {
+    env: Envelope,
+    m: f64,
+    big_m: f64,
+    kx: f64,
+    kz: f64,
+    cx: f64,
+    cz: f64,
+    kc: f64,
+    cc: f64,
+    mu: f64,
+    v_eps: f64,
+    c_arm: f64,
+}
+
+/// Forces and deflections at one state: what the optics read.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Readout {
+    /// Lateral deflection of the tip relative to the body, m (positive along +x).
+    pub lateral: f64,
+    /// Normal compression of the finger, m (positive when the tip is pushed up).
+    pub normal: f64,
+    /// Contact normal force, N.
+    pub contact_force: f64,
+    /// Tip position along the line, m.
+    pub tip_x: f64,
+    /// Height of the body's reference point, m.
+    pub body_z: f64,
+}
+
+impl FingerModel {
+    /// The model for `params` on the line whose envelope is `env`.
+    pub fn new(params: &FingerParams, env: Envelope) -> Self {
+        let m = params.tip_mass_g * 1e-3;
+        let big_m = params.body_mass_g * 1e-3;
+        let kx = params.lateral_stiffness_n_mm * 1e3;
+        let kz = params.normal_stiffness_n_mm * 1e3;
+        let kc = params.contact_stiffness_n_m;
+        FingerModel {
+            env,
+            m,
+            big_m,
+            kx,
+            kz,
+            cx: 2.0 * params.lateral_damping_ratio * (kx * m).sqrt(),
+            cz: 2.0 * params.normal_damping_ratio * (kz * m).sqrt(),
+            kc,
+            cc: 2.0 * params.contact_damping_ratio * (kc * m).sqrt(),
+            mu: params.friction,
+            v_eps: params.friction_velocity_mm_s * 1e-3,
+            c_arm: params.arm_damping_n_s_m,
+        }
+    }
+
+    /// The envelope the tip rides on.
+    pub fn envelope(&self) -> &Envelope {
+        &self.env
+    }
+
+    /// Static equilibrium on the surface below `x` (m) with the arm still: the start state.
+    pub fn rest_state(&self, x: f64) -> State {
+        let (e, _) = self.env.at(x);
+        let w_body = self.big_m * G;
+        let w_total = (self.big_m + self.m) * G;
+        let pen = w_total / self.kc;
+        let zt = e - pen;
+        // Body weight compresses the finger by W/kz.
+        let zb = zt + w_body / self.kz;
+        [x, zt, 0.0, 0.0, zb, 0.0]
+    }
+
+    /// Contact normal force and tangential friction force components acting on the tip, plus
+    /// the normal force magnitude.
+    #[inline]
+    fn contact(&self, y: &State) -> (f64, f64, f64) {
+        let (xt, zt, vx, vz) = (y[0], y[1], y[2], y[3]);
+        let (e, s) = self.env.at(xt);
+        let pen = e - zt;
+        if pen <= 0.0 {
+            return (0.0, 0.0, 0.0);
+        }
+        let norm = (1.0 + s * s).sqrt();
+        let inv = 1.0 / norm;
+        let pen_n = pen * inv;
+        // Rate of penetration along the normal: (s vx - vz)/norm.
+        let pen_rate = (s * vx - vz) * inv;
+        let fn_mag = (self.kc * pen_n + self.cc * pen_rate).max(0.0);
+        // Normal (-s, 1)/norm, tangent (1, s)/norm.
+        let vt = (vx + s * vz) * inv;
+        let ft = -self.mu * fn_mag * (vt / self.v_eps).tanh();
+        let fx = -s * inv * fn_mag + ft * inv;
+        let fz = inv * fn_mag + ft * s * inv;
+        (fx, fz, fn_mag)
+    }
+
+    /// `dy/dt` at time `t`, with the arm on `arm`.
+    #[inline]
+    pub fn rhs(&self, t: f64, y: &State, arm: &dyn ArmPath) -> State {
+        let (xb, vb) = arm.at(t);
+        let (xt, zt, vx, vz, zb, vzb) = (y[0], y[1], y[2], y[3], y[4], y[5]);
+        let (fcx, fcz, _) = self.contact(y);
+        // Finger springs: lateral towards the body, normal compression δz = zb - zt pushes the
+        // tip down and the body up.
+        let fsx = -self.kx * (xt - xb) - self.cx * (vx - vb);
+        let fsz = self.kz * (zb - zt) + self.cz * (vzb - vz);
+        let ax = (fsx + fcx) / self.m;
+        let az = (-fsz + fcz) / self.m - G;
+        // The body: weight, the finger's reaction, the arm's damping.
+        let azb = (fsz - self.big_m * G - self.c_arm * vzb) / self.big_m;
+        [vx, vz, ax, az, vzb, azb]
+    }
+
+    /// Deflections and contact force at a state, for the optics.
+    pub fn readout(&self, t: f64, y: &State, arm: &dyn ArmPath) -> Readout {
+        let (xb, _) = arm.at(t);
+        let (_, _, fn_mag) = self.contact(y);
+        Readout {
+            lateral: y[0] - xb,
+            normal: y[4] - y[1],
+            contact_force: fn_mag,
+            tip_x: y[0],
+            body_z: y[4],
+        }
+    }
+
+    /// Mechanical energy (kinetic + springs + contact penalty + gravity), J. With the arm still
+    /// and no input it never grows.
+    pub fn energy(&self, y: &State, arm_x: f64) -> f64 {
+        let (xt, zt, vx, vz, zb, vzb) = (y[0], y[1], y[2], y[3], y[4], y[5]);
+        let (e, s) = self.env.at(xt);
+        let pen_n = (e - zt).max(0.0) / (1.0 + s * s).sqrt();
+        0.5 * self.m * (vx * vx + vz * vz)
+            + 0.5 * self.big_m * vzb * vzb
+            + 0.5 * self.kx * (xt - arm_x).powi(2)
+            + 0.5 * self.kz * (zb - zt).powi(2)
+            + 0.5 * self.kc * pen_n * pen_n
+            + G * (self.m * zt + self.big_m * zb)
+    }
+
+    /// Surface height at `x` m.
+    pub fn surface_at(&self, x: f64) -> f64 {
+        self.env.surface_at(x)
+    }
+
+    /// Reflectivity at `x` m.
+    pub fn reflectivity_at(&self, x: f64) -> f64 {
+        self.env.reflectivity_at(x)
+    }
+}
+
+/// A time-stepping method for the finger.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Integrator {
+    /// Two-stage L-stable SDIRK (Alexander, order 2) with `substeps` steps per output sample and
+    /// simplified Newton on a finite-difference Jacobian; a step whose Newton iteration fails
+    /// is retried as two half steps. The default.
+    Sdirk2 {
+        /// Steps per output sample.
+        substeps: u32,
+    },
+    /// Backward Euler (L-stable, order 1), same machinery.
+    BackwardEuler {
+        /// Steps per output sample.
+        substeps: u32,
+    },
+    /// Explicit Dormand–Prince 5(4) with adaptive steps (error control per output interval).
+    DormandPrince {
+        /// Relative tolerance.
+        rtol: f64,
+        /// Absolute tolerance (m, m/s).
+        atol: f64,
+    },
+    /// Explicit semi-implicit (symplectic) Euler with a fixed number of sub-steps: unstable on
+    /// the stiff contact unless the sub-steps are tiny; kept to show why.
+    SymplecticEuler {
+        /// Steps per output sample.
+        substeps: u32,
+    },
+}
+
+impl Default for Integrator {
+    fn default() -> Self {
+        Integrator::Sdirk2 { substeps: 2 }
+    }
+}
+
+impl Integrator {
+    /// Checks the integrator's settings.
+    pub fn validate(&self) -> Result<(), SimError> {
+        match *self {
+            Integrator::Sdirk2 { substeps }
+            | Integrator::BackwardEuler { substeps }
+            | Integrator::SymplecticEuler { substeps } => {
+                if substeps == 0 || substeps > 1_000_000 {
+                    return Err(SimError::Invalid(format!(
+                        "integrator substeps must be in 1..=1000000, got {substeps}"
+                    )));
+                }
+            }
+            Integrator::DormandPrince { rtol, atol } => {
+                if !(rtol.is_finite() && rtol > 0.0 && atol.is_finite() && atol > 0.0) {
+                    return Err(SimError::Invalid(format!(
+                        "Dormand-Prince tolerances must be positive, got rtol {rtol}, atol {atol}"
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A short label for tables.
+    pub fn label(&self) -> String {
+        match *self {
+            Integrator::Sdirk2 { substeps } => format!("sdirk2 x{substeps}"),
+            Integrator::BackwardEuler { substeps } => format!("backward-euler x{substeps}"),
+            Integrator::DormandPrince { rtol, .. } => format!("dopri5 rtol {rtol:.0e}"),
+            Integrator::SymplecticEuler { substeps } => format!("symplectic-euler x{substeps}"),
+        }
+    }
+}
+
+/// Counters of the work an integrator did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Work {
+    /// Right-hand-side evaluations.
+    pub rhs_evals: u64,
+    /// Steps taken (accepted).
+    pub steps: u64,
+    /// Steps rejected (Newton failure or error too large).
+    pub rejected: u64,
+}
+
+/// Integrates a [`FingerModel`] from output sample to output sample.
+#[derive(Debug, Clone)]
+pub struct Stepper {
+    method: Integrator,
+    /// Last accepted step of the adaptive method, s.
+    h_adaptive: f64,
+    /// Work done so far.
+    pub work: Work,
+}
+
+fn add(a: &State, b: &State, s: f64) -> State {
+    let mut r = *a;
+    for k in 0..STATE {
+        r[k] += s * b[k];
+    }
+    r
+}
+
+fn finite(y: &State) -> bool {
+    y.iter().all(|v| v.is_finite())
+}
+
+/// Error scale of the state components (m and m/s).
+const SCALE: State = [1e-6, 1e-6, 1e-4, 1e-4, 1e-6, 1e-4];
+
+impl Stepper {
+    /// A stepper using `method`.
+    pub fn new(method: Integrator) -> Self {
+        Stepper {
+            method,
+            h_adaptive: 1e-4,
+            work: Work::default(),
+        }
+    }
+
+    /// The method.
+    pub fn method(&self) -> Integrator {
+        self.method
+    }
+
+    /// Advances `y` from `t` to `t + dt`.
+    pub fn advance(
+        &mut self,
+        model: &FingerModel,
+        arm: &dyn ArmPath,
+        t: f64,
+        dt: f64,
+        y: &mut State,
+    ) -> Result<(), SimError> {
+        match self.method {
+            Integrator::Sdirk2 { substeps } | Integrator::BackwardEuler { substeps } => {
+                let h = dt / substeps as f64;
+                for k in 0..substeps {
+                    self.implicit_step(model, arm, t + k as f64 * h, h, y, 0)?;
+                }
+            }
+            Integrator::SymplecticEuler { substeps } => {
+                let h = dt / substeps as f64;
+                for k in 0..substeps {
+                    let tk = t + k as f64 * h;
+                    let f = model.rhs(tk, y, arm);
+                    self.work.rhs_evals += 1;
+                    // Velocities first, then positions with the new velocities.
+                    for (v, a) in [(2, 2), (3, 3), (5, 5)] {
+                        y[v] += h * f[a];
+                    }
+                    y[0] += h * y[2];
+                    y[1] += h * y[3];
+                    y[4] += h * y[5];
+                    self.work.steps += 1;
+                }
+                if !finite(y) {
+                    return Err(SimError::Integration {
+                        t: t + dt,
+                        reason: "the explicit step blew up (state not finite)".into(),
+                    });
+                }
+            }
+            Integrator::DormandPrince { rtol, atol } => {
+                self.dopri(model, arm, t, dt, y, rtol, atol)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn jacobian(&mut self, model: &FingerModel, arm: &dyn ArmPath, t: f64, y: &State) -> Mat6 {
+        let f0 = model.rhs(t, y, arm);
+        let mut j = Mat6::zeros();
+        for c in 0..STATE {
+            let eps = SCALE[c] * 1e-3;
+            let mut yp = *y;
+            yp[c] += eps;
+            let fp = model.rhs(t, &yp, arm);
+            for r in 0..STATE {
+                j[(r, c)] = (fp[r] - f0[r]) / eps;
+            }
+        }
+        self.work.rhs_evals += STATE as u64 + 1;
+        j
+    }
+
+    /// Solves the stage equation `k = f(t, base + a k)` by simplified Newton with the
+    /// factorised `I - a J`.
+    #[allow(clippy::too_many_arguments)]
+    fn stage(
+        &mut self,
+        model: &FingerModel,
+        arm: &dyn ArmPath,
+        t: f64,
+        base: &State,
+        a: f64,
+        lu: &nalgebra::LU<f64, nalgebra::Const<STATE>, nalgebra::Const<STATE>>,
+        guess: State,
+    ) -> Option<State> {
+        let mut k = guess;
+        for _ in 0..12 {
+            let yk = add(base, &k, a);
+            let f = model.rhs(t, &yk, arm);
+            self.work.rhs_evals += 1;
+            let mut r = Vec6::zeros();
+            for i in 0..STATE {
+                r[i] = f[i] - k[i];
+            }
+            let d = lu.solve(&r)?;
+            let mut err: f64 = 0.0;
+            for i in 0..STATE {
+                k[i] += d[i];
+                // Stage change scaled by the step: a position-like change a*d.
+                err = err.max((a * d[i]).abs() / SCALE[i]);
+            }
+            if !err.is_finite() {
+                return None;
+            }
+            if err < 1e-3 {
+                return Some(k);
+            }
+        }
+        None
+    }
+
+    fn implicit_step(
+        &mut self,
+        model: &FingerModel,
+        arm: &dyn ArmPath,
+        t: f64,
+        h: f64,
+        y: &mut State,
+        depth: u32,
+    ) -> Result<(), SimError> {
+        let sdirk = matches!(self.method, Integrator::Sdirk2 { .. });
+        let gamma = if sdirk {
+            1.0 - std::f64::consts::FRAC_1_SQRT_2
+        } else {
+            1.0
+        };
+        let j = self.jacobian(model, arm, t, y);
+        let m = Mat6::identity() - j * (h * gamma);
+        let lu = m.lu();
+        let f0 = model.rhs(t, y, arm);
+        self.work.rhs_evals += 1;
+        let result = (|| {
+            let k1 = self.stage(model, arm, t + gamma * h, y, gamma * h, &lu, f0)?;
+            if !sdirk {
+                return Some(add(y, &k1, h));
+            }
+            let base = add(y, &k1, (1.0 - gamma) * h);
+            let k2 = self.stage(model, arm, t + h, &base, gamma * h, &lu, k1)?;
+            let mut out = *y;
+            for i in 0..STATE {
+                out[i] += h * ((1.0 - gamma) * k1[i] + gamma * k2[i]);
+            }
+            Some(out)
+        })();
+        match result {
+            Some(next) if finite(&next) => {
+                *y = next;
+                self.work.steps += 1;
+                Ok(())
+            }
+            _ => {
+                self.work.rejected += 1;
+                if depth >= 16 {
+                    return Err(SimError::Integration {
+                        t,
+                        reason: format!(
+                            "Newton did not converge even with a step of {:.3e} s",
+                            h
+                        ),
+                    });
+                }
+                self.implicit_step(model, arm, t, h / 2.0, y, depth + 1)?;
+                self.implicit_step(model, arm, t + h / 2.0, h / 2.0, y, depth + 1)
+            }
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn dopri(
+        &mut self,
+        model: &FingerModel,
+        arm: &dyn ArmPath,
+        t0: f64,
+        dt: f64,
+        y: &mut State,
+        rtol: f64,
+        atol: f64,
+    ) -> Result<(), SimError> {
+        // Dormand–Prince 5(4) tableau.
+        const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
+        const A: [[f64; 6]; 7] = [
+            [0.0; 6],
+            [0.2, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+            [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+            [
+                19372.0 / 6561.0,
+                -25360.0 / 2187.0,
+                64448.0 / 6561.0,
+                -212.0 / 729.0,
+                0.0,
+                0.0,
+            ],
+            [
+                9017.0 / 3168.0,
+                -355.0 / 33.0,
+                46732.0 / 5247.0,
+                49.0 / 176.0,
+                -5103.0 / 18656.0,
+                0.0,
+            ],
+            [
+                35.0 / 384.0,
+                0.0,
+                500.0 / 1113.0,
+                125.0 / 192.0,
+                -2187.0 / 6784.0,
+                11.0 / 84.0,
+            ],
+        ];
+        const B5: [f64; 7] = [
+            35.0 / 384.0,
+            0.0,
+            500.0 / 1113.0,
+            125.0 / 192.0,
+            -2187.0 / 6784.0,
+            11.0 / 84.0,
+            0.0,
+        ];
+        const B4: [f64; 7] = [
+            5179.0 / 57600.0,
+            0.0,
+            7571.0 / 16695.0,
+            393.0 / 640.0,
+            -92097.0 / 339200.0,
+            187.0 / 2100.0,
+            1.0 / 40.0,
+        ];
+        let t_end = t0 + dt;
+        let mut t = t0;
+        let mut h = self.h_adaptive.min(dt);
+        let mut guard = 0u64;
+        while t < t_end - 1e-15 {
+            guard += 1;
+            if guard > 10_000_000 || h < 1e-12 {
+                return Err(SimError::Integration {
+                    t,
+                    reason: format!("Dormand-Prince step size collapsed to {h:.3e} s"),
+                });
+            }
+            let h_try = h.min(t_end - t);
+            let mut k = [[0.0; STATE]; 7];
+            for s in 0..7 {
+                let mut ys = *y;
+                for (j, kj) in k.iter().enumerate().take(s) {
+                    let a = A[s][j];
+                    if a != 0.0 {
+                        for i in 0..STATE {
+                            ys[i] += h_try * a * kj[i];
+                        }
+                    }
+                }
+                k[s] = model.rhs(t + C[s] * h_try, &ys, arm);
+            }
+            self.work.rhs_evals += 7;
+            let mut y5 = *y;
+            let mut err: f64 = 0.0;
+            for i in 0..STATE {
+                let mut d5 = 0.0;
+                let mut d4 = 0.0;
+                for s in 0..7 {
+                    d5 += B5[s] * k[s][i];
+                    d4 += B4[s] * k[s][i];
+                }
+                y5[i] += h_try * d5;
+                // atol is in metres for positions; velocities get 100× (m/s against ~mm/s).
+                let sc = atol * SCALE[i] / SCALE[0] + rtol * y[i].abs().max(y5[i].abs());
+                err = err.max((h_try * (d5 - d4)).abs() / sc);
+            }
+            if err.is_finite() && err <= 1.0 {
+                t += h_try;
+                *y = y5;
+                self.work.steps += 1;
+                let fac = if err == 0.0 {
+                    5.0
+                } else {
+                    (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
+                };
+                h = h_try * fac;
+                self.h_adaptive = h;
+            } else {
+                self.work.rejected += 1;
+                let fac = if err.is_finite() {
+                    (0.9 * err.powf(-0.2)).clamp(0.1, 0.5)
+                } else {
+                    0.1
+                };
+                h = h_try * fac;
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surface::{Feature, Surface};
+
+    fn flat_model(params: &FingerParams) -> FingerModel {
+        let surface = Surface::flat([200.0, 100.0]);
+        let profile = surface.profile([0.0, 50.0], [40.0, 50.0], 0.01);
+        FingerModel::new(params, Envelope::new(&profile, params.tip_radius_mm))
+    }
+
+    #[test]
+    fn envelope_of_a_narrow_crack_is_shallow() {
+        let crack = |w: f64| Surface {
+            size_mm: [200.0, 100.0],
+            features: vec![Feature::Crack {
+                path: vec![[20.0, 0.0], [20.0, 100.0]],
+                width_mm: w,
+                depth_mm: 3.0,
+                edge_radius_mm: 0.0,
+            }],
+        };
+        let dip = |w: f64| {
+            let p = crack(w).profile([0.0, 50.0], [40.0, 50.0], 0.005);
+            let env = Envelope::new(&p, 1.0);
+            env.at(0.020).0 * 1e3
+        };
+        // A 1 mm crack under a 1 mm tip: R - sqrt(R² - (w/2)²) = 0.134 mm.
+        assert!((dip(1.0) + 0.134).abs() < 0.01, "{}", dip(1.0));
+        // A 5 mm crack lets the tip reach the bottom.
+        assert!((dip(5.0) + 3.0).abs() < 1e-9, "{}", dip(5.0));
+        assert_eq!(dip(0.0), 0.0);
+    }
+
+    #[test]
+    fn strokes_go_forth_and_back_smoothly() {
+        let s = Strokes {
+            start: 0.01,
+            stroke: 0.016,
+            speed: 0.00389,
+            ramp: 0.1,
+        };
+        let t1 = s.stroke_time();
+        let (x_end, v_end) = s.at(t1 - 1e-9);
+        assert!((x_end - 0.026).abs() < 1e-6, "{x_end}");
+        assert!(v_end.abs() < 1e-6);
+        let (x_mid, v_mid) = s.at(t1 / 2.0);
+        assert!((x_mid - 0.018).abs() < 1e-4, "{x_mid}");
+        assert!((v_mid - 0.00389).abs() < 1e-9);
+        let (x_back, v_back) = s.at(1.5 * t1);
+        assert!((x_back - 0.018).abs() < 1e-4);
+        assert!(v_back < 0.0);
+        let (x_home, _) = s.at(2.0 * t1 - 1e-9);
+        assert!((x_home - 0.01).abs() < 1e-6);
+    }
+
+    #[test]
+    fn rest_state_is_an_equilibrium() {
+        let p = FingerParams::default();
+        let model = flat_model(&p);
+        let y = model.rest_state(0.02);
+        let f = model.rhs(0.0, &y, &Still(0.02));
+        for a in [f[2], f[3], f[5]] {
+            assert!(a.abs() < 1e-6, "{f:?}");
+        }
+    }
+}

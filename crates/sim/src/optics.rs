@@ -1,0 +1,287 @@
+//! Optics and electronics: deformation and proximity → light intensity → transducer voltage →
+//! 10-bit ADC counts.
+//!
+//! * Deformation fibres D1 (left), D2 (right), D3 (normal): the reflected light changes linearly
+//!   with small deflections of the finger's compliant part (the sensor's own calibration is a
+//!   matrix, Konstantinova et al. 2017), so each channel is its resting level plus gains times
+//!   the lateral deflection and the normal compression beyond the static load.
+//! * Proximity fibre P: a reflective fibre pair, whose intensity over distance `d` rises from
+//!   zero, peaks at `d_pk` and falls off as `1/d²`: `I(u) = 2u²/(1+u⁴)` with `u = d/d_pk`,
+//!   scaled by the surface's reflectivity (colour, printed decoys). The fibre looks at the surface
+//!   a fixed offset ahead of the tip, from a fixed height above the tip's lowest point.
+//! * Transducers saturate softly at `saturation_counts`; the ADC clamps to 0..=1023 and
+//!   quantises. White noise, a slow random-walk drift, and a per-recording offset and gain change
+//!   (the paper found the fibre cables' position and twisting shifted the data between sessions)
+//!   are added before the ADC.
+
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+use serde::{Deserialize, Serialize};
+
+use crate::finger::Readout;
+use crate::SimError;
+
+/// Channels, in the order of the recordings: D1, D2, D3, P.
+pub const CHANNELS: usize = 4;
+
+/// Optical and electronic parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OpticsParams {
+    /// D1, D2, D3 at zero lateral deflection under the static load, ADC counts.
+    pub rest_counts: [f64; 3],
+    /// D1, D2, D3 change per mm of lateral deflection (tip behind the body is negative), counts/mm.
+    pub lateral_gain: [f64; 3],
+    /// D1, D2, D3 change per mm of extra normal compression, counts/mm.
+    pub normal_gain: [f64; 3],
+    /// P with nothing in view, counts.
+    pub proximity_dark_counts: f64,
+    /// P above dark at the peak of the distance curve, for reflectivity 1, counts.
+    pub proximity_peak_counts: f64,
+    /// Distance of the peak of the proximity curve, mm.
+    pub proximity_peak_mm: f64,
+    /// Height of the proximity fibre's end above the tip's lowest point, mm.
+    pub proximity_height_mm: f64,
+    /// Where the proximity fibre looks, ahead of the tip along the slide's +x, mm.
+    pub proximity_offset_mm: f64,
+    /// Transducer output ceiling, counts (the soft knee starts 10 % below).
+    pub saturation_counts: f64,
+    /// White-noise standard deviation per channel (D1, D2, D3, P), counts.
+    pub noise_counts: [f64; 4],
+    /// Random-walk drift of every channel, counts per √s.
+    pub drift_counts_per_sqrt_s: f64,
+    /// Standard deviation of the per-recording offset change of each channel, counts.
+    pub recording_offset_sigma_counts: f64,
+    /// Standard deviation of the per-recording relative gain change of each channel.
+    pub recording_gain_sigma: f64,
+    /// ADC resolution, bits.
+    pub adc_bits: u32,
+}
+
+impl Default for OpticsParams {
+    fn default() -> Self {
+        OpticsParams {
+            rest_counts: [655.0, 431.0, 708.0],
+            lateral_gain: [40.0, 15.0, -30.0],
+            normal_gain: [20.0, 6.0, -25.0],
+            proximity_dark_counts: 235.0,
+            proximity_peak_counts: 560.0,
+            proximity_peak_mm: 1.5,
+            proximity_height_mm: 2.9,
+            proximity_offset_mm: 2.5,
+            saturation_counts: 1000.0,
+            noise_counts: [1.0, 1.0, 1.5, 2.0],
+            drift_counts_per_sqrt_s: 0.3,
+            recording_offset_sigma_counts: 2.0,
+            recording_gain_sigma: 0.03,
+            adc_bits: 10,
+        }
+    }
+}
+
+impl OpticsParams {
+    /// Checks every parameter, naming the first bad one.
+    pub fn validate(&self) -> Result<(), SimError> {
+        let finite = self
+            .rest_counts
+            .iter()
+            .chain(&self.lateral_gain)
+            .chain(&self.normal_gain)
+            .chain(&self.noise_counts)
+            .chain(&[
+                self.proximity_dark_counts,
+                self.proximity_peak_counts,
+                self.proximity_height_mm,
+                self.proximity_offset_mm,
+            ])
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err(SimError::Invalid(
+                "sensor.optics has a value that is not a finite number".into(),
+            ));
+        }
+        if !(self.proximity_peak_mm.is_finite() && self.proximity_peak_mm > 0.0) {
+            return Err(SimError::Invalid(format!(
+                "sensor.optics.proximity_peak_mm must be positive, got {}",
+                self.proximity_peak_mm
+            )));
+        }
+        if !(1..=16).contains(&self.adc_bits) {
+            return Err(SimError::Invalid(format!(
+                "sensor.optics.adc_bits must be 1..=16, got {}",
+                self.adc_bits
+            )));
+        }
+        let full = self.adc_full_scale();
+        if !(self.saturation_counts.is_finite()
+            && self.saturation_counts > 0.0
+            && self.saturation_counts <= full)
+        {
+            return Err(SimError::Invalid(format!(
+                "sensor.optics.saturation_counts must be in (0, {full}], got {}",
+                self.saturation_counts
+            )));
+        }
+        for (name, v) in [
+            ("drift_counts_per_sqrt_s", self.drift_counts_per_sqrt_s),
+            (
+                "recording_offset_sigma_counts",
+                self.recording_offset_sigma_counts,
+            ),
+            ("recording_gain_sigma", self.recording_gain_sigma),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(SimError::Invalid(format!(
+                    "sensor.optics.{name} must be a non-negative number, got {v}"
+                )));
+            }
+        }
+        if self.noise_counts.iter().any(|v| *v < 0.0) {
+            return Err(SimError::Invalid(
+                "sensor.optics.noise_counts must not be negative".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Largest ADC code.
+    pub fn adc_full_scale(&self) -> f64 {
+        ((1u32 << self.adc_bits.clamp(1, 16)) - 1) as f64
+    }
+
+    /// Relative intensity of the proximity fibre at distance `d_mm` (1 at the peak).
+    pub fn proximity_curve(&self, d_mm: f64) -> f64 {
+        let u = d_mm.max(0.0) / self.proximity_peak_mm;
+        let u2 = u * u;
+        2.0 * u2 / (1.0 + u2 * u2)
+    }
+
+    /// The transducer's soft saturation.
+    pub fn saturate(&self, v: f64) -> f64 {
+        let sat = self.saturation_counts;
+        let knee = 0.9 * sat;
+        if v <= knee {
+            v
+        } else {
+            let room = sat - knee;
+            sat - room * (-(v - knee) / room).exp()
+        }
+    }
+}
+
+/// What the fibres see at one instant, before electronics: deflections and the proximity
+/// geometry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scene1d {
+    /// Distance from the proximity fibre to the surface it looks at, mm.
+    pub proximity_distance_mm: f64,
+    /// Reflectivity of that spot (plate material × features).
+    pub reflectivity: f64,
+}
+
+/// The electronics of one recording: its noise generator, drift state and the recording's own
+/// offset/gain changes.
+#[derive(Debug, Clone)]
+pub struct Electronics {
+    params: OpticsParams,
+    static_compression_mm: f64,
+    offset: [f64; CHANNELS],
+    gain: [f64; CHANNELS],
+    drift: [f64; CHANNELS],
+    rng: ChaCha8Rng,
+}
+
+impl Electronics {
+    /// Electronics for one recording: draws the recording's offsets and gains from `rng`.
+    /// `static_compression_mm` is the finger's compression under the body's weight on a flat
+    /// surface (the deformation channels read their rest level there).
+    pub fn new(params: &OpticsParams, static_compression_mm: f64, mut rng: ChaCha8Rng) -> Self {
+        let mut normal = |s: f64| s * rng.sample::<f64, _>(StandardNormal);
+        let offset = std::array::from_fn(|_| normal(params.recording_offset_sigma_counts));
+        let gain = std::array::from_fn(|_| 1.0 + normal(params.recording_gain_sigma));
+        Electronics {
+            params: params.clone(),
+            static_compression_mm,
+            offset,
+            gain,
+            drift: [0.0; CHANNELS],
+            rng,
+        }
+    }
+
+    /// The analog channel values (counts, before the ADC) for a readout, advancing the drift by
+    /// `dt` seconds.
+    pub fn analog(&mut self, r: &Readout, view: &Scene1d, dt: f64) -> [f64; CHANNELS] {
+        let p = &self.params;
+        let lat = r.lateral * 1e3;
+        let nor = r.normal * 1e3 - self.static_compression_mm;
+        let mut v = [0.0; CHANNELS];
+        for c in 0..3 {
+            v[c] = p.rest_counts[c] + self.gain[c] * (p.lateral_gain[c] * lat + p.normal_gain[c] * nor);
+        }
+        v[3] = p.proximity_dark_counts
+            + self.gain[3]
+                * p.proximity_peak_counts
+                * view.reflectivity.max(0.0)
+                * p.proximity_curve(view.proximity_distance_mm);
+        let walk = p.drift_counts_per_sqrt_s * dt.max(0.0).sqrt();
+        for c in 0..CHANNELS {
+            let n: f64 = self.rng.sample(StandardNormal);
+            let w: f64 = self.rng.sample(StandardNormal);
+            self.drift[c] += walk * w;
+            v[c] = p.saturate(v[c] + self.offset[c] + self.drift[c] + p.noise_counts[c] * n);
+        }
+        v
+    }
+
+    /// The ADC: clamps to the full scale and rounds to the nearest code.
+    pub fn quantise(&self, v: &[f64; CHANNELS]) -> [f64; CHANNELS] {
+        let full = self.params.adc_full_scale();
+        v.map(|x| {
+            if x.is_nan() {
+                0.0
+            } else {
+                x.clamp(0.0, full).round()
+            }
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    #[test]
+    fn proximity_curve_peaks_and_falls_off() {
+        let p = OpticsParams::default();
+        assert!((p.proximity_curve(p.proximity_peak_mm) - 1.0).abs() < 1e-12);
+        assert_eq!(p.proximity_curve(0.0), 0.0);
+        assert!(p.proximity_curve(30.0) < 0.01);
+        assert!(p.proximity_curve(2.0) > p.proximity_curve(4.0));
+    }
+
+    #[test]
+    fn saturation_is_soft_and_bounded() {
+        let p = OpticsParams::default();
+        assert_eq!(p.saturate(500.0), 500.0);
+        assert!(p.saturate(1e12) <= p.saturation_counts);
+        assert!(p.saturate(950.0) < 950.0 && p.saturate(950.0) > 900.0);
+        let mut last = 0.0;
+        for k in 0..2000 {
+            let y = p.saturate(k as f64);
+            assert!(y >= last);
+            last = y;
+        }
+    }
+
+    #[test]
+    fn adc_quantises_and_clamps() {
+        let e = Electronics::new(&OpticsParams::default(), 1.0, ChaCha8Rng::seed_from_u64(0));
+        assert_eq!(
+            e.quantise(&[-5.0, 1e9, 12.4, f64::NAN]),
+            [0.0, 1023.0, 12.0, 0.0]
+        );
+    }
+}

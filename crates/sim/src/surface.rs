@@ -1,0 +1,429 @@
+//! Surface geometry: height and reflectivity of a flat plate carrying cracks, bumps, wavy
+//! patches, printed decoys and screws.
+//!
+//! Coordinates are millimetres in the plate's frame: `x` along its length, `y` along its width,
+//! origin at a corner, `z` up (0 is the plate's top face). Heights are millimetres (cracks are
+//! negative). Reflectivity is the fraction of the plate material's own reflectivity seen by the
+//! proximity fibre (1 = bare plate, below 1 darker).
+
+use serde::{Deserialize, Serialize};
+
+/// A point on the plate, mm.
+pub type Point = [f64; 2];
+
+/// One feature on the plate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Feature {
+    /// A groove of constant width and depth along a polyline, flat-bottomed, with rounded edges.
+    Crack {
+        /// Polyline of the crack's centre line, mm (two points or more).
+        path: Vec<Point>,
+        /// Width at the top, mm (0: a closed hairline, invisible to touch).
+        width_mm: f64,
+        /// Depth, mm.
+        depth_mm: f64,
+        /// Radius of the rounded top edges, mm.
+        #[serde(default = "default_edge_radius")]
+        edge_radius_mm: f64,
+    },
+    /// A smooth dome (raised cosine) of given base radius and height.
+    Bump {
+        /// Centre, mm.
+        centre: Point,
+        /// Radius of the base, mm.
+        radius_mm: f64,
+        /// Height of the top, mm.
+        height_mm: f64,
+    },
+    /// A sinusoidal corrugation over a rectangle: ridges perpendicular to `direction_deg`.
+    Wavy {
+        /// Lower corner of the patch, mm.
+        min: Point,
+        /// Upper corner of the patch, mm.
+        max: Point,
+        /// Amplitude, mm (the paper: 1 mm).
+        #[serde(default = "default_wave_amplitude")]
+        amplitude_mm: f64,
+        /// Period, mm (the paper: 5 mm).
+        #[serde(default = "default_wave_period")]
+        period_mm: f64,
+        /// Direction of travel of the wave in the plate, degrees from +x.
+        #[serde(default)]
+        direction_deg: f64,
+    },
+    /// A crack printed on the surface: flat to the touch, darker to the proximity fibre and the
+    /// camera.
+    Decoy {
+        /// Polyline of the printed line, mm.
+        path: Vec<Point>,
+        /// Width of the printed line, mm.
+        width_mm: f64,
+        /// Reflectivity of the ink relative to the plate (0 black .. 1 invisible).
+        #[serde(default = "default_decoy_reflectivity")]
+        reflectivity: f64,
+    },
+    /// A screw head: a low cylinder, an occluder for the camera and an obstacle for the finger.
+    Screw {
+        /// Centre, mm.
+        centre: Point,
+        /// Head diameter, mm.
+        #[serde(default = "default_screw_diameter")]
+        head_diameter_mm: f64,
+        /// Head height, mm.
+        #[serde(default = "default_screw_height")]
+        height_mm: f64,
+    },
+}
+
+fn default_edge_radius() -> f64 {
+    0.2
+}
+fn default_wave_amplitude() -> f64 {
+    1.0
+}
+fn default_wave_period() -> f64 {
+    5.0
+}
+fn default_decoy_reflectivity() -> f64 {
+    0.35
+}
+fn default_screw_diameter() -> f64 {
+    8.0
+}
+fn default_screw_height() -> f64 {
+    3.0
+}
+
+impl Feature {
+    /// A short name of the feature's kind, for messages.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Feature::Crack { .. } => "crack",
+            Feature::Bump { .. } => "bump",
+            Feature::Wavy { .. } => "wavy",
+            Feature::Decoy { .. } => "decoy",
+            Feature::Screw { .. } => "screw",
+        }
+    }
+
+    /// Axis-aligned bounding box of the feature's footprint on the plate, `(min, max)`, mm.
+    pub fn footprint(&self) -> (Point, Point) {
+        let poly_box = |path: &[Point], half: f64| {
+            let mut lo = [f64::INFINITY; 2];
+            let mut hi = [f64::NEG_INFINITY; 2];
+            for p in path {
+                for k in 0..2 {
+                    lo[k] = lo[k].min(p[k] - half);
+                    hi[k] = hi[k].max(p[k] + half);
+                }
+            }
+            (lo, hi)
+        };
+        match self {
+            Feature::Crack { path, width_mm, .. } | Feature::Decoy { path, width_mm, .. } => {
+                poly_box(path, width_mm / 2.0)
+            }
+            Feature::Bump {
+                centre, radius_mm, ..
+            } => poly_box(&[*centre], *radius_mm),
+            Feature::Screw {
+                centre,
+                head_diameter_mm,
+                ..
+            } => poly_box(&[*centre], head_diameter_mm / 2.0),
+            Feature::Wavy { min, max, .. } => (*min, *max),
+        }
+    }
+
+    /// Height contribution at `p`, mm (added to the plate's 0).
+    pub fn height_mm(&self, p: Point) -> f64 {
+        match self {
+            Feature::Crack {
+                path,
+                width_mm,
+                depth_mm,
+                edge_radius_mm,
+            } => {
+                if *width_mm <= 0.0 || *depth_mm <= 0.0 {
+                    return 0.0;
+                }
+                let d = distance_to_polyline(path, p);
+                groove_height(d, width_mm / 2.0, *depth_mm, *edge_radius_mm)
+            }
+            Feature::Bump {
+                centre,
+                radius_mm,
+                height_mm,
+            } => {
+                let r = dist(*centre, p);
+                if r >= *radius_mm || *radius_mm <= 0.0 {
+                    0.0
+                } else {
+                    height_mm * 0.5 * (1.0 + (std::f64::consts::PI * r / radius_mm).cos())
+                }
+            }
+            Feature::Wavy {
+                min,
+                max,
+                amplitude_mm,
+                period_mm,
+                direction_deg,
+            } => {
+                if p[0] < min[0] || p[0] > max[0] || p[1] < min[1] || p[1] > max[1] {
+                    return 0.0;
+                }
+                if *period_mm <= 0.0 {
+                    return 0.0;
+                }
+                let a = direction_deg.to_radians();
+                let s = (p[0] - min[0]) * a.cos() + (p[1] - min[1]) * a.sin();
+                // Starts at 0 height with the corrugation rising: no step at the patch's edge.
+                amplitude_mm * (2.0 * std::f64::consts::PI * s / period_mm).sin()
+            }
+            Feature::Decoy { .. } => 0.0,
+            Feature::Screw {
+                centre,
+                head_diameter_mm,
+                height_mm,
+            } => {
+                let r = dist(*centre, p);
+                let rad = head_diameter_mm / 2.0;
+                if r >= rad {
+                    0.0
+                } else {
+                    // A domed head: full height in the middle, 60 % at the rim.
+                    height_mm * (1.0 - 0.4 * (r / rad).powi(2))
+                }
+            }
+        }
+    }
+
+    /// Reflectivity factor at `p` (1 where the feature does not change the surface's colour).
+    pub fn reflectivity(&self, p: Point) -> f64 {
+        match self {
+            Feature::Decoy {
+                path,
+                width_mm,
+                reflectivity,
+            } => {
+                if distance_to_polyline(path, p) <= width_mm / 2.0 {
+                    *reflectivity
+                } else {
+                    1.0
+                }
+            }
+            _ => 1.0,
+        }
+    }
+}
+
+/// Height of a flat-bottomed groove of half-width `half`, depth `depth` and top edges rounded
+/// with radius `r`, at distance `d` from its centre line.
+fn groove_height(d: f64, half: f64, depth: f64, r: f64) -> f64 {
+    if d >= half {
+        return 0.0;
+    }
+    let r = r.clamp(0.0, half.min(depth));
+    // Inside the rounding of the edge: a quarter circle from the top face down the wall.
+    if r > 0.0 && d > half - r {
+        let u = d - (half - r);
+        return -(r - (r * r - u * u).max(0.0).sqrt()).min(depth);
+    }
+    -depth
+}
+
+fn dist(a: Point, b: Point) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+}
+
+/// Distance from `p` to the polyline `path` (to the point itself for a single point).
+pub fn distance_to_polyline(path: &[Point], p: Point) -> f64 {
+    match path {
+        [] => f64::INFINITY,
+        [a] => dist(*a, p),
+        _ => path
+            .windows(2)
+            .map(|s| distance_to_segment(s[0], s[1], p))
+            .fold(f64::INFINITY, f64::min),
+    }
+}
+
+fn distance_to_segment(a: Point, b: Point, p: Point) -> f64 {
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let ap = [p[0] - a[0], p[1] - a[1]];
+    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if len2 > 0.0 {
+        ((ap[0] * ab[0] + ap[1] * ab[1]) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    dist([a[0] + t * ab[0], a[1] + t * ab[1]], p)
+}
+
+/// A plate with its features: the finger's world.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Surface {
+    /// Size of the plate, mm (`[x, y]`).
+    pub size_mm: [f64; 2],
+    /// The features, in any order; heights add up and reflectivities multiply.
+    pub features: Vec<Feature>,
+}
+
+impl Surface {
+    /// A bare plate.
+    pub fn flat(size_mm: [f64; 2]) -> Self {
+        Surface {
+            size_mm,
+            features: Vec::new(),
+        }
+    }
+
+    /// Height at `p`, mm.
+    pub fn height_mm(&self, p: Point) -> f64 {
+        self.features.iter().map(|f| f.height_mm(p)).sum()
+    }
+
+    /// Reflectivity factor at `p` (1 = bare plate).
+    pub fn reflectivity(&self, p: Point) -> f64 {
+        self.features.iter().map(|f| f.reflectivity(p)).product()
+    }
+
+    /// The height and reflectivity along the segment from `a` to `b`, sampled every `step_mm`.
+    pub fn profile(&self, a: Point, b: Point, step_mm: f64) -> Profile {
+        let len = dist(a, b);
+        let n = ((len / step_mm.max(1e-6)).ceil() as usize).max(1) + 1;
+        let step = len / (n - 1) as f64;
+        let dir = if len > 0.0 {
+            [(b[0] - a[0]) / len, (b[1] - a[1]) / len]
+        } else {
+            [1.0, 0.0]
+        };
+        let mut height = Vec::with_capacity(n);
+        let mut reflectivity = Vec::with_capacity(n);
+        for k in 0..n {
+            let s = k as f64 * step;
+            let p = [a[0] + s * dir[0], a[1] + s * dir[1]];
+            height.push(self.height_mm(p));
+            reflectivity.push(self.reflectivity(p));
+        }
+        Profile {
+            step_mm: step.max(1e-9),
+            height,
+            reflectivity,
+        }
+    }
+}
+
+/// A surface sampled along a line: what the finger meets on one slide.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Profile {
+    /// Spacing of the samples, mm.
+    pub step_mm: f64,
+    /// Height at each sample, mm.
+    pub height: Vec<f64>,
+    /// Reflectivity at each sample.
+    pub reflectivity: Vec<f64>,
+}
+
+impl Profile {
+    /// Length of the line, mm.
+    pub fn length_mm(&self) -> f64 {
+        self.step_mm * (self.height.len().saturating_sub(1)) as f64
+    }
+
+    /// Linear interpolation of `values` at `s` mm along the line (clamped at the ends).
+    pub fn sample(values: &[f64], step_mm: f64, s: f64) -> f64 {
+        if values.is_empty() {
+            return 0.0;
+        }
+        let u = (s / step_mm).clamp(0.0, (values.len() - 1) as f64);
+        let k = (u.floor() as usize).min(values.len() - 1);
+        let f = u - k as f64;
+        if k + 1 < values.len() {
+            values[k] * (1.0 - f) + values[k + 1] * f
+        } else {
+            values[k]
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn crack(width: f64, depth: f64) -> Feature {
+        Feature::Crack {
+            path: vec![[50.0, 0.0], [50.0, 100.0]],
+            width_mm: width,
+            depth_mm: depth,
+            edge_radius_mm: 0.2,
+        }
+    }
+
+    #[test]
+    fn crack_is_a_flat_bottomed_groove_with_rounded_edges() {
+        let s = Surface {
+            size_mm: [200.0, 100.0],
+            features: vec![crack(4.0, 3.0)],
+        };
+        assert_eq!(s.height_mm([50.0, 40.0]), -3.0);
+        assert_eq!(s.height_mm([52.5, 40.0]), 0.0);
+        let edge = s.height_mm([51.95, 40.0]);
+        assert!(edge < 0.0 && edge > -0.2, "{edge}");
+        // Zero-width cracks are invisible to touch.
+        let closed = Surface {
+            size_mm: [200.0, 100.0],
+            features: vec![crack(0.0, 3.0)],
+        };
+        assert_eq!(closed.height_mm([50.0, 40.0]), 0.0);
+    }
+
+    #[test]
+    fn decoy_is_flat_and_dark() {
+        let s = Surface {
+            size_mm: [200.0, 100.0],
+            features: vec![Feature::Decoy {
+                path: vec![[10.0, 10.0], [90.0, 10.0]],
+                width_mm: 2.0,
+                reflectivity: 0.3,
+            }],
+        };
+        assert_eq!(s.height_mm([50.0, 10.0]), 0.0);
+        assert_eq!(s.reflectivity([50.0, 10.0]), 0.3);
+        assert_eq!(s.reflectivity([50.0, 12.0]), 1.0);
+    }
+
+    #[test]
+    fn bump_and_wave_have_the_given_heights() {
+        let bump = Feature::Bump {
+            centre: [20.0, 20.0],
+            radius_mm: 5.0,
+            height_mm: 2.0,
+        };
+        assert!((bump.height_mm([20.0, 20.0]) - 2.0).abs() < 1e-12);
+        assert_eq!(bump.height_mm([26.0, 20.0]), 0.0);
+        let wave = Feature::Wavy {
+            min: [0.0, 0.0],
+            max: [50.0, 50.0],
+            amplitude_mm: 1.0,
+            period_mm: 5.0,
+            direction_deg: 0.0,
+        };
+        assert!((wave.height_mm([1.25, 3.0]) - 1.0).abs() < 1e-12);
+        assert!((wave.height_mm([3.75, 3.0]) + 1.0).abs() < 1e-12);
+        assert_eq!(wave.height_mm([60.0, 3.0]), 0.0);
+    }
+
+    #[test]
+    fn profile_samples_the_line() {
+        let s = Surface {
+            size_mm: [200.0, 100.0],
+            features: vec![crack(4.0, 3.0)],
+        };
+        let p = s.profile([40.0, 50.0], [60.0, 50.0], 0.01);
+        assert!((p.length_mm() - 20.0).abs() < 1e-9);
+        assert_eq!(Profile::sample(&p.height, p.step_mm, 10.0), -3.0);
+        assert_eq!(Profile::sample(&p.height, p.step_mm, 0.0), 0.0);
+    }
+}
