@@ -31,6 +31,7 @@ use serialport::SerialPort as _;
 
 mod tactile;
 mod vision;
+mod sim;
 
 /// crackbot: find surface cracks with a camera and a fibre-optic tactile finger.
 #[derive(Debug, Parser)]
@@ -63,6 +64,9 @@ enum Command {
     /// Pixel ↔ surface-millimetre calibration of the camera (homography).
     #[command(subcommand)]
     Homography(vision::HomographyCommand),
+    /// The simulator: paper datasets, calibration against real recordings, work-precision.
+    #[command(subcommand)]
+    Sim(sim::SimCommand),
 }
 
 #[derive(Debug, Args)]
@@ -157,6 +161,7 @@ fn main() -> Result<()> {
         Command::EvalDetector(args) => vision::eval_detector(args),
         Command::DetectorTradeoff(args) => vision::detector_tradeoff(args),
         Command::Homography(cmd) => vision::homography(cmd),
+        Command::Sim(cmd) => sim::run(cmd),
         Command::Calibration(CalibrationCommand::Check { file }) => {
             let cal = Calibration::load(&file)?;
             println!(

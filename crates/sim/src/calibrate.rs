@@ -1,1 +1,431 @@
-//! TODO
+//! Calibration of the simulated sensor against the authors' real recordings.
+//!
+//! The mechanics are physical guesses (the finger's stiffness, friction and geometry are not
+//! published); the optics and electronics are *fitted*: the simulator runs the recognition
+//! experiment once with noise-free electronics, and the channel maps are chosen so that, for
+//! every surface class and sliding direction, the quantiles (5 %, 15 %, …, 95 %) of each
+//! simulated channel match those of the real recordings. That needs no alignment between real
+//! and simulated slides (the real feature positions are unknown), and it matches signal levels
+//! and per-class shapes of the distributions. The deformation channels are linear in their
+//! parameters (rest level and gains for lateral deflection, normal compression and friction
+//! moment) and are fitted one by one; the proximity channel (dark level, peak, peak distance,
+//! fibre height, look-ahead, spot) is fitted jointly. Both by Nelder–Mead. Noise levels come
+//! from the first differences of the real flat recordings.
+//!
+//! [`calibrated_sensor`] holds the result of `crackbot sim calibrate` on repetition 1 of
+//! `../shared/data/tactile/type` (repetitions 2 and 3 are left for checking the sim→real
+//! transfer).
+
+use crackbot_recording::Recording;
+use serde::Serialize;
+
+use crate::experiment::{Experiment, ExperimentConfig};
+use crate::finger::{FingerModel, Integrator};
+use crate::optics::OpticsParams;
+use crate::run::{ProximityGeometry, Sample, SlideLine, SlideSim, SAMPLE_RATE_HZ};
+use crate::{SensorParams, SimError};
+
+/// Quantile levels compared between real and simulated channels.
+pub const QUANTILES: [f64; 10] = [0.05, 0.15, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.85, 0.95];
+
+/// The sensor as calibrated against repetition 1 of the authors' recognition recordings
+/// (`crackbot sim calibrate --real ../shared/data/tactile/type --repetition 1`).
+pub fn calibrated_sensor() -> SensorParams {
+    let mut sensor = SensorParams::default();
+    let o = &mut sensor.optics;
+    o.rest_counts = [657.54, 434.73, 711.56];
+    o.lateral_gain = [14.364, 6.734, -17.101];
+    o.normal_gain = [22.814, 8.618, -19.393];
+    o.moment_gain = [-0.338, -0.808, 1.321];
+    o.proximity_spot_mm = 0.114;
+    o.proximity_dark_counts = 109.56;
+    o.proximity_peak_counts = 593.32;
+    o.proximity_peak_mm = 2.685;
+    o.proximity_height_mm = 1.704;
+    o.proximity_offset_mm = -1.153;
+    o.noise_counts = [1.384, 2.781, 5.189, 0.418];
+    sensor
+}
+
+/// Quantiles of one channel for one class and direction.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelQuantiles {
+    /// Class label.
+    pub label: f64,
+    /// Sliding direction (1 = +x).
+    pub direction: u8,
+    /// Channel index (0 D1, 1 D2, 2 D3, 3 P).
+    pub channel: usize,
+    /// The quantiles at [`QUANTILES`].
+    pub values: Vec<f64>,
+}
+
+fn quantiles(mut v: Vec<f64>) -> Vec<f64> {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return vec![0.0; QUANTILES.len()];
+    }
+    v.sort_by(f64::total_cmp);
+    QUANTILES
+        .iter()
+        .map(|q| v[((v.len() - 1) as f64 * q).round() as usize])
+        .collect()
+}
+
+/// The real targets: channel quantiles per class and direction, from `recordings` (each with
+/// its label in the rows).
+pub fn real_quantiles(recordings: &[Recording]) -> Vec<ChannelQuantiles> {
+    let mut labels: Vec<f64> = recordings.iter().filter_map(|r| r.label()).collect();
+    labels.sort_by(f64::total_cmp);
+    labels.dedup();
+    let mut out = Vec::new();
+    for &label in &labels {
+        for direction in [0u8, 1] {
+            for channel in 0..4 {
+                let values = recordings
+                    .iter()
+                    .flat_map(|r| r.rows.iter())
+                    .filter(|row| row.label == label && row.direction == direction)
+                    .map(|row| [row.d1, row.d2, row.d3, row.p][channel])
+                    .collect();
+                out.push(ChannelQuantiles {
+                    label,
+                    direction,
+                    channel,
+                    values: quantiles(values),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// One simulated recording's mechanics, kept for refitting the optics.
+#[derive(Debug, Clone)]
+pub struct Trace {
+    /// Class label.
+    pub label: f64,
+    /// The samples (mechanics; their optics are ignored).
+    pub samples: Vec<Sample>,
+    /// The model, for surface lookups.
+    pub model: FingerModel,
+    /// Stroke origin in the model's line coordinate, m.
+    pub origin: f64,
+}
+
+/// Simulates one recording per surface of `config` (12 slides) for calibration.
+pub fn simulate_traces(config: &ExperimentConfig) -> Result<Vec<Trace>, SimError> {
+    let mut traces = Vec::new();
+    for (k, (_, label, surface, edge_x)) in config.surfaces().into_iter().enumerate() {
+        let line = SlideLine {
+            start: [edge_x - 7.5, 50.0],
+            direction: [1.0, 0.0],
+            stroke_mm: config.stroke_mm,
+            speed_mm_s: config.speed_mm_s,
+        };
+        let mut sim = SlideSim::new(
+            &surface,
+            1.0,
+            &line,
+            &config.sensor,
+            config.integrator,
+            config.seed + k as u64,
+        )?;
+        let n = (config.slides as f64 * sim.slide_time() * SAMPLE_RATE_HZ).round() as usize;
+        let mut samples = Vec::with_capacity(n);
+        for _ in 0..n {
+            samples.push(sim.next_sample()?);
+        }
+        traces.push(Trace {
+            label,
+            samples,
+            model: sim.model().clone(),
+            origin: sim.origin(),
+        });
+    }
+    Ok(traces)
+}
+
+fn direction_of(s: &Sample) -> u8 {
+    u8::from(s.arm_velocity_mm_s >= 0.0)
+}
+
+/// The noise-free value of channel `channel` for a sample under `optics`.
+fn channel_value(
+    optics: &OpticsParams,
+    static_mm: f64,
+    trace: &Trace,
+    s: &Sample,
+    channel: usize,
+) -> f64 {
+    if channel < 3 {
+        optics.rest_counts[channel]
+            + optics.lateral_gain[channel] * s.lateral_mm
+            + optics.normal_gain[channel] * (s.normal_mm - static_mm)
+            + optics.moment_gain[channel] * s.moment_nmm
+    } else {
+        let geometry = ProximityGeometry {
+            height: optics.proximity_height_mm * 1e-3,
+            offset: optics.proximity_offset_mm * 1e-3,
+            spot: optics.proximity_spot_mm.max(0.0) * 1e-3,
+            peak_mm: optics.proximity_peak_mm,
+        };
+        let view = geometry.view(
+            &trace.model,
+            trace.origin + s.tip_x_mm * 1e-3,
+            s.tip_z_mm * 1e-3,
+            1.0,
+        );
+        optics.proximity_dark_counts + optics.proximity_peak_counts * view.intensity
+    }
+}
+
+/// Squared quantile distance of one channel between the simulated traces under `optics` and
+/// the real targets (mean over classes, directions and quantiles, counts²).
+pub fn channel_loss(
+    optics: &OpticsParams,
+    static_mm: f64,
+    traces: &[Trace],
+    targets: &[ChannelQuantiles],
+    channel: usize,
+) -> f64 {
+    let mut total = 0.0;
+    let mut n = 0usize;
+    for t in targets.iter().filter(|t| t.channel == channel) {
+        let Some(trace) = traces.iter().find(|tr| tr.label == t.label) else {
+            continue;
+        };
+        let values: Vec<f64> = trace
+            .samples
+            .iter()
+            .filter(|s| direction_of(s) == t.direction)
+            .map(|s| optics.saturate(channel_value(optics, static_mm, trace, s, channel)))
+            .collect();
+        let q = quantiles(values);
+        for (a, b) in q.iter().zip(&t.values) {
+            total += (a - b).powi(2);
+            n += 1;
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        total / n as f64
+    }
+}
+
+/// Minimises `f` from `x0` with initial simplex steps `step` by Nelder–Mead, for at most
+/// `max_evals` evaluations. Returns the best point and its value.
+pub fn nelder_mead(
+    mut f: impl FnMut(&[f64]) -> f64,
+    x0: &[f64],
+    step: &[f64],
+    max_evals: usize,
+) -> (Vec<f64>, f64) {
+    let n = x0.len();
+    let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
+    let v0 = f(x0);
+    simplex.push((x0.to_vec(), v0));
+    for i in 0..n {
+        let mut x = x0.to_vec();
+        x[i] += step[i];
+        let v = f(&x);
+        simplex.push((x, v));
+    }
+    let mut evals = n + 1;
+    let sanitize = |v: f64| if v.is_finite() { v } else { f64::MAX };
+    for s in simplex.iter_mut() {
+        s.1 = sanitize(s.1);
+    }
+    while evals < max_evals {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let best = simplex[0].1;
+        let worst = simplex[n].1;
+        if (worst - best).abs() <= 1e-9 * (1.0 + best.abs()) {
+            break;
+        }
+        let centroid: Vec<f64> = (0..n)
+            .map(|i| simplex[..n].iter().map(|s| s.0[i]).sum::<f64>() / n as f64)
+            .collect();
+        let towards = |t: f64| -> Vec<f64> {
+            (0..n)
+                .map(|i| centroid[i] + t * (simplex[n].0[i] - centroid[i]))
+                .collect()
+        };
+        let xr = towards(-1.0);
+        let vr = sanitize(f(&xr));
+        evals += 1;
+        if vr < simplex[0].1 {
+            let xe = towards(-2.0);
+            let ve = sanitize(f(&xe));
+            evals += 1;
+            simplex[n] = if ve < vr { (xe, ve) } else { (xr, vr) };
+        } else if vr < simplex[n - 1].1 {
+            simplex[n] = (xr, vr);
+        } else {
+            let xc = if vr < simplex[n].1 {
+                towards(-0.5)
+            } else {
+                towards(0.5)
+            };
+            let vc = sanitize(f(&xc));
+            evals += 1;
+            if vc < simplex[n].1.min(vr) {
+                simplex[n] = (xc, vc);
+            } else {
+                // Shrink towards the best point.
+                let best_x = simplex[0].0.clone();
+                for s in simplex.iter_mut().skip(1) {
+                    for i in 0..n {
+                        s.0[i] = best_x[i] + 0.5 * (s.0[i] - best_x[i]);
+                    }
+                    s.1 = sanitize(f(&s.0));
+                    evals += 1;
+                }
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let (x, v) = simplex.swap_remove(0);
+    (x, v)
+}
+
+/// What a calibration did.
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrationReport {
+    /// Quantile distance (RMS, counts) per channel before the fit (D1, D2, D3, P).
+    pub rms_before: [f64; 4],
+    /// After the fit.
+    pub rms_after: [f64; 4],
+    /// White-noise levels measured on the real flat recordings, counts.
+    pub noise_counts: [f64; 4],
+    /// The fitted optics.
+    pub optics: OpticsParams,
+}
+
+/// Fits the optics of `config.sensor` to `real` recordings of the recognition experiment
+/// (labels 0–3). `max_evals` bounds each Nelder–Mead run.
+pub fn calibrate(
+    config: &ExperimentConfig,
+    real: &[Recording],
+    max_evals: usize,
+) -> Result<CalibrationReport, SimError> {
+    if config.experiment != Experiment::Recognition {
+        return Err(SimError::Invalid(
+            "calibration uses the recognition experiment (four surfaces)".into(),
+        ));
+    }
+    if real.is_empty() {
+        return Err(SimError::Invalid("no real recordings to calibrate against".into()));
+    }
+    let mut quiet = config.clone();
+    quiet.integrator = Integrator::default();
+    let traces = simulate_traces(&quiet)?;
+    let targets = real_quantiles(real);
+    let static_mm = {
+        let s = &config.sensor.finger;
+        s.body_mass_g * 1e-3 * 9.81 / (s.normal_stiffness_n_mm * 1e3) * 1e3
+    };
+    let mut optics = config.sensor.optics.clone();
+    let rms = |o: &OpticsParams| -> [f64; 4] {
+        std::array::from_fn(|c| channel_loss(o, static_mm, &traces, &targets, c).sqrt())
+    };
+    let rms_before = rms(&optics);
+    for c in 0..3 {
+        let x0 = [
+            optics.rest_counts[c],
+            optics.lateral_gain[c],
+            optics.normal_gain[c],
+            optics.moment_gain[c],
+        ];
+        let (x, _) = nelder_mead(
+            |x| {
+                let mut o = optics.clone();
+                o.rest_counts[c] = x[0];
+                o.lateral_gain[c] = x[1];
+                o.normal_gain[c] = x[2];
+                o.moment_gain[c] = x[3];
+                channel_loss(&o, static_mm, &traces, &targets, c)
+            },
+            &x0,
+            &[5.0, 5.0, 5.0, 5.0],
+            max_evals,
+        );
+        optics.rest_counts[c] = x[0];
+        optics.lateral_gain[c] = x[1];
+        optics.normal_gain[c] = x[2];
+        optics.moment_gain[c] = x[3];
+    }
+    let x0 = [
+        optics.proximity_dark_counts,
+        optics.proximity_peak_counts,
+        optics.proximity_peak_mm,
+        optics.proximity_height_mm,
+        optics.proximity_offset_mm,
+        optics.proximity_spot_mm,
+    ];
+    let apply = |o: &mut OpticsParams, x: &[f64]| {
+        o.proximity_dark_counts = x[0];
+        o.proximity_peak_counts = x[1];
+        o.proximity_peak_mm = x[2].max(0.05);
+        o.proximity_height_mm = x[3];
+        o.proximity_offset_mm = x[4];
+        o.proximity_spot_mm = x[5].abs();
+    };
+    let (x, _) = nelder_mead(
+        |x| {
+            let mut o = optics.clone();
+            apply(&mut o, x);
+            channel_loss(&o, static_mm, &traces, &targets, 3)
+        },
+        &x0,
+        &[20.0, 50.0, 0.3, 0.5, 0.5, 0.3],
+        max_evals,
+    );
+    apply(&mut optics, &x);
+    let noise_counts = real_noise(real);
+    optics.noise_counts = noise_counts;
+    Ok(CalibrationReport {
+        rms_before,
+        rms_after: rms(&optics),
+        noise_counts,
+        optics,
+    })
+}
+
+/// White noise per channel of the real flat recordings (label 0): the standard deviation of
+/// first differences over √2, from a robust (median absolute) estimate.
+pub fn real_noise(real: &[Recording]) -> [f64; 4] {
+    std::array::from_fn(|c| {
+        let mut diffs: Vec<f64> = real
+            .iter()
+            .filter(|r| r.label() == Some(0.0))
+            .flat_map(|r| {
+                r.rows
+                    .windows(2)
+                    .map(move |w| {
+                        let a = [w[0].d1, w[0].d2, w[0].d3, w[0].p][c];
+                        let b = [w[1].d1, w[1].d2, w[1].d3, w[1].p][c];
+                        b - a
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        if diffs.is_empty() {
+            return 0.0;
+        }
+        diffs.sort_by(f64::total_cmp);
+        // Mean absolute difference is robust enough and, unlike the median, not zero for
+        // quantised signals that mostly repeat a code.
+        let mad = diffs.iter().map(|d| d.abs()).sum::<f64>() / diffs.len() as f64;
+        // For Gaussian noise E|Δ| = 2σ/√π.
+        mad * std::f64::consts::PI.sqrt() / 2.0
+    })
+}
+
+/// Runs the calibration with the paper's recognition settings (one trace per class).
+pub fn calibrate_paper(real: &[Recording], seed: u64) -> Result<CalibrationReport, SimError> {
+    let mut config = ExperimentConfig::paper(Experiment::Recognition, seed);
+    config.sensor = SensorParams::default();
+    calibrate(&config, real, 400)
+}

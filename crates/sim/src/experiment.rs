@@ -1,1 +1,326 @@
-//! TODO
+//! The paper's two experiments, simulated: recordings in the authors' nine-column format.
+//!
+//! * Recognition: four surfaces, label 0 flat, 1 crack, 2 bump, 3 wavy pattern; files
+//!   `crack_{nocrack,crack,bump,pattern}_complete_<r>.csv`.
+//! * Width: cracks of 0, 1, 2, 5, 8 and 10 mm, label = width; files
+//!   `crack_mm<w>_complete_<r>.csv`.
+//!
+//! Each recording is 12 slides (a 16 mm stroke forth and back at 3.89 mm/s) starting a random
+//! 5–10 mm before the feature's near edge, on a random line across the plate, with the
+//! recording's own offset/gain change and noise. Everything follows from the seed: the same seed
+//! writes the same bytes. The files load with `crackbot tactile eval` as they are.
+
+use std::path::{Path, PathBuf};
+
+use crackbot_recording::{write_recording, Recording, Row};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::finger::Integrator;
+use crate::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
+use crate::surface::{Feature, Surface};
+use crate::{SensorParams, SimError};
+
+/// Which of the paper's experiments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Experiment {
+    /// Surface recognition: flat, crack, bump, wavy pattern.
+    Recognition,
+    /// Crack width: 0, 1, 2, 5, 8, 10 mm.
+    Width,
+}
+
+/// The geometry of the paper's samples, as simulated.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Samples {
+    /// Depth of the cracks, mm.
+    pub crack_depth_mm: f64,
+    /// Angle of the cracks' walls from the plate, degrees.
+    pub crack_wall_angle_deg: f64,
+    /// Width of the crack of the recognition experiment, mm.
+    pub recognition_crack_width_mm: f64,
+    /// Widths of the width experiment, mm.
+    pub widths_mm: Vec<f64>,
+    /// Base radius of the bump, mm.
+    pub bump_radius_mm: f64,
+    /// Height of the bump, mm.
+    pub bump_height_mm: f64,
+    /// Amplitude of the wavy pattern, mm (the paper: 1 mm).
+    pub wave_amplitude_mm: f64,
+    /// Period of the wavy pattern, mm (the paper: 5 mm).
+    pub wave_period_mm: f64,
+}
+
+impl Default for Samples {
+    fn default() -> Self {
+        Samples {
+            crack_depth_mm: 5.0,
+            crack_wall_angle_deg: 85.0,
+            recognition_crack_width_mm: 5.0,
+            widths_mm: vec![0.0, 1.0, 2.0, 5.0, 8.0, 10.0],
+            bump_radius_mm: 4.0,
+            bump_height_mm: 2.0,
+            wave_amplitude_mm: 1.0,
+            wave_period_mm: 5.0,
+        }
+    }
+}
+
+/// Settings of a simulated experiment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExperimentConfig {
+    /// Which experiment.
+    pub experiment: Experiment,
+    /// Recordings per surface (the paper: 5).
+    pub recordings: u32,
+    /// Slides per recording (the paper: 12).
+    pub slides: u32,
+    /// Stroke length, mm.
+    pub stroke_mm: f64,
+    /// Sliding speed, mm/s.
+    pub speed_mm_s: f64,
+    /// Range of the distance from the stroke's start to the feature's near edge, mm.
+    pub start_range_mm: (f64, f64),
+    /// Rate at which the position column is updated, Hz (the authors' haptic device: ~80 Hz;
+    /// the value is held between updates).
+    pub position_rate_hz: f64,
+    /// The samples' geometry.
+    pub samples: Samples,
+    /// The sensor.
+    pub sensor: SensorParams,
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Seed of everything random.
+    pub seed: u64,
+}
+
+impl ExperimentConfig {
+    /// The paper's settings for `experiment`, with the default sensor.
+    pub fn paper(experiment: Experiment, seed: u64) -> Self {
+        ExperimentConfig {
+            experiment,
+            recordings: 5,
+            slides: 12,
+            stroke_mm: 16.0,
+            speed_mm_s: 3.89,
+            start_range_mm: (5.0, 10.0),
+            position_rate_hz: 80.0,
+            samples: Samples::default(),
+            sensor: crate::calibrate::calibrated_sensor(),
+            integrator: Integrator::default(),
+            seed,
+        }
+    }
+
+    /// Checks the settings.
+    pub fn validate(&self) -> Result<(), SimError> {
+        if self.recordings == 0 || self.slides == 0 {
+            return Err(SimError::Invalid(format!(
+                "need at least one recording and one slide, got {} recordings of {} slides",
+                self.recordings, self.slides
+            )));
+        }
+        let (lo, hi) = self.start_range_mm;
+        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
+            return Err(SimError::Invalid(format!(
+                "start range must be 0 ≤ min ≤ max mm, got {lo}..{hi}"
+            )));
+        }
+        if !(self.position_rate_hz.is_finite() && self.position_rate_hz > 0.0) {
+            return Err(SimError::Invalid(format!(
+                "position rate must be positive, got {} Hz",
+                self.position_rate_hz
+            )));
+        }
+        self.sensor.finger.validate()?;
+        self.sensor.optics.validate()?;
+        self.integrator.validate()
+    }
+
+    /// The surfaces of the experiment: `(file stem, label, surface, x of the feature's near
+    /// edge in mm)`. The feature runs across the plate at x = 100 mm.
+    pub fn surfaces(&self) -> Vec<(String, f64, Surface, f64)> {
+        let s = &self.samples;
+        let crack = |w: f64| Feature::Crack {
+            path: vec![[100.0, 0.0], [100.0, 100.0]],
+            width_mm: w,
+            depth_mm: s.crack_depth_mm,
+            edge_radius_mm: 0.5,
+            wall_angle_deg: s.crack_wall_angle_deg,
+        };
+        let plate = |features: Vec<Feature>| Surface {
+            size_mm: [200.0, 100.0],
+            features,
+        };
+        match self.experiment {
+            Experiment::Recognition => vec![
+                ("crack_nocrack".into(), 0.0, plate(vec![]), 100.0),
+                (
+                    "crack_crack".into(),
+                    1.0,
+                    plate(vec![crack(s.recognition_crack_width_mm)]),
+                    100.0 - s.recognition_crack_width_mm / 2.0,
+                ),
+                (
+                    "crack_bump".into(),
+                    2.0,
+                    plate(vec![Feature::Bump {
+                        centre: [100.0, 50.0],
+                        radius_mm: s.bump_radius_mm,
+                        height_mm: s.bump_height_mm,
+                    }]),
+                    100.0 - s.bump_radius_mm,
+                ),
+                (
+                    "crack_pattern".into(),
+                    3.0,
+                    plate(vec![Feature::Wavy {
+                        min: [40.0, 0.0],
+                        max: [160.0, 100.0],
+                        amplitude_mm: s.wave_amplitude_mm,
+                        period_mm: s.wave_period_mm,
+                        direction_deg: 0.0,
+                    }]),
+                    100.0,
+                ),
+            ],
+            Experiment::Width => s
+                .widths_mm
+                .iter()
+                .map(|&w| {
+                    (
+                        format!("crack_mm{}", fmt_width(w)),
+                        w,
+                        plate(vec![crack(w)]),
+                        100.0 - w / 2.0,
+                    )
+                })
+                .collect(),
+        }
+    }
+}
+
+fn fmt_width(w: f64) -> String {
+    if w.fract() == 0.0 {
+        format!("{}", w as i64)
+    } else {
+        format!("{w}").replace('.', "p")
+    }
+}
+
+/// Simulates one recording of `slides` slides over `surface`: the arm starts `start_mm` before
+/// `edge_x` on the line y = `line_y`.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_recording(
+    config: &ExperimentConfig,
+    surface: &Surface,
+    label: f64,
+    repetition: u32,
+    edge_x: f64,
+    start_mm: f64,
+    line_y: f64,
+    position_offset_mm: f64,
+    seed: u64,
+) -> Result<Recording, SimError> {
+    let line = SlideLine {
+        start: [edge_x - start_mm, line_y],
+        direction: [1.0, 0.0],
+        stroke_mm: config.stroke_mm,
+        speed_mm_s: config.speed_mm_s,
+    };
+    let mut sim = SlideSim::new(surface, 1.0, &line, &config.sensor, config.integrator, seed)?;
+    let slide_time = sim.slide_time();
+    let n = (config.slides as f64 * slide_time * SAMPLE_RATE_HZ).round() as usize;
+    let hold = (SAMPLE_RATE_HZ / config.position_rate_hz).round().max(1.0) as usize;
+    let mut rows = Vec::with_capacity(n);
+    let mut x_col = position_offset_mm;
+    let mut last_dir = 1u8;
+    for k in 0..n {
+        let s = sim.next_sample()?;
+        if k % hold == 0 {
+            x_col = position_offset_mm + s.arm_mm;
+        }
+        let direction = if s.arm_velocity_mm_s > 1e-9 {
+            1
+        } else if s.arm_velocity_mm_s < -1e-9 {
+            0
+        } else {
+            last_dir
+        };
+        last_dir = direction;
+        let slide = ((s.t - 0.5 / SAMPLE_RATE_HZ) / slide_time).floor() as u32 + 1;
+        rows.push(Row {
+            x_mm: (x_col * 1e4).round() / 1e4,
+            d1: s.counts[0],
+            d2: s.counts[1],
+            d3: s.counts[2],
+            p: s.counts[3],
+            direction,
+            slide: slide.min(config.slides),
+            label,
+            repetition,
+        });
+    }
+    Ok(Recording { rows, extra: None })
+}
+
+/// One file written by [`generate`].
+#[derive(Debug, Clone, Serialize)]
+pub struct Written {
+    /// The file.
+    pub path: PathBuf,
+    /// Its label.
+    pub label: f64,
+    /// Its repetition number.
+    pub repetition: u32,
+    /// Rows written.
+    pub rows: usize,
+}
+
+/// Generates every recording of the experiment into `out` (created if needed) as
+/// `<stem>_complete_<r>.<ext>` with `ext` "csv" or "mat", calling `progress(done, total)` after
+/// each recording.
+pub fn generate(
+    config: &ExperimentConfig,
+    out: &Path,
+    ext: &str,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<Written>, SimError> {
+    config.validate()?;
+    std::fs::create_dir_all(out).map_err(SimError::io(out))?;
+    let surfaces = config.surfaces();
+    let total = surfaces.len() * config.recordings as usize;
+    let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
+    let mut written = Vec::with_capacity(total);
+    for (stem, label, surface, edge_x) in &surfaces {
+        for r in 1..=config.recordings {
+            let (lo, hi) = config.start_range_mm;
+            let start = if hi > lo {
+                rng.random_range(lo..hi)
+            } else {
+                lo
+            };
+            // Lines cross the bump's top (±1 mm) as the authors' slides did.
+            let line_y = 50.0 + rng.random_range(-1.0..1.0);
+            // The haptic device's frame: the stroke starts somewhere 8–14 mm from its origin.
+            let offset = rng.random_range(8.0..14.0);
+            let seed = rng.random::<u64>();
+            let rec = simulate_recording(
+                config, surface, *label, r, *edge_x, start, line_y, offset, seed,
+            )?;
+            let path = out.join(format!("{stem}_complete_{r}.{ext}"));
+            write_recording(&path, &rec)?;
+            written.push(Written {
+                path,
+                label: *label,
+                repetition: r,
+                rows: rec.rows.len(),
+            });
+            progress(written.len(), total);
+        }
+    }
+    Ok(written)
+}

@@ -6,7 +6,7 @@
 //!   free to move vertically against the arm's viscous damping.
 //! * The tip, a sphere of radius `R` and gram-scale mass `m`, is joined to the body by the
 //!   compliant middle part of the finger: lateral and normal linear spring–dampers. The lateral
-//!   deflection `δx = x_t − x_b` and the normal compression `δz = z_b − z_t` are what the
+//!   deflection `δx = x_t − x_b` and the normal compression `δz = z_t − z_b` are what the
 //!   deformation fibres D1–D3 see.
 //! * Contact: the sphere meets the surface along its *rolling envelope* `e(x)` (the height of the
 //!   sphere's lowest point when it rests on the profile above `x`), so a crack narrower than the
@@ -70,7 +70,7 @@ pub struct FingerParams {
 impl Default for FingerParams {
     fn default() -> Self {
         FingerParams {
-            tip_radius_mm: 1.0,
+            tip_radius_mm: 6.0,
             tip_mass_g: 2.0,
             body_mass_g: 200.0,
             lateral_stiffness_n_mm: 1.0,
@@ -79,7 +79,7 @@ impl Default for FingerParams {
             normal_damping_ratio: 0.7,
             contact_stiffness_n_m: 2e5,
             contact_damping_ratio: 0.3,
-            friction: 0.35,
+            friction: 0.15,
             friction_velocity_mm_s: 0.5,
             arm_damping_n_s_m: 8.0,
         }
@@ -93,9 +93,18 @@ impl FingerParams {
             ("sensor.finger.tip_radius_mm", self.tip_radius_mm),
             ("sensor.finger.tip_mass_g", self.tip_mass_g),
             ("sensor.finger.body_mass_g", self.body_mass_g),
-            ("sensor.finger.lateral_stiffness_n_mm", self.lateral_stiffness_n_mm),
-            ("sensor.finger.normal_stiffness_n_mm", self.normal_stiffness_n_mm),
-            ("sensor.finger.contact_stiffness_n_m", self.contact_stiffness_n_m),
+            (
+                "sensor.finger.lateral_stiffness_n_mm",
+                self.lateral_stiffness_n_mm,
+            ),
+            (
+                "sensor.finger.normal_stiffness_n_mm",
+                self.normal_stiffness_n_mm,
+            ),
+            (
+                "sensor.finger.contact_stiffness_n_m",
+                self.contact_stiffness_n_m,
+            ),
             (
                 "sensor.finger.friction_velocity_mm_s",
                 self.friction_velocity_mm_s,
@@ -109,9 +118,18 @@ impl FingerParams {
             }
         }
         let non_negative = [
-            ("sensor.finger.lateral_damping_ratio", self.lateral_damping_ratio),
-            ("sensor.finger.normal_damping_ratio", self.normal_damping_ratio),
-            ("sensor.finger.contact_damping_ratio", self.contact_damping_ratio),
+            (
+                "sensor.finger.lateral_damping_ratio",
+                self.lateral_damping_ratio,
+            ),
+            (
+                "sensor.finger.normal_damping_ratio",
+                self.normal_damping_ratio,
+            ),
+            (
+                "sensor.finger.contact_damping_ratio",
+                self.contact_damping_ratio,
+            ),
             ("sensor.finger.friction", self.friction),
             ("sensor.finger.arm_damping_n_s_m", self.arm_damping_n_s_m),
         ];
@@ -328,6 +346,7 @@ pub struct FingerModel {
     mu: f64,
     v_eps: f64,
     c_arm: f64,
+    radius: f64,
 }
 
 /// Forces and deflections at one state: what the optics read.
@@ -339,6 +358,9 @@ pub struct Readout {
     pub normal: f64,
     /// Contact normal force, N.
     pub contact_force: f64,
+    /// Moment of the friction force about the tip's centre, N·m (friction acts at the contact
+    /// point, the normal force through the centre).
+    pub moment: f64,
     /// Tip position along the line, m.
     pub tip_x: f64,
     /// Height of the body's reference point, m.
@@ -366,6 +388,7 @@ impl FingerModel {
             mu: params.friction,
             v_eps: params.friction_velocity_mm_s * 1e-3,
             c_arm: params.arm_damping_n_s_m,
+            radius: params.tip_radius_mm * 1e-3,
         }
     }
 
@@ -382,19 +405,19 @@ impl FingerModel {
         let pen = w_total / self.kc;
         let zt = e - pen;
         // Body weight compresses the finger by W/kz.
-        let zb = zt + w_body / self.kz;
+        let zb = zt - w_body / self.kz;
         [x, zt, 0.0, 0.0, zb, 0.0]
     }
 
-    /// Contact normal force and tangential friction force components acting on the tip, plus
-    /// the normal force magnitude.
+    /// Contact force components acting on the tip `(f_x, f_z)`, the normal force magnitude and
+    /// the friction force along the tangent.
     #[inline]
-    fn contact(&self, y: &State) -> (f64, f64, f64) {
+    fn contact(&self, y: &State) -> (f64, f64, f64, f64) {
         let (xt, zt, vx, vz) = (y[0], y[1], y[2], y[3]);
         let (e, s) = self.env.at(xt);
         let pen = e - zt;
         if pen <= 0.0 {
-            return (0.0, 0.0, 0.0);
+            return (0.0, 0.0, 0.0, 0.0);
         }
         let norm = (1.0 + s * s).sqrt();
         let inv = 1.0 / norm;
@@ -407,7 +430,7 @@ impl FingerModel {
         let ft = -self.mu * fn_mag * (vt / self.v_eps).tanh();
         let fx = -s * inv * fn_mag + ft * inv;
         let fz = inv * fn_mag + ft * s * inv;
-        (fx, fz, fn_mag)
+        (fx, fz, fn_mag, ft)
     }
 
     /// `dy/dt` at time `t`, with the arm on `arm`.
@@ -415,11 +438,11 @@ impl FingerModel {
     pub fn rhs(&self, t: f64, y: &State, arm: &dyn ArmPath) -> State {
         let (xb, vb) = arm.at(t);
         let (xt, zt, vx, vz, zb, vzb) = (y[0], y[1], y[2], y[3], y[4], y[5]);
-        let (fcx, fcz, _) = self.contact(y);
-        // Finger springs: lateral towards the body, normal compression δz = zb - zt pushes the
-        // tip down and the body up.
+        let (fcx, fcz, _, _) = self.contact(y);
+        // Finger springs: lateral towards the body; the normal compression δz = zt - zb (the
+        // tip pushed up towards the body's reference point) pushes the tip down and the body up.
         let fsx = -self.kx * (xt - xb) - self.cx * (vx - vb);
-        let fsz = self.kz * (zb - zt) + self.cz * (vzb - vz);
+        let fsz = self.kz * (zt - zb) + self.cz * (vz - vzb);
         let ax = (fsx + fcx) / self.m;
         let az = (-fsz + fcz) / self.m - G;
         // The body: weight, the finger's reaction, the arm's damping.
@@ -430,11 +453,12 @@ impl FingerModel {
     /// Deflections and contact force at a state, for the optics.
     pub fn readout(&self, t: f64, y: &State, arm: &dyn ArmPath) -> Readout {
         let (xb, _) = arm.at(t);
-        let (_, _, fn_mag) = self.contact(y);
+        let (_, _, fn_mag, ft) = self.contact(y);
         Readout {
             lateral: y[0] - xb,
-            normal: y[4] - y[1],
+            normal: y[1] - y[4],
             contact_force: fn_mag,
+            moment: ft * self.radius,
             tip_x: y[0],
             body_z: y[4],
         }
@@ -449,7 +473,7 @@ impl FingerModel {
         0.5 * self.m * (vx * vx + vz * vz)
             + 0.5 * self.big_m * vzb * vzb
             + 0.5 * self.kx * (xt - arm_x).powi(2)
-            + 0.5 * self.kz * (zb - zt).powi(2)
+            + 0.5 * self.kz * (zt - zb).powi(2)
             + 0.5 * self.kc * pen_n * pen_n
             + G * (self.m * zt + self.big_m * zb)
     }
@@ -498,7 +522,7 @@ pub enum Integrator {
 
 impl Default for Integrator {
     fn default() -> Self {
-        Integrator::Sdirk2 { substeps: 2 }
+        Integrator::Sdirk2 { substeps: 1 }
     }
 }
 
@@ -572,6 +596,9 @@ fn finite(y: &State) -> bool {
 
 /// Error scale of the state components (m and m/s).
 const SCALE: State = [1e-6, 1e-6, 1e-4, 1e-4, 1e-6, 1e-4];
+
+/// Newton stops when the stage changes by less than this fraction of [`SCALE`] (10 nm, 1 µm/s).
+const NEWTON_TOL: f64 = 1e-2;
 
 impl Stepper {
     /// A stepper using `method`.
@@ -649,8 +676,9 @@ impl Stepper {
         j
     }
 
-    /// Solves the stage equation `k = f(t, base + a k)` by simplified Newton with the
-    /// factorised `I - a J`.
+    /// Solves the stage equation `k = f(t, base + a k)` by Newton's method on `I - a J`: the
+    /// factorisation `lu` of the step's Jacobian is reused (simplified Newton) and refreshed at
+    /// the current iterate when the iteration stalls (a contact switching inside the step).
     #[allow(clippy::too_many_arguments)]
     fn stage(
         &mut self,
@@ -659,11 +687,12 @@ impl Stepper {
         t: f64,
         base: &State,
         a: f64,
-        lu: &nalgebra::LU<f64, nalgebra::Const<STATE>, nalgebra::Const<STATE>>,
+        lu: &mut nalgebra::LU<f64, nalgebra::Const<STATE>, nalgebra::Const<STATE>>,
         guess: State,
     ) -> Option<State> {
         let mut k = guess;
-        for _ in 0..12 {
+        let mut last_err = f64::INFINITY;
+        for iter in 0..16 {
             let yk = add(base, &k, a);
             let f = model.rhs(t, &yk, arm);
             self.work.rhs_evals += 1;
@@ -675,15 +704,22 @@ impl Stepper {
             let mut err: f64 = 0.0;
             for i in 0..STATE {
                 k[i] += d[i];
-                // Stage change scaled by the step: a position-like change a*d.
+                // The change of the stage state a*d, against the error scale.
                 err = err.max((a * d[i]).abs() / SCALE[i]);
             }
             if !err.is_finite() {
                 return None;
             }
-            if err < 1e-3 {
+            if err < NEWTON_TOL {
                 return Some(k);
             }
+            if iter >= 2 && err > 0.5 * last_err {
+                // Slow convergence: refresh the Jacobian where the iterate is now.
+                let yk = add(base, &k, a);
+                let j = self.jacobian(model, arm, t, &yk);
+                *lu = (Mat6::identity() - j * a).lu();
+            }
+            last_err = err;
         }
         None
     }
@@ -705,16 +741,16 @@ impl Stepper {
         };
         let j = self.jacobian(model, arm, t, y);
         let m = Mat6::identity() - j * (h * gamma);
-        let lu = m.lu();
+        let mut lu = m.lu();
         let f0 = model.rhs(t, y, arm);
         self.work.rhs_evals += 1;
         let result = (|| {
-            let k1 = self.stage(model, arm, t + gamma * h, y, gamma * h, &lu, f0)?;
+            let k1 = self.stage(model, arm, t + gamma * h, y, gamma * h, &mut lu, f0)?;
             if !sdirk {
                 return Some(add(y, &k1, h));
             }
             let base = add(y, &k1, (1.0 - gamma) * h);
-            let k2 = self.stage(model, arm, t + h, &base, gamma * h, &lu, k1)?;
+            let k2 = self.stage(model, arm, t + h, &base, gamma * h, &mut lu, k1)?;
             let mut out = *y;
             for i in 0..STATE {
                 out[i] += h * ((1.0 - gamma) * k1[i] + gamma * k2[i]);
@@ -732,10 +768,7 @@ impl Stepper {
                 if depth >= 16 {
                     return Err(SimError::Integration {
                         t,
-                        reason: format!(
-                            "Newton did not converge even with a step of {:.3e} s",
-                            h
-                        ),
+                        reason: format!("Newton did not converge even with a step of {:.3e} s", h),
                     });
                 }
                 self.implicit_step(model, arm, t, h / 2.0, y, depth + 1)?;
@@ -891,6 +924,7 @@ mod tests {
                 width_mm: w,
                 depth_mm: 3.0,
                 edge_radius_mm: 0.0,
+                wall_angle_deg: 90.0,
             }],
         };
         let dip = |w: f64| {

@@ -17,12 +17,15 @@
 //!   simulated with real slides.
 
 pub mod calibrate;
+pub mod camera;
 pub mod experiment;
 pub mod finger;
 pub mod optics;
 pub mod render;
+pub mod run;
 pub mod scene;
 pub mod surface;
+pub mod work_precision;
 
 use serde::{Deserialize, Serialize};
 

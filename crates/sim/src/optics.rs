@@ -35,6 +35,10 @@ pub struct OpticsParams {
     pub lateral_gain: [f64; 3],
     /// D1, D2, D3 change per mm of extra normal compression, counts/mm.
     pub normal_gain: [f64; 3],
+    /// D1, D2, D3 change per N·mm of the friction moment about the tip, counts/(N·mm).
+    pub moment_gain: [f64; 3],
+    /// Diameter of the spot the proximity fibre averages over, mm.
+    pub proximity_spot_mm: f64,
     /// P with nothing in view, counts.
     pub proximity_dark_counts: f64,
     /// P above dark at the peak of the distance curve, for reflectivity 1, counts.
@@ -63,13 +67,15 @@ impl Default for OpticsParams {
     fn default() -> Self {
         OpticsParams {
             rest_counts: [655.0, 431.0, 708.0],
-            lateral_gain: [40.0, 15.0, -30.0],
+            lateral_gain: [13.0, 5.0, -10.0],
             normal_gain: [20.0, 6.0, -25.0],
-            proximity_dark_counts: 235.0,
+            moment_gain: [0.0, 0.0, 0.0],
+            proximity_spot_mm: 1.0,
+            proximity_dark_counts: 240.0,
             proximity_peak_counts: 560.0,
-            proximity_peak_mm: 1.5,
-            proximity_height_mm: 2.9,
-            proximity_offset_mm: 2.5,
+            proximity_peak_mm: 3.0,
+            proximity_height_mm: 1.5,
+            proximity_offset_mm: 2.0,
             saturation_counts: 1000.0,
             noise_counts: [1.0, 1.0, 1.5, 2.0],
             drift_counts_per_sqrt_s: 0.3,
@@ -88,12 +94,14 @@ impl OpticsParams {
             .iter()
             .chain(&self.lateral_gain)
             .chain(&self.normal_gain)
+            .chain(&self.moment_gain)
             .chain(&self.noise_counts)
             .chain(&[
                 self.proximity_dark_counts,
                 self.proximity_peak_counts,
                 self.proximity_height_mm,
                 self.proximity_offset_mm,
+                self.proximity_spot_mm,
             ])
             .all(|v| v.is_finite());
         if !finite {
@@ -152,9 +160,7 @@ impl OpticsParams {
 
     /// Relative intensity of the proximity fibre at distance `d_mm` (1 at the peak).
     pub fn proximity_curve(&self, d_mm: f64) -> f64 {
-        let u = d_mm.max(0.0) / self.proximity_peak_mm;
-        let u2 = u * u;
-        2.0 * u2 / (1.0 + u2 * u2)
+        proximity_intensity(d_mm, self.proximity_peak_mm)
     }
 
     /// The transducer's soft saturation.
@@ -170,14 +176,23 @@ impl OpticsParams {
     }
 }
 
-/// What the fibres see at one instant, before electronics: deflections and the proximity
-/// geometry.
+/// Relative intensity of a reflective fibre pair at distance `d_mm` whose curve peaks at
+/// `peak_mm`: `2u²/(1+u⁴)`, `u = d/peak` (0 at contact, 1 at the peak, `2/u²` far away).
+#[inline]
+pub fn proximity_intensity(d_mm: f64, peak_mm: f64) -> f64 {
+    let u = d_mm.max(0.0) / peak_mm;
+    let u2 = u * u;
+    2.0 * u2 / (1.0 + u2 * u2)
+}
+
+/// What the proximity fibre sees at one instant: its relative intensity (the distance curve
+/// averaged over its spot, times the reflectivity there).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Scene1d {
-    /// Distance from the proximity fibre to the surface it looks at, mm.
+    /// Mean distance from the proximity fibre to the spot it looks at, mm (for reports).
     pub proximity_distance_mm: f64,
-    /// Reflectivity of that spot (plate material × features).
-    pub reflectivity: f64,
+    /// Relative intensity, 1 = the curve's peak over a plate of reflectivity 1.
+    pub intensity: f64,
 }
 
 /// The electronics of one recording: its noise generator, drift state and the recording's own
@@ -216,15 +231,15 @@ impl Electronics {
         let p = &self.params;
         let lat = r.lateral * 1e3;
         let nor = r.normal * 1e3 - self.static_compression_mm;
+        let mom = r.moment * 1e3;
         let mut v = [0.0; CHANNELS];
         for c in 0..3 {
-            v[c] = p.rest_counts[c] + self.gain[c] * (p.lateral_gain[c] * lat + p.normal_gain[c] * nor);
+            v[c] = p.rest_counts[c]
+                + self.gain[c]
+                    * (p.lateral_gain[c] * lat + p.normal_gain[c] * nor + p.moment_gain[c] * mom);
         }
         v[3] = p.proximity_dark_counts
-            + self.gain[3]
-                * p.proximity_peak_counts
-                * view.reflectivity.max(0.0)
-                * p.proximity_curve(view.proximity_distance_mm);
+            + self.gain[3] * p.proximity_peak_counts * view.intensity.max(0.0);
         let walk = p.drift_counts_per_sqrt_s * dt.max(0.0).sqrt();
         for c in 0..CHANNELS {
             let n: f64 = self.rng.sample(StandardNormal);
@@ -258,8 +273,9 @@ mod tests {
         let p = OpticsParams::default();
         assert!((p.proximity_curve(p.proximity_peak_mm) - 1.0).abs() < 1e-12);
         assert_eq!(p.proximity_curve(0.0), 0.0);
-        assert!(p.proximity_curve(30.0) < 0.01);
-        assert!(p.proximity_curve(2.0) > p.proximity_curve(4.0));
+        assert!(p.proximity_curve(20.0 * p.proximity_peak_mm) < 0.01);
+        assert!(p.proximity_curve(2.0 * p.proximity_peak_mm) > p.proximity_curve(3.0 * p.proximity_peak_mm));
+        assert!(p.proximity_curve(0.5 * p.proximity_peak_mm) < 1.0);
     }
 
     #[test]

@@ -26,6 +26,10 @@ pub enum Feature {
         /// Radius of the rounded top edges, mm.
         #[serde(default = "default_edge_radius")]
         edge_radius_mm: f64,
+        /// Angle of the walls from the plate's plane, degrees (90: vertical walls; the default
+        /// 45° is a printed V/trapezoid groove, flat-bottomed where it reaches `depth_mm`).
+        #[serde(default = "default_wall_angle")]
+        wall_angle_deg: f64,
     },
     /// A smooth dome (raised cosine) of given base radius and height.
     Bump {
@@ -79,6 +83,9 @@ pub enum Feature {
 fn default_edge_radius() -> f64 {
     0.2
 }
+fn default_wall_angle() -> f64 {
+    45.0
+}
 fn default_wave_amplitude() -> f64 {
     1.0
 }
@@ -121,9 +128,13 @@ impl Feature {
             (lo, hi)
         };
         match self {
-            Feature::Crack { path, width_mm, .. } | Feature::Decoy { path, width_mm, .. } => {
-                poly_box(path, width_mm / 2.0)
-            }
+            Feature::Crack {
+                path,
+                width_mm,
+                edge_radius_mm,
+                ..
+            } => poly_box(path, width_mm / 2.0 + edge_radius_mm.max(0.0)),
+            Feature::Decoy { path, width_mm, .. } => poly_box(path, width_mm / 2.0),
             Feature::Bump {
                 centre, radius_mm, ..
             } => poly_box(&[*centre], *radius_mm),
@@ -144,12 +155,22 @@ impl Feature {
                 width_mm,
                 depth_mm,
                 edge_radius_mm,
+                wall_angle_deg,
             } => {
                 if *width_mm <= 0.0 || *depth_mm <= 0.0 {
                     return 0.0;
                 }
                 let d = distance_to_polyline(path, p);
-                groove_height(d, width_mm / 2.0, *depth_mm, *edge_radius_mm)
+                if d >= width_mm / 2.0 + edge_radius_mm.max(0.0) {
+                    return 0.0;
+                }
+                groove_height(
+                    d,
+                    width_mm / 2.0,
+                    *depth_mm,
+                    *edge_radius_mm,
+                    *wall_angle_deg,
+                )
             }
             Feature::Bump {
                 centre,
@@ -218,19 +239,19 @@ impl Feature {
     }
 }
 
-/// Height of a flat-bottomed groove of half-width `half`, depth `depth` and top edges rounded
-/// with radius `r`, at distance `d` from its centre line.
-fn groove_height(d: f64, half: f64, depth: f64, r: f64) -> f64 {
-    if d >= half {
-        return 0.0;
+/// Height of a groove of half-width `half` at the top, depth `depth`, walls at `angle_deg`
+/// from the plate, at distance `d` from its centre line. The top edges are rounded by a
+/// parabolic fillet over `±r` around the edge (tangent to the top face and to the wall), so the
+/// profile's slope never exceeds the wall's.
+fn groove_height(d: f64, half: f64, depth: f64, r: f64, angle_deg: f64) -> f64 {
+    let slope = angle_deg.clamp(1.0, 90.0).to_radians().tan();
+    let wall = |d: f64| -((half - d) * slope).clamp(0.0, depth);
+    // A fillet no wider than half the wall's horizontal run or the half-width.
+    let b = r.clamp(0.0, (0.5 * depth / slope).min(half));
+    if b > 0.0 && (d - half).abs() < b {
+        return -slope * (half + b - d).powi(2) / (4.0 * b);
     }
-    let r = r.clamp(0.0, half.min(depth));
-    // Inside the rounding of the edge: a quarter circle from the top face down the wall.
-    if r > 0.0 && d > half - r {
-        let u = d - (half - r);
-        return -(r - (r * r - u * u).max(0.0).sqrt()).min(depth);
-    }
-    -depth
+    wall(d)
 }
 
 fn dist(a: Point, b: Point) -> f64 {
@@ -358,6 +379,7 @@ mod tests {
             width_mm: width,
             depth_mm: depth,
             edge_radius_mm: 0.2,
+            wall_angle_deg: 60.0,
         }
     }
 
@@ -371,6 +393,8 @@ mod tests {
         assert_eq!(s.height_mm([52.5, 40.0]), 0.0);
         let edge = s.height_mm([51.95, 40.0]);
         assert!(edge < 0.0 && edge > -0.2, "{edge}");
+        // The fillet is tangent to the top face: nothing beyond the edge plus its radius.
+        assert_eq!(s.height_mm([52.21, 40.0]), 0.0);
         // Zero-width cracks are invisible to touch.
         let closed = Surface {
             size_mm: [200.0, 100.0],

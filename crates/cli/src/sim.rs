@@ -1,0 +1,438 @@
+//! `crackbot sim …`: the simulator's datasets, calibration, work-precision report and the
+//! real-vs-simulated comparison.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Subcommand, ValueEnum};
+use crackbot_recording::{collect_recordings, Recording};
+use crackbot_sim::experiment::{generate, Experiment, ExperimentConfig};
+use crackbot_sim::work_precision::{default_methods, work_precision, WorkPrecisionRow};
+use indicatif::{ProgressBar, ProgressStyle};
+use plotters::prelude::*;
+
+const FONT: &str = "sans-serif";
+
+/// Simulator commands.
+#[derive(Debug, Subcommand)]
+pub enum SimCommand {
+    /// Simulate the paper's experiment and write its recordings (authors' nine columns).
+    Dataset(DatasetArgs),
+    /// Fit the simulated sensor's optics to real recordings of the recognition experiment.
+    Calibrate(CalibrateArgs),
+    /// Integrators' error against a fine-step reference vs run time (table, JSON and PNG).
+    WorkPrecision(WorkPrecisionArgs),
+    /// Real and simulated slides side by side, per class and channel (PNG).
+    Compare(CompareArgs),
+}
+
+/// Which experiment.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ExperimentArg {
+    /// Flat, crack, bump, wavy pattern.
+    Recognition,
+    /// Cracks of 0, 1, 2, 5, 8, 10 mm.
+    Width,
+}
+
+impl From<ExperimentArg> for Experiment {
+    fn from(e: ExperimentArg) -> Self {
+        match e {
+            ExperimentArg::Recognition => Experiment::Recognition,
+            ExperimentArg::Width => Experiment::Width,
+        }
+    }
+}
+
+/// File format of the recordings written.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum FormatArg {
+    /// crackbot's CSV (the authors' nine columns with a header).
+    Csv,
+    /// MAT-file level 5, as the authors distribute them.
+    Mat,
+}
+
+/// `crackbot sim dataset`.
+#[derive(Debug, Args)]
+pub struct DatasetArgs {
+    /// Which experiment.
+    #[arg(long, value_enum)]
+    experiment: ExperimentArg,
+    /// Output folder (created if needed).
+    #[arg(long)]
+    out: PathBuf,
+    /// Seed: the same seed writes the same files.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Recordings per surface (the paper: 5).
+    #[arg(long, default_value_t = 5)]
+    recordings: u32,
+    /// Slides per recording (the paper: 12).
+    #[arg(long, default_value_t = 12)]
+    slides: u32,
+    /// File format.
+    #[arg(long, value_enum, default_value_t = FormatArg::Csv)]
+    format: FormatArg,
+}
+
+/// `crackbot sim calibrate`.
+#[derive(Debug, Args)]
+pub struct CalibrateArgs {
+    /// Folder of real recognition recordings (e.g. ../shared/data/tactile/type).
+    #[arg(long)]
+    real: PathBuf,
+    /// Use only this repetition (the others stay unseen for checking the transfer).
+    #[arg(long, default_value_t = 1)]
+    repetition: u32,
+    /// Evaluations per Nelder–Mead run.
+    #[arg(long, default_value_t = 400)]
+    evaluations: usize,
+    /// Write the report as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+/// `crackbot sim work-precision`.
+#[derive(Debug, Args)]
+pub struct WorkPrecisionArgs {
+    /// Output folder for work_precision.{json,png}.
+    #[arg(long, default_value = "out/work-precision")]
+    out: PathBuf,
+}
+
+/// `crackbot sim compare`.
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Folder of real recordings.
+    #[arg(long)]
+    real: PathBuf,
+    /// Folder of simulated recordings of the same experiment (`crackbot sim dataset`).
+    #[arg(long)]
+    sim: PathBuf,
+    /// PNG to write.
+    #[arg(long, default_value = "out/real-vs-sim.png")]
+    out: PathBuf,
+    /// Which slide of each recording to draw.
+    #[arg(long, default_value_t = 2)]
+    slide: u32,
+}
+
+fn bar(total: usize, what: &str) -> ProgressBar {
+    let bar = if std::env::var_os("CI").is_some() {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(total as u64)
+    };
+    if let Ok(style) =
+        ProgressStyle::with_template(&format!("{what} {{bar:30}} {{pos}}/{{len}} {{elapsed}}"))
+    {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// Runs a `crackbot sim` command.
+pub fn run(cmd: SimCommand) -> Result<()> {
+    match cmd {
+        SimCommand::Dataset(a) => dataset(a),
+        SimCommand::Calibrate(a) => calibrate(a),
+        SimCommand::WorkPrecision(a) => work_precision_cmd(a),
+        SimCommand::Compare(a) => compare(a),
+    }
+}
+
+fn dataset(a: DatasetArgs) -> Result<()> {
+    let mut config = ExperimentConfig::paper(a.experiment.into(), a.seed);
+    config.recordings = a.recordings;
+    config.slides = a.slides;
+    let ext = match a.format {
+        FormatArg::Csv => "csv",
+        FormatArg::Mat => "mat",
+    };
+    let total = config.surfaces().len() * a.recordings as usize;
+    let pb = bar(total, "simulating");
+    let start = std::time::Instant::now();
+    let written = generate(&config, &a.out, ext, |done, _| pb.set_position(done as u64))
+        .with_context(|| format!("simulating into {}", a.out.display()))?;
+    pb.finish_and_clear();
+    let rows: usize = written.iter().map(|w| w.rows).sum();
+    let secs = start.elapsed().as_secs_f64();
+    println!(
+        "wrote {} recordings ({} rows, {:.0} simulated s) to {} in {:.1} s ({:.0}× real time)",
+        written.len(),
+        rows,
+        rows as f64 / 400.0,
+        a.out.display(),
+        secs,
+        rows as f64 / 400.0 / secs.max(1e-9)
+    );
+    Ok(())
+}
+
+fn load_all(dir: &Path) -> Result<Vec<Recording>> {
+    let recs = collect_recordings(&[dir.to_path_buf()])
+        .with_context(|| format!("reading recordings in {}", dir.display()))?;
+    if recs.is_empty() {
+        bail!("{}: no .mat or .csv recordings", dir.display());
+    }
+    Ok(recs.into_iter().map(|(_, r)| r).collect())
+}
+
+fn calibrate(a: CalibrateArgs) -> Result<()> {
+    let real: Vec<Recording> = load_all(&a.real)?
+        .into_iter()
+        .filter(|r| r.repetition() == Some(a.repetition))
+        .collect();
+    if real.is_empty() {
+        bail!(
+            "{}: no recording of repetition {}",
+            a.real.display(),
+            a.repetition
+        );
+    }
+    let mut config = ExperimentConfig::paper(Experiment::Recognition, 7);
+    config.sensor = crackbot_sim::SensorParams::default();
+    let report = crackbot_sim::calibrate::calibrate(&config, &real, a.evaluations)?;
+    println!("quantile distance (RMS counts)   D1      D2      D3      P");
+    println!(
+        "before (uncalibrated)        {:7.2} {:7.2} {:7.2} {:7.2}",
+        report.rms_before[0], report.rms_before[1], report.rms_before[2], report.rms_before[3]
+    );
+    println!(
+        "after                        {:7.2} {:7.2} {:7.2} {:7.2}",
+        report.rms_after[0], report.rms_after[1], report.rms_after[2], report.rms_after[3]
+    );
+    println!("fitted optics (TOML, [sensor.optics]):");
+    println!("{}", toml::to_string(&report.optics)?);
+    if let Some(path) = a.json {
+        std::fs::write(&path, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn work_precision_cmd(a: WorkPrecisionArgs) -> Result<()> {
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let methods = default_methods();
+    let pb = bar(methods.len(), "integrating");
+    let rows = work_precision(&methods, |d, _| pb.set_position(d as u64))?;
+    pb.finish_and_clear();
+    println!(
+        "{:<26} {:>12} {:>12} {:>12} {:>10}",
+        "method", "RMS counts", "max counts", "ms / sim s", "× real"
+    );
+    for r in &rows {
+        let fmt = |v: Option<f64>| v.map_or("failed".to_string(), |v| format!("{v:.2e}"));
+        println!(
+            "{:<26} {:>12} {:>12} {:>12.2} {:>10.0}{}",
+            r.method,
+            fmt(r.rms_error_counts),
+            fmt(r.max_error_counts),
+            r.ms_per_sim_second,
+            r.real_time_factor,
+            r.failure
+                .as_deref()
+                .map(|f| format!("  ({f})"))
+                .unwrap_or_default()
+        );
+    }
+    let json = a.out.join("work_precision.json");
+    std::fs::write(&json, serde_json::to_string_pretty(&rows)?)
+        .with_context(|| format!("writing {}", json.display()))?;
+    let png = a.out.join("work_precision.png");
+    work_precision_png(&png, &rows)?;
+    println!("wrote {} and {}", json.display(), png.display());
+    Ok(())
+}
+
+const COLOURS: [RGBColor; 4] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+];
+
+fn work_precision_png(path: &Path, rows: &[WorkPrecisionRow]) -> Result<()> {
+    crackbot_tactile::plots::load_font()?;
+    let ok: Vec<&WorkPrecisionRow> = rows
+        .iter()
+        .filter(|r| r.rms_error_counts.is_some_and(|e| e.is_finite()))
+        .collect();
+    if ok.is_empty() {
+        bail!("no integrator finished, nothing to plot");
+    }
+    let err = |r: &WorkPrecisionRow| r.rms_error_counts.unwrap_or(1.0).max(1e-7);
+    let (x_lo, x_hi) = ok.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
+        (lo.min(r.ms_per_sim_second), hi.max(r.ms_per_sim_second))
+    });
+    let (y_lo, y_hi) = ok
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(err(r)), hi.max(err(r))));
+    let root = BitMapBackend::new(path, (1000, 650)).into_drawing_area();
+    let draw = || -> std::result::Result<(), Box<dyn std::error::Error>> {
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "Work-precision: one slide over a 5 mm crack (error vs DOPRI5 rtol 1e-10)",
+                (FONT, 20),
+            )
+            .margin(16)
+            .x_label_area_size(50)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                (x_lo / 1.5..x_hi * 1.5).log_scale(),
+                (y_lo / 3.0..y_hi * 3.0).log_scale(),
+            )?;
+        chart
+            .configure_mesh()
+            .x_desc("wall ms per simulated second (log)")
+            .y_desc("RMS error of the channels, ADC counts (log)")
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .axis_desc_style((FONT, 16))
+            .label_style((FONT, 13))
+            .draw()?;
+        for (k, fam) in ["sdirk2", "backward-euler", "dopri5", "symplectic-euler"]
+            .iter()
+            .enumerate()
+        {
+            let pts: Vec<(f64, f64)> = ok
+                .iter()
+                .filter(|r| r.family == *fam)
+                .map(|r| (r.ms_per_sim_second, err(r)))
+                .collect();
+            let c = COLOURS[k];
+            chart
+                .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))?
+                .label(*fam)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(3)));
+            chart.draw_series(pts.iter().map(|p| Circle::new(*p, 4, c.filled())))?;
+        }
+        // Quantisation of a 10-bit ADC: an error below this is invisible in the data.
+        let q = 1.0 / 12f64.sqrt();
+        chart
+            .draw_series(LineSeries::new(
+                vec![(x_lo / 1.5, q), (x_hi * 1.5, q)],
+                BLACK.mix(0.5).stroke_width(1),
+            ))?
+            .label("ADC quantisation (RMS 0.29 counts)")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.mix(0.5)));
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font((FONT, 14))
+            .draw()?;
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| anyhow::anyhow!("{}: could not draw: {e}", path.display()))
+}
+
+fn label_name(label: f64, experiment: Experiment) -> String {
+    match experiment {
+        Experiment::Recognition => ["flat", "crack", "bump", "wavy"]
+            .get(label as usize)
+            .map_or(format!("label {label}"), |s| s.to_string()),
+        Experiment::Width => format!("{label} mm"),
+    }
+}
+
+fn compare(a: CompareArgs) -> Result<()> {
+    crackbot_tactile::plots::load_font()?;
+    let real = load_all(&a.real)?;
+    let sim = load_all(&a.sim)?;
+    let mut labels: Vec<f64> = real.iter().filter_map(|r| r.label()).collect();
+    labels.sort_by(f64::total_cmp);
+    labels.dedup();
+    let experiment = if labels.iter().any(|l| *l > 3.0) {
+        Experiment::Width
+    } else {
+        Experiment::Recognition
+    };
+    let pick = |recs: &[Recording], label: f64| -> Option<Vec<[f64; 4]>> {
+        let rec = recs
+            .iter()
+            .filter(|r| r.label() == Some(label))
+            .min_by_key(|r| r.repetition().unwrap_or(u32::MAX))?;
+        let rows: Vec<[f64; 4]> = rec
+            .rows
+            .iter()
+            .filter(|row| row.slide == a.slide)
+            .map(|row| [row.d1, row.d2, row.d3, row.p])
+            .collect();
+        (!rows.is_empty()).then_some(rows)
+    };
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let n = labels.len();
+    let root = BitMapBackend::new(&a.out, (1600, 260 * n as u32 + 60)).into_drawing_area();
+    let draw = || -> std::result::Result<(), Box<dyn std::error::Error>> {
+        root.fill(&WHITE)?;
+        let (title, body) = root.split_vertically(50);
+        title.draw(&Text::new(
+            format!(
+                "slide {} of the first recording per class: real (blue) vs simulated (red)",
+                a.slide
+            ),
+            (20, 14),
+            (FONT, 22),
+        ))?;
+        let cells = body.split_evenly((n, 4));
+        for (i, &label) in labels.iter().enumerate() {
+            let r = pick(&real, label);
+            let s = pick(&sim, label);
+            for ch in 0..4 {
+                let cell = &cells[i * 4 + ch];
+                let vals = r
+                    .iter()
+                    .chain(s.iter())
+                    .flat_map(|v| v.iter().map(move |x| x[ch]));
+                let (lo, hi) = vals.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                });
+                if !lo.is_finite() {
+                    continue;
+                }
+                let len = r
+                    .as_ref()
+                    .map_or(0, |v| v.len())
+                    .max(s.as_ref().map_or(0, |v| v.len()));
+                let mut chart = ChartBuilder::on(cell)
+                    .caption(
+                        format!(
+                            "{} — {}",
+                            label_name(label, experiment),
+                            ["D1", "D2", "D3", "P"][ch]
+                        ),
+                        (FONT, 15),
+                    )
+                    .margin(6)
+                    .x_label_area_size(22)
+                    .y_label_area_size(42)
+                    .build_cartesian_2d(0f64..len as f64 / 400.0, lo - 5.0..hi + 5.0)?;
+                chart
+                    .configure_mesh()
+                    .label_style((FONT, 11))
+                    .x_labels(5)
+                    .y_labels(5)
+                    .draw()?;
+                for (series, colour) in [(&r, COLOURS[0]), (&s, COLOURS[1])] {
+                    if let Some(v) = series {
+                        chart.draw_series(LineSeries::new(
+                            v.iter().enumerate().map(|(k, x)| (k as f64 / 400.0, x[ch])),
+                            colour.stroke_width(1),
+                        ))?;
+                    }
+                }
+            }
+        }
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| anyhow::anyhow!("{}: could not draw: {e}", a.out.display()))?;
+    println!("wrote {}", a.out.display());
+    Ok(())
+}

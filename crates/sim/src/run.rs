@@ -1,0 +1,262 @@
+//! Running the finger along a line of a surface: mechanics + optics, one 400 Hz sample at a time.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::finger::{ArmPath, Envelope, FingerModel, Integrator, State, Stepper, Strokes};
+use crate::optics::{proximity_intensity, Electronics, Scene1d, CHANNELS};
+use crate::surface::{Point, Surface};
+use crate::{SensorParams, SimError};
+
+/// The sensor's sampling rate, Hz.
+pub const SAMPLE_RATE_HZ: f64 = 400.0;
+
+/// Extra length of the tabulated profile before and after the stroke, mm (room for the
+/// proximity fibre's look-ahead and the tip's radius).
+const MARGIN_MM: f64 = 8.0;
+
+/// One slide line: where the strokes run on the plate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlideLine {
+    /// Where the first stroke starts, mm on the plate.
+    pub start: Point,
+    /// Direction of the first stroke (normalised internally).
+    pub direction: Point,
+    /// Stroke length, mm.
+    pub stroke_mm: f64,
+    /// Sliding speed, mm/s.
+    pub speed_mm_s: f64,
+}
+
+/// One output sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Time since the start, s.
+    pub t: f64,
+    /// Arm (commanded) position along the line, mm from the first stroke's start.
+    pub arm_mm: f64,
+    /// Arm velocity along the line, mm/s.
+    pub arm_velocity_mm_s: f64,
+    /// Lateral deflection of the tip, mm.
+    pub lateral_mm: f64,
+    /// Normal compression of the finger, mm.
+    pub normal_mm: f64,
+    /// Contact force, N.
+    pub contact_force_n: f64,
+    /// Friction moment about the tip's centre, N·mm.
+    pub moment_nmm: f64,
+    /// Tip position along the line, mm from the first stroke's start.
+    pub tip_x_mm: f64,
+    /// Height of the tip's lowest point, mm.
+    pub tip_z_mm: f64,
+    /// Distance seen by the proximity fibre, mm.
+    pub proximity_mm: f64,
+    /// Channel values before the ADC (D1, D2, D3, P), counts.
+    pub analog: [f64; CHANNELS],
+    /// ADC codes (D1, D2, D3, P).
+    pub counts: [f64; CHANNELS],
+}
+
+/// The finger sliding back and forth along one line of a surface.
+#[derive(Debug, Clone)]
+pub struct SlideSim {
+    model: FingerModel,
+    electronics: Electronics,
+    stepper: Stepper,
+    arm: Strokes,
+    state: State,
+    t: f64,
+    /// Offset of the stroke start in the tabulated profile, m.
+    origin: f64,
+    proximity_height: f64,
+    proximity_offset: f64,
+    proximity_spot: f64,
+    proximity_peak_mm: f64,
+    plate_reflectivity: f64,
+}
+
+/// Points across the proximity fibre's spot.
+pub const SPOT_POINTS: usize = 5;
+
+/// Where the proximity fibre sits and how it sees, SI units (the calibration varies these).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProximityGeometry {
+    /// Height of the fibre's end above the tip's lowest point, m.
+    pub height: f64,
+    /// Look-ahead along the line, m.
+    pub offset: f64,
+    /// Diameter of the spot, m.
+    pub spot: f64,
+    /// Distance of the intensity curve's peak, mm.
+    pub peak_mm: f64,
+}
+
+impl ProximityGeometry {
+    /// The proximity view with the tip at `(tip_x, tip_z)` (m) on `model`'s line: the distance
+    /// curve averaged over the spot's [`SPOT_POINTS`] points, times the reflectivity there.
+    pub fn view(&self, model: &FingerModel, tip_x: f64, tip_z: f64, plate_reflectivity: f64) -> Scene1d {
+        let fibre_x = tip_x + self.offset;
+        let fibre_z = tip_z + self.height;
+        let mut intensity = 0.0;
+        let mut distance = 0.0;
+        for k in 0..SPOT_POINTS {
+            let u = (k as f64 + 0.5) / SPOT_POINTS as f64 - 0.5;
+            let x = fibre_x + u * self.spot;
+            let d_mm = (fibre_z - model.surface_at(x)) * 1e3;
+            distance += d_mm;
+            intensity += proximity_intensity(d_mm, self.peak_mm) * model.reflectivity_at(x);
+        }
+        Scene1d {
+            proximity_distance_mm: distance / SPOT_POINTS as f64,
+            intensity: plate_reflectivity * intensity / SPOT_POINTS as f64,
+        }
+    }
+}
+
+impl SlideSim {
+    /// A simulation of `sensor` sliding along `line` on `surface` (plate reflectivity
+    /// `plate_reflectivity`), integrated with `integrator`, noise and per-recording changes
+    /// drawn from `seed`.
+    pub fn new(
+        surface: &Surface,
+        plate_reflectivity: f64,
+        line: &SlideLine,
+        sensor: &SensorParams,
+        integrator: Integrator,
+        seed: u64,
+    ) -> Result<Self, SimError> {
+        sensor.finger.validate()?;
+        sensor.optics.validate()?;
+        integrator.validate()?;
+        let norm = (line.direction[0].powi(2) + line.direction[1].powi(2)).sqrt();
+        if !(norm.is_finite() && norm > 0.0) {
+            return Err(SimError::Invalid(format!(
+                "slide direction {:?} has no length",
+                line.direction
+            )));
+        }
+        if !(line.stroke_mm.is_finite() && line.stroke_mm > 0.0) {
+            return Err(SimError::Invalid(format!(
+                "stroke must be a positive length in mm, got {}",
+                line.stroke_mm
+            )));
+        }
+        if !(line.speed_mm_s.is_finite() && line.speed_mm_s > 0.0) {
+            return Err(SimError::Invalid(format!(
+                "slide speed must be positive in mm/s, got {}",
+                line.speed_mm_s
+            )));
+        }
+        let dir = [line.direction[0] / norm, line.direction[1] / norm];
+        let margin =
+            MARGIN_MM + sensor.optics.proximity_offset_mm.abs() + sensor.finger.tip_radius_mm;
+        let a = [
+            line.start[0] - margin * dir[0],
+            line.start[1] - margin * dir[1],
+        ];
+        let len = line.stroke_mm + 2.0 * margin;
+        let b = [a[0] + len * dir[0], a[1] + len * dir[1]];
+        let step = (sensor.finger.tip_radius_mm / 100.0).clamp(0.002, 0.02);
+        let profile = surface.profile(a, b, step);
+        let env = Envelope::new(&profile, sensor.finger.tip_radius_mm);
+        let model = FingerModel::new(&sensor.finger, env);
+        let origin = margin * 1e-3;
+        let arm = Strokes {
+            start: origin,
+            stroke: line.stroke_mm * 1e-3,
+            speed: line.speed_mm_s * 1e-3,
+            ramp: 0.05,
+        };
+        let state = model.rest_state(origin);
+        let static_compression_mm = (state[1] - state[4]) * 1e3;
+        let electronics = Electronics::new(
+            &sensor.optics,
+            static_compression_mm,
+            ChaCha8Rng::seed_from_u64(seed),
+        );
+        Ok(SlideSim {
+            model,
+            electronics,
+            stepper: Stepper::new(integrator),
+            arm,
+            state,
+            t: 0.0,
+            origin,
+            proximity_height: sensor.optics.proximity_height_mm * 1e-3,
+            proximity_offset: sensor.optics.proximity_offset_mm * 1e-3,
+            proximity_spot: sensor.optics.proximity_spot_mm.max(0.0) * 1e-3,
+            proximity_peak_mm: sensor.optics.proximity_peak_mm,
+            plate_reflectivity,
+        })
+    }
+
+    /// Duration of one slide (a stroke forth and back), s.
+    pub fn slide_time(&self) -> f64 {
+        self.arm.slide_time()
+    }
+
+    /// The mechanical state (SI units).
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// The finger model.
+    pub fn model(&self) -> &FingerModel {
+        &self.model
+    }
+
+    /// The stepper's work counters.
+    pub fn work(&self) -> crate::finger::Work {
+        self.stepper.work
+    }
+
+    /// What the proximity fibre sees now.
+    pub fn proximity_view(&self) -> Scene1d {
+        let geometry = ProximityGeometry {
+            height: self.proximity_height,
+            offset: self.proximity_offset,
+            spot: self.proximity_spot,
+            peak_mm: self.proximity_peak_mm,
+        };
+        geometry.view(&self.model, self.state[0], self.state[1], self.plate_reflectivity)
+    }
+
+    /// Where the stroke starts in the model's line coordinate, m.
+    pub fn origin(&self) -> f64 {
+        self.origin
+    }
+
+    /// Advances one output sample (1/400 s) and returns it.
+    pub fn next_sample(&mut self) -> Result<Sample, SimError> {
+        let dt = 1.0 / SAMPLE_RATE_HZ;
+        self.stepper
+            .advance(&self.model, &self.arm, self.t, dt, &mut self.state)?;
+        self.t += dt;
+        if !self.state.iter().all(|v| v.is_finite()) {
+            return Err(SimError::Integration {
+                t: self.t,
+                reason: "the state is not finite".into(),
+            });
+        }
+        let readout = self.model.readout(self.t, &self.state, &self.arm);
+        let view = self.proximity_view();
+        let d_mm = view.proximity_distance_mm;
+        let analog = self.electronics.analog(&readout, &view, dt);
+        let counts = self.electronics.quantise(&analog);
+        let (xb, vb) = self.arm.at(self.t);
+        Ok(Sample {
+            t: self.t,
+            arm_mm: (xb - self.origin) * 1e3,
+            arm_velocity_mm_s: vb * 1e3,
+            lateral_mm: readout.lateral * 1e3,
+            normal_mm: readout.normal * 1e3,
+            contact_force_n: readout.contact_force,
+            moment_nmm: readout.moment * 1e3,
+            tip_x_mm: (self.state[0] - self.origin) * 1e3,
+            tip_z_mm: self.state[1] * 1e3,
+            proximity_mm: d_mm,
+            analog,
+            counts,
+        })
+    }
+}
