@@ -29,9 +29,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use serialport::SerialPort as _;
 
+mod sim;
 mod tactile;
 mod vision;
-mod sim;
 
 /// crackbot: find surface cracks with a camera and a fibre-optic tactile finger.
 #[derive(Debug, Parser)]

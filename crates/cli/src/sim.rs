@@ -266,9 +266,9 @@ fn work_precision_png(path: &Path, rows: &[WorkPrecisionRow]) -> Result<()> {
     let (x_lo, x_hi) = ok.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
         (lo.min(r.ms_per_sim_second), hi.max(r.ms_per_sim_second))
     });
-    let (y_lo, y_hi) = ok
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(err(r)), hi.max(err(r))));
+    let (y_lo, y_hi) = ok.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
+        (lo.min(err(r)), hi.max(err(r)))
+    });
     let root = BitMapBackend::new(path, (1000, 650)).into_drawing_area();
     let draw = || -> std::result::Result<(), Box<dyn std::error::Error>> {
         root.fill(&WHITE)?;
@@ -305,7 +305,9 @@ fn work_precision_png(path: &Path, rows: &[WorkPrecisionRow]) -> Result<()> {
             chart
                 .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))?
                 .label(*fam)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(3)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(3))
+                });
             chart.draw_series(pts.iter().map(|p| Circle::new(*p, 4, c.filled())))?;
         }
         // Quantisation of a 10-bit ADC: an error below this is invisible in the data.

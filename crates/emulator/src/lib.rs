@@ -10,7 +10,10 @@
 //! ```
 //!
 //! * [`SignalSource`]s stand in for the analog front end: a synthetic finger sliding over a crack
-//!   ([`SyntheticSlide`]) or the raw channels of a recording ([`RecordingSource`]).
+//!   ([`SyntheticSlide`]), the raw channels of a recording ([`RecordingSource`]), or the physics
+//!   simulator `crackbot-sim` ([`SimSource`]: the simulated finger's mechanics and optics on a
+//!   plate, one 1/400 s simulation step per tick), so that
+//!   simulator → firmware frames → PTY → acquisition runs over the real serial path.
 //! * [`PacedUart`] is the host implementation of the firmware's UART: it accepts bytes at the
 //!   configured baud rate (8N1, 10 bits per byte) and never faster, so the firmware's ring buffer
 //!   and overrun logic behave as on the board.
@@ -28,8 +31,10 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 mod signal;
+mod sim_source;
 
 pub use signal::{RecordingSource, SignalSource, SyntheticSlide};
+pub use sim_source::{SimSource, CRACK_LEAD_IN_MM, PAPER_SPEED_MM_S, PAPER_STROKE_MM};
 
 /// Bytes of the firmware's UART ring buffer in the emulator (as on the board: 8 frames).
 pub const TX_RING_BYTES: usize = 8 * WIRE_LEN;

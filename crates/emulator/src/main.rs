@@ -4,7 +4,22 @@
 //! ```text
 //! crackbot-sensor-emulator --pty --duration 10          # prints "PTY /dev/pts/N", then streams
 //! crackbot-sensor-emulator --port /dev/ttyUSB1 --baud 115200 --flip-rate 0.01
+//! crackbot-sensor-emulator --pty --replay recording.csv  # replays a recording's channels
+//! crackbot-sensor-emulator --pty --source sim --crack-width-mm 2   # the physics simulator
+//! crackbot-sensor-emulator --pty --source sim --scene crates/sim/scenes/default.toml
 //! ```
+//!
+//! The ADC values come from one of three sources (`--source`):
+//!
+//! * `synthetic` (the default): a smooth, cheap stand-in of a finger sliding over a crack of
+//!   `--crack-width-mm`;
+//! * `recording`: the D1, D2, D3, P columns of the CSV recording given with `--replay`, one row
+//!   per tick, looping (implied by `--replay`);
+//! * `sim`: the physics simulator `crackbot-sim` — the calibrated finger sliding with the paper's
+//!   16 mm strokes at 3.89 mm/s across one crack of `--crack-width-mm` (0: a flat plate), each
+//!   stroke starting 7 mm before it; or, with `--scene FILE`, across the first crack of that
+//!   scene. The simulator advances one 1/400 s sample per tick. If it fails, the ADC holds the
+//!   last values, and the emulator exits with an error after the run.
 
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
@@ -13,9 +28,35 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use clap::Parser;
-use crackbot_emulator::{run, Corruption, EmulatorConfig, RecordingSource, SyntheticSlide};
+use clap::{Parser, ValueEnum};
+use crackbot_emulator::{
+    run, Corruption, EmulatorConfig, RecordingSource, SimSource, SyntheticSlide,
+};
+use crackbot_sim::Scene;
 use serialport::SerialPort;
+
+/// Where the emulated ADC reads its values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Source {
+    /// A smooth stand-in of a finger sliding over a crack of --crack-width-mm.
+    Synthetic,
+    /// The channels of the recording given with --replay.
+    Recording,
+    /// The physics simulator: the calibrated finger sliding across a crack of --crack-width-mm,
+    /// or across the first crack of --scene.
+    Sim,
+}
+
+impl Source {
+    /// The name on the command line.
+    fn name(self) -> &'static str {
+        match self {
+            Source::Synthetic => "synthetic",
+            Source::Recording => "recording",
+            Source::Sim => "sim",
+        }
+    }
+}
 
 /// Runs the crackbot sensor firmware on this host and streams its frames over a serial line.
 #[derive(Debug, Parser)]
@@ -42,12 +83,20 @@ struct Args {
     /// Stop after this many ticks of the sample clock.
     #[arg(long)]
     frames: Option<u64>,
-    /// Replay the D1, D2, D3, P columns of this CSV recording instead of the synthetic slide.
+    /// Where the ADC values come from [default: synthetic, or recording with --replay, or sim
+    /// with --scene].
+    #[arg(long, value_enum)]
+    source: Option<Source>,
+    /// Replay the D1, D2, D3, P columns of this CSV recording (the `recording` source).
     #[arg(long)]
     replay: Option<PathBuf>,
-    /// Crack width of the synthetic slide, mm (0 = flat).
-    #[arg(long, default_value_t = 5.0)]
-    crack_width: f64,
+    /// Crack width of the synthetic slide or of the simulated plate, mm (0 = flat).
+    #[arg(long, alias = "crack-width", default_value_t = 5.0)]
+    crack_width_mm: f64,
+    /// With the `sim` source: slide across the first crack of this scene TOML file (`builtin`:
+    /// the built-in default scene) instead of a plate with one crack of --crack-width-mm.
+    #[arg(long, conflicts_with_all = ["replay", "crack_width_mm"])]
+    scene: Option<PathBuf>,
     /// Probability that a byte on the line is flipped.
     #[arg(long, default_value_t = 0.0)]
     flip_rate: f64,
@@ -95,6 +144,21 @@ fn main() -> Result<()> {
         (Some(d), _) => Some((d * args.rate).round() as u64),
         (None, n) => n,
     };
+    let source = source_kind(&args)?;
+    // Set up the simulator before the port opens, so a bad scene fails before anything streams.
+    let mut sim = match source {
+        Source::Sim => {
+            if args.rate != 400.0 {
+                tracing::warn!(
+                    "the simulator advances 1/400 s per tick: at {} Hz the simulated slide runs {:.2}× real time",
+                    args.rate,
+                    args.rate / 400.0
+                );
+            }
+            Some(sim_source(&args)?)
+        }
+        _ => None,
+    };
     let config = EmulatorConfig {
         rate_hz: args.rate,
         baud: args.baud,
@@ -140,20 +204,35 @@ fn main() -> Result<()> {
             .context("waiting for the start line on stdin")?;
     }
 
-    let result = match &args.replay {
-        Some(path) => {
+    let result = match source {
+        Source::Recording => {
+            let path = args
+                .replay
+                .as_deref()
+                .context("--source recording needs --replay")?;
             let rec = crackbot_recording::read_csv(path)?;
             let source = RecordingSource::new(rec)
                 .with_context(|| format!("recording {} has no rows", path.display()))?;
-            run(&config, source, &mut port, &stop)
+            run(&config, source, &mut port, &stop).map(|r| (r, None))
         }
-        None => {
+        Source::Synthetic => {
             let mut source = SyntheticSlide::new(args.seed);
-            source.crack_width_mm = args.crack_width;
-            run(&config, source, &mut port, &stop)
+            source.crack_width_mm = args.crack_width_mm;
+            run(&config, source, &mut port, &stop).map(|r| (r, None))
+        }
+        Source::Sim => {
+            let mut source = sim.take().context("the sim source was not set up")?;
+            let report = run(&config, &mut source, &mut port, &stop)?;
+            let failure = source.error().map(|e| {
+                format!(
+                    "the simulation failed after {} samples ({e}); the ADC held the last values from then on",
+                    source.samples()
+                )
+            });
+            Ok((report, failure))
         }
     };
-    let report = result?;
+    let (report, sim_failure) = result?;
     std::thread::sleep(Duration::from_millis(args.linger_ms));
     if let Some(path) = &args.corruption_log {
         std::fs::write(path, serde_json::to_string_pretty(&report.corruption)?)
@@ -168,5 +247,60 @@ fn main() -> Result<()> {
         "emulator done in {:.2} s",
         report.seconds
     );
+    if let Some(failure) = sim_failure {
+        bail!(failure);
+    }
     Ok(())
+}
+
+/// The source the arguments ask for, with the implied defaults, rejecting settings that belong
+/// to another source.
+fn source_kind(args: &Args) -> Result<Source> {
+    let source = match (args.source, &args.replay, &args.scene) {
+        (Some(s), _, _) => s,
+        (None, Some(_), _) => Source::Recording,
+        (None, None, Some(_)) => Source::Sim,
+        (None, None, None) => Source::Synthetic,
+    };
+    if args.replay.is_some() && source != Source::Recording {
+        bail!("--replay is for --source recording, not {}", source.name());
+    }
+    if args.scene.is_some() && source != Source::Sim {
+        bail!("--scene is for --source sim, not {}", source.name());
+    }
+    if source == Source::Recording && args.replay.is_none() {
+        bail!("--source recording needs the recording to replay: --replay FILE.csv");
+    }
+    if !(args.crack_width_mm.is_finite() && args.crack_width_mm >= 0.0) {
+        bail!(
+            "--crack-width-mm must be a non-negative number of mm, got {}",
+            args.crack_width_mm
+        );
+    }
+    Ok(source)
+}
+
+/// Sets up the simulator for `--source sim`.
+fn sim_source(args: &Args) -> Result<SimSource> {
+    match &args.scene {
+        Some(path) => {
+            let scene = if path.as_os_str() == "builtin" && !path.exists() {
+                Scene::builtin_default()
+            } else {
+                Scene::load(path)?
+            };
+            SimSource::across_first_crack(&scene, args.seed).with_context(|| {
+                format!(
+                    "setting up the simulator across the first crack of {}",
+                    path.display()
+                )
+            })
+        }
+        None => SimSource::over_crack(args.crack_width_mm, args.seed).with_context(|| {
+            format!(
+                "setting up the simulator over a {} mm crack",
+                args.crack_width_mm
+            )
+        }),
+    }
 }

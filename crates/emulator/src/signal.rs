@@ -13,6 +13,14 @@ pub trait SignalSource {
     fn sample(&mut self, t: f64) -> [f64; 4];
 }
 
+/// A borrowed source: lets the caller keep the source (e.g. to query a [`crate::SimSource`]'s
+/// error) while [`crate::run`] samples it.
+impl<S: SignalSource + ?Sized> SignalSource for &mut S {
+    fn sample(&mut self, t: f64) -> [f64; 4] {
+        (**self).sample(t)
+    }
+}
+
 /// A finger sliding back and forth over a crack, in the style of the authors' recordings:
 /// periodic 16 mm strokes at 3.89 mm/s; the proximity channel rises over the crack (the fibre sees
 /// further), the lateral deformation channels bend as the tip drops into and climbs out of it.

@@ -276,8 +276,8 @@ pub fn nelder_mead(
                 // Shrink towards the best point.
                 let best_x = simplex[0].0.clone();
                 for s in simplex.iter_mut().skip(1) {
-                    for i in 0..n {
-                        s.0[i] = best_x[i] + 0.5 * (s.0[i] - best_x[i]);
+                    for (x, b) in s.0.iter_mut().zip(&best_x) {
+                        *x = b + 0.5 * (*x - b);
                     }
                     s.1 = sanitize(f(&s.0));
                     evals += 1;
@@ -316,7 +316,9 @@ pub fn calibrate(
         ));
     }
     if real.is_empty() {
-        return Err(SimError::Invalid("no real recordings to calibrate against".into()));
+        return Err(SimError::Invalid(
+            "no real recordings to calibrate against".into(),
+        ));
     }
     let mut quiet = config.clone();
     quiet.integrator = Integrator::default();

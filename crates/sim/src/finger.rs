@@ -298,7 +298,7 @@ impl ArmPath for Strokes {
         let dir0 = self.stroke.signum();
         let n = (t / t_stroke).floor().max(0.0);
         let tau = t - n * t_stroke;
-        let forward = (n as u64) % 2 == 0;
+        let forward = (n as u64).is_multiple_of(2);
         let dir = if forward { dir0 } else { -dir0 };
         let origin = if forward {
             self.start

@@ -232,20 +232,24 @@ impl Electronics {
         let lat = r.lateral * 1e3;
         let nor = r.normal * 1e3 - self.static_compression_mm;
         let mom = r.moment * 1e3;
-        let mut v = [0.0; CHANNELS];
-        for c in 0..3 {
-            v[c] = p.rest_counts[c]
-                + self.gain[c]
-                    * (p.lateral_gain[c] * lat + p.normal_gain[c] * nor + p.moment_gain[c] * mom);
-        }
-        v[3] = p.proximity_dark_counts
-            + self.gain[3] * p.proximity_peak_counts * view.intensity.max(0.0);
+        let mut v: [f64; CHANNELS] = std::array::from_fn(|c| {
+            if c < 3 {
+                p.rest_counts[c]
+                    + self.gain[c]
+                        * (p.lateral_gain[c] * lat
+                            + p.normal_gain[c] * nor
+                            + p.moment_gain[c] * mom)
+            } else {
+                p.proximity_dark_counts
+                    + self.gain[3] * p.proximity_peak_counts * view.intensity.max(0.0)
+            }
+        });
         let walk = p.drift_counts_per_sqrt_s * dt.max(0.0).sqrt();
-        for c in 0..CHANNELS {
+        for (c, value) in v.iter_mut().enumerate() {
             let n: f64 = self.rng.sample(StandardNormal);
             let w: f64 = self.rng.sample(StandardNormal);
             self.drift[c] += walk * w;
-            v[c] = p.saturate(v[c] + self.offset[c] + self.drift[c] + p.noise_counts[c] * n);
+            *value = p.saturate(*value + self.offset[c] + self.drift[c] + p.noise_counts[c] * n);
         }
         v
     }
@@ -274,7 +278,10 @@ mod tests {
         assert!((p.proximity_curve(p.proximity_peak_mm) - 1.0).abs() < 1e-12);
         assert_eq!(p.proximity_curve(0.0), 0.0);
         assert!(p.proximity_curve(20.0 * p.proximity_peak_mm) < 0.01);
-        assert!(p.proximity_curve(2.0 * p.proximity_peak_mm) > p.proximity_curve(3.0 * p.proximity_peak_mm));
+        assert!(
+            p.proximity_curve(2.0 * p.proximity_peak_mm)
+                > p.proximity_curve(3.0 * p.proximity_peak_mm)
+        );
         assert!(p.proximity_curve(0.5 * p.proximity_peak_mm) < 1.0);
     }
 

@@ -94,7 +94,13 @@ pub struct ProximityGeometry {
 impl ProximityGeometry {
     /// The proximity view with the tip at `(tip_x, tip_z)` (m) on `model`'s line: the distance
     /// curve averaged over the spot's [`SPOT_POINTS`] points, times the reflectivity there.
-    pub fn view(&self, model: &FingerModel, tip_x: f64, tip_z: f64, plate_reflectivity: f64) -> Scene1d {
+    pub fn view(
+        &self,
+        model: &FingerModel,
+        tip_x: f64,
+        tip_z: f64,
+        plate_reflectivity: f64,
+    ) -> Scene1d {
         let fibre_x = tip_x + self.offset;
         let fibre_z = tip_z + self.height;
         let mut intensity = 0.0;
@@ -218,7 +224,12 @@ impl SlideSim {
             spot: self.proximity_spot,
             peak_mm: self.proximity_peak_mm,
         };
-        geometry.view(&self.model, self.state[0], self.state[1], self.plate_reflectivity)
+        geometry.view(
+            &self.model,
+            self.state[0],
+            self.state[1],
+            self.plate_reflectivity,
+        )
     }
 
     /// Where the stroke starts in the model's line coordinate, m.

@@ -1,10 +1,20 @@
 //! Scenes: a plate with features, the camera looking at it, the manipulator and the sensor,
 //! read from TOML files (kept in `crates/sim/scenes/`) and validated.
 
+use std::path::Path;
+
 use serde::{Deserialize, Serialize};
 
-use crate::surface::{Feature, Surface};
-use crate::SensorParams;
+use crate::camera::Camera;
+use crate::surface::{Feature, Point, Surface};
+use crate::{SensorParams, SimError};
+
+/// The text of the built-in default scene (`crates/sim/scenes/default.toml`).
+pub const DEFAULT_SCENE_TOML: &str = include_str!("../scenes/default.toml");
+
+/// The steepest view of the plate a camera may have: the angle between its optical axis and the
+/// plate's downward normal, degrees (beyond it the camera looks at the plate edge-on).
+pub const MAX_CAMERA_TILT_DEG: f64 = 75.0;
 
 /// The plate's material.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -179,11 +189,320 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Parses a scene from TOML text and validates it; `source` names the text in errors (a
+    /// path, or e.g. `"<builtin>"`).
+    pub fn from_toml_str(text: &str, source: &str) -> Result<Scene, SimError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| SimError::Parse {
+            path: source.to_string(),
+            message: e.to_string(),
+        })?;
+        scene.validate().map_err(|e| match e {
+            SimError::Invalid(m) => SimError::Invalid(format!("{source}: {m}")),
+            other => other,
+        })?;
+        Ok(scene)
+    }
+
+    /// Reads, parses and validates the scene file at `path`.
+    pub fn load(path: &Path) -> Result<Scene, SimError> {
+        let text = std::fs::read_to_string(path).map_err(SimError::io(path))?;
+        Scene::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// The built-in default scene (`crates/sim/scenes/default.toml`, compiled in): a 200 × 100 mm
+    /// PLA plate with cracks of several widths, a bump, a wavy patch, a printed decoy, two
+    /// screws and a top-down camera.
+    pub fn builtin_default() -> Scene {
+        match Scene::from_toml_str(DEFAULT_SCENE_TOML, "<builtin default.toml>") {
+            Ok(scene) => scene,
+            // Unreachable: a unit test checks the built-in scene parses and validates.
+            Err(_) => Scene {
+                name: "bare plate".to_string(),
+                plate: PlateSpec::default(),
+                features: Vec::new(),
+                camera: None,
+                manipulator: ManipulatorSpec::default(),
+                sensor: SensorParams::default(),
+            },
+        }
+    }
+
+    /// The scene's camera, built from its spec (`None` for a scene without a camera).
+    pub fn camera(&self) -> Option<Result<Camera, SimError>> {
+        self.camera.as_ref().map(Camera::from_spec)
+    }
+
+    /// Checks the whole scene, naming the first bad field (and the feature by index and kind).
+    pub fn validate(&self) -> Result<(), SimError> {
+        let [sx, sy] = self.plate.size_mm;
+        if !(sx.is_finite() && sx > 0.0 && sy.is_finite() && sy > 0.0) {
+            return Err(SimError::Invalid(format!(
+                "plate.size_mm must be positive, got [{sx}, {sy}]"
+            )));
+        }
+        let refl = self.plate.material.reflectivity;
+        if !(0.0..=1.0).contains(&refl) {
+            return Err(SimError::Invalid(format!(
+                "plate.material.reflectivity must be in [0, 1], got {refl}"
+            )));
+        }
+        for (i, f) in self.features.iter().enumerate() {
+            validate_feature(f, self.plate.size_mm)
+                .map_err(|m| SimError::Invalid(format!("features[{i}] ({}): {m}", f.kind())))?;
+        }
+        self.validate_manipulator()?;
+        if let Some(spec) = &self.camera {
+            self.validate_camera(spec)?;
+        }
+        self.sensor.finger.validate()?;
+        self.sensor.optics.validate()?;
+        Ok(())
+    }
+
+    fn validate_manipulator(&self) -> Result<(), SimError> {
+        let m = &self.manipulator;
+        for (name, v) in [
+            ("manipulator.slide_speed_mm_s", m.slide_speed_mm_s),
+            ("manipulator.stroke_mm", m.stroke_mm),
+            ("manipulator.travel_speed_mm_s", m.travel_speed_mm_s),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(SimError::Invalid(format!(
+                    "{name} must be positive, got {v}"
+                )));
+            }
+        }
+        let (lo, hi) = (m.workspace_min_mm, m.workspace_max_mm);
+        if !lo.iter().chain(&hi).all(|v| v.is_finite()) {
+            return Err(SimError::Invalid(format!(
+                "manipulator.workspace_min_mm/workspace_max_mm must be finite, got {lo:?} and {hi:?}"
+            )));
+        }
+        for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+            if lo[k] >= hi[k] {
+                return Err(SimError::Invalid(format!(
+                    "manipulator.workspace_min_mm must be below workspace_max_mm in {axis}, got {} ≥ {}",
+                    lo[k], hi[k]
+                )));
+            }
+        }
+        let size = self.plate.size_mm;
+        for (k, axis) in ["x", "y"].iter().enumerate() {
+            if lo[k] > 0.0 || hi[k] < size[k] {
+                return Err(SimError::Invalid(format!(
+                    "manipulator workspace must cover the plate in {axis}: [{}, {}] does not contain [0, {}]",
+                    lo[k], hi[k], size[k]
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_camera(&self, spec: &CameraSpec) -> Result<(), SimError> {
+        if !(spec.noise_sigma.is_finite() && spec.noise_sigma >= 0.0) {
+            return Err(SimError::Invalid(format!(
+                "camera.noise_sigma must be ≥ 0, got {}",
+                spec.noise_sigma
+            )));
+        }
+        if !(0.0..=1.0).contains(&spec.lighting_variation) {
+            return Err(SimError::Invalid(format!(
+                "camera.lighting_variation must be in [0, 1], got {}",
+                spec.lighting_variation
+            )));
+        }
+        let z = spec.position_mm[2];
+        if !(z.is_finite() && z > 0.0) {
+            return Err(SimError::Invalid(format!(
+                "camera.position_mm must be above the plate (z > 0), got z = {z}"
+            )));
+        }
+        let [sx, sy] = self.plate.size_mm;
+        let [lx, ly] = spec.look_at_mm;
+        if !(lx >= 0.0 && lx <= sx && ly >= 0.0 && ly <= sy) {
+            return Err(SimError::Invalid(format!(
+                "camera.look_at_mm must be a point on the plate [0, {sx}] × [0, {sy}], got [{lx}, {ly}]: the camera looks away from the plate"
+            )));
+        }
+        let cam = Camera::from_spec(spec)?;
+        let tilt = (-cam.forward()[2]).clamp(-1.0, 1.0).acos().to_degrees();
+        if tilt > MAX_CAMERA_TILT_DEG {
+            return Err(SimError::Invalid(format!(
+                "camera.position_mm looks at the plate edge-on: the optical axis is {tilt:.1}° from the vertical (at most {MAX_CAMERA_TILT_DEG}°)"
+            )));
+        }
+        let probes = [
+            [0.0, 0.0],
+            [sx, 0.0],
+            [0.0, sy],
+            [sx, sy],
+            [sx / 2.0, sy / 2.0],
+            [lx, ly],
+        ];
+        let sees = probes.iter().any(|p| {
+            cam.project([p[0], p[1], 0.0])
+                .is_some_and(|uv| cam.in_image(uv))
+        });
+        if !sees {
+            return Err(SimError::Invalid(
+                "camera does not see the plate: none of its corners, its centre or the look-at point falls inside the image (check camera.principal_px and camera.focal_px)".into(),
+            ));
+        }
+        Ok(())
+    }
+
     /// The plate and its features, for the finger.
     pub fn surface(&self) -> Surface {
         Surface {
             size_mm: self.plate.size_mm,
             features: self.features.clone(),
         }
+    }
+}
+
+fn check_positive(name: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{name} must be > 0, got {v}"))
+    }
+}
+
+fn check_non_negative(name: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{name} must be ≥ 0, got {v}"))
+    }
+}
+
+fn check_point(name: &str, p: Point) -> Result<(), String> {
+    if p.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(format!("{name} must be finite, got [{}, {}]", p[0], p[1]))
+    }
+}
+
+fn check_path(path: &[Point]) -> Result<(), String> {
+    if path.len() < 2 {
+        return Err(format!(
+            "path must have at least 2 points, got {}",
+            path.len()
+        ));
+    }
+    for (k, p) in path.iter().enumerate() {
+        check_point(&format!("path[{k}]"), *p)?;
+    }
+    let length: f64 = path
+        .windows(2)
+        .map(|s| ((s[1][0] - s[0][0]).powi(2) + (s[1][1] - s[0][1]).powi(2)).sqrt())
+        .sum();
+    if length.is_nan() || length <= 1e-9 {
+        return Err(format!(
+            "path has zero length (all {} points coincide)",
+            path.len()
+        ));
+    }
+    Ok(())
+}
+
+/// Checks one feature's parameters and that it lies on a plate of `size`; the message names the
+/// field (the caller prefixes the feature's index and kind).
+fn validate_feature(f: &Feature, size: [f64; 2]) -> Result<(), String> {
+    match f {
+        Feature::Crack {
+            path,
+            width_mm,
+            depth_mm,
+            edge_radius_mm,
+            wall_angle_deg,
+        } => {
+            check_path(path)?;
+            check_non_negative("width_mm", *width_mm)?;
+            check_positive("depth_mm", *depth_mm)?;
+            check_non_negative("edge_radius_mm", *edge_radius_mm)?;
+            if !(*wall_angle_deg > 0.0 && *wall_angle_deg <= 90.0) {
+                return Err(format!(
+                    "wall_angle_deg must be in (0, 90], got {wall_angle_deg}"
+                ));
+            }
+        }
+        Feature::Bump {
+            centre,
+            radius_mm,
+            height_mm,
+        } => {
+            check_point("centre", *centre)?;
+            check_positive("radius_mm", *radius_mm)?;
+            check_positive("height_mm", *height_mm)?;
+        }
+        Feature::Wavy {
+            min,
+            max,
+            amplitude_mm,
+            period_mm,
+            direction_deg,
+        } => {
+            check_point("min", *min)?;
+            check_point("max", *max)?;
+            if !(min[0] < max[0] && min[1] < max[1]) {
+                return Err(format!(
+                    "min must be below max in x and y, got min = [{}, {}], max = [{}, {}]",
+                    min[0], min[1], max[0], max[1]
+                ));
+            }
+            check_non_negative("amplitude_mm", *amplitude_mm)?;
+            check_positive("period_mm", *period_mm)?;
+            if !direction_deg.is_finite() {
+                return Err(format!("direction_deg must be finite, got {direction_deg}"));
+            }
+        }
+        Feature::Decoy {
+            path,
+            width_mm,
+            reflectivity,
+        } => {
+            check_path(path)?;
+            check_non_negative("width_mm", *width_mm)?;
+            if !(0.0..=1.0).contains(reflectivity) {
+                return Err(format!(
+                    "reflectivity must be in [0, 1], got {reflectivity}"
+                ));
+            }
+        }
+        Feature::Screw {
+            centre,
+            head_diameter_mm,
+            height_mm,
+        } => {
+            check_point("centre", *centre)?;
+            check_positive("head_diameter_mm", *head_diameter_mm)?;
+            check_positive("height_mm", *height_mm)?;
+        }
+    }
+    let (lo, hi) = f.footprint();
+    let eps = 1e-9;
+    if !(lo[0] >= -eps && lo[1] >= -eps && hi[0] <= size[0] + eps && hi[1] <= size[1] + eps) {
+        return Err(format!(
+            "footprint [{}, {}]–[{}, {}] mm is outside the plate [0, {}] × [0, {}]",
+            lo[0], lo[1], hi[0], hi[1], size[0], size[1]
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtin_default_parses_and_validates() {
+        let scene = Scene::from_toml_str(DEFAULT_SCENE_TOML, "default.toml");
+        assert!(scene.is_ok(), "{scene:?}");
+        let scene = Scene::builtin_default();
+        assert!(scene.camera.is_some());
+        assert!(scene.features.len() >= 6);
+        assert!(scene.validate().is_ok());
     }
 }

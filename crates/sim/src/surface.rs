@@ -227,13 +227,7 @@ impl Feature {
                 path,
                 width_mm,
                 reflectivity,
-            } => {
-                if distance_to_polyline(path, p) <= width_mm / 2.0 {
-                    *reflectivity
-                } else {
-                    1.0
-                }
-            }
+            } if distance_to_polyline(path, p) <= width_mm / 2.0 => *reflectivity,
             _ => 1.0,
         }
     }

@@ -183,8 +183,7 @@ mod tests {
         assert!(e_fine < e_default, "{e_fine} vs {e_default}");
         // An explicit step at the output rate on a 2e5 N/m contact blows up.
         assert!(
-            explicit.failure.is_some()
-                || explicit.rms_error_counts.is_none_or(|e| e > 50.0),
+            explicit.failure.is_some() || explicit.rms_error_counts.is_none_or(|e| e > 50.0),
             "{explicit:?}"
         );
     }

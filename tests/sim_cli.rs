@@ -1,0 +1,183 @@
+//! `crackbot sim …` end to end: the simulated datasets are deterministic from the seed, in the
+//! authors' nine-column format, and `crackbot tactile eval` reads them as they are; the
+//! work-precision report and the real-vs-simulated figure are written.
+
+use std::path::Path;
+
+use crackbot_recording::read_recording;
+use crackbot_tests::{crackbot, text};
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/tactile");
+
+fn utf8(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn dataset(out: &Path, experiment: &str, seed: &str, recordings: &str) {
+    let o = crackbot(&[
+        "sim",
+        "dataset",
+        "--experiment",
+        experiment,
+        "--out",
+        utf8(out),
+        "--seed",
+        seed,
+        "--recordings",
+        recordings,
+        "--slides",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stdout).contains("real time"), "{}", text(&o.stdout));
+}
+
+#[test]
+fn width_dataset_is_deterministic_and_in_the_authors_format() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let a = tmp.path().join("a");
+    let b = tmp.path().join("b");
+    let c = tmp.path().join("c");
+    dataset(&a, "width", "5", "1");
+    dataset(&b, "width", "5", "1");
+    dataset(&c, "width", "6", "1");
+    let mut names: Vec<String> = std::fs::read_dir(&a)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let mut expected = [0, 1, 2, 5, 8, 10].map(|w| format!("crack_mm{w}_complete_1.csv"));
+    expected.sort();
+    assert_eq!(names, expected);
+    for name in &names {
+        let ra = std::fs::read(a.join(name)).expect("a");
+        let rb = std::fs::read(b.join(name)).expect("b");
+        let rc = std::fs::read(c.join(name)).expect("c");
+        assert_eq!(ra, rb, "{name}: same seed, same bytes");
+        assert_ne!(ra, rc, "{name}: another seed, other data");
+        let rec = read_recording(&a.join(name)).expect("readable");
+        let width: f64 = name
+            .trim_start_matches("crack_mm")
+            .trim_end_matches("_complete_1.csv")
+            .parse()
+            .expect("width");
+        assert_eq!(rec.label(), Some(width));
+        assert_eq!(rec.repetition(), Some(1));
+        let slides: Vec<u32> = rec.rows.iter().map(|r| r.slide).collect();
+        assert_eq!(slides.first(), Some(&1));
+        assert_eq!(slides.last(), Some(&3));
+        assert!(rec.rows.iter().any(|r| r.direction == 0));
+        assert!(rec.rows.iter().any(|r| r.direction == 1));
+        for r in &rec.rows {
+            for v in [r.d1, r.d2, r.d3, r.p] {
+                assert!((0.0..=1023.0).contains(&v) && v.fract() == 0.0, "{v}");
+            }
+        }
+        // About 16 mm of travel.
+        let (lo, hi) = rec
+            .rows
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| {
+                (l.min(r.x_mm), h.max(r.x_mm))
+            });
+        assert!((15.0..=16.5).contains(&(hi - lo)), "travel {lo}..{hi}");
+    }
+    // The proximity channel sees the crack: wider cracks dip further.
+    let p_min = |w: u32| {
+        read_recording(&a.join(format!("crack_mm{w}_complete_1.csv")))
+            .expect("read")
+            .rows
+            .iter()
+            .map(|r| r.p)
+            .fold(f64::INFINITY, f64::min)
+    };
+    assert!(p_min(5) < p_min(0) - 100.0, "{} vs {}", p_min(5), p_min(0));
+}
+
+#[test]
+fn tactile_eval_reads_simulated_recordings_and_tests_on_real_ones() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let sim = tmp.path().join("type");
+    dataset(&sim, "recognition", "1", "2");
+    let real = Path::new(DATA).join("type/crack_crack_complete_2.mat");
+    let o = crackbot(&[
+        "tactile",
+        "eval",
+        "--train",
+        utf8(&sim),
+        "--test",
+        utf8(&real),
+        "--trees",
+        "10",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let acc = v["window_accuracy"].as_f64().expect("accuracy");
+    assert!((0.0..=1.0).contains(&acc), "{v}");
+    assert_eq!(v["train_recordings"].as_u64(), Some(8));
+    // Simulated against itself: training on repetition 1, testing on 2 separates the surfaces.
+    let o = crackbot(&[
+        "tactile",
+        "eval",
+        "--train",
+        utf8(&sim.join("crack_nocrack_complete_1.csv")),
+        utf8(&sim.join("crack_crack_complete_1.csv")),
+        utf8(&sim.join("crack_bump_complete_1.csv")),
+        utf8(&sim.join("crack_pattern_complete_1.csv")),
+        "--test",
+        utf8(&sim.join("crack_nocrack_complete_2.csv")),
+        utf8(&sim.join("crack_crack_complete_2.csv")),
+        utf8(&sim.join("crack_bump_complete_2.csv")),
+        utf8(&sim.join("crack_pattern_complete_2.csv")),
+        "--trees",
+        "20",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    // Whole slides are classified well; single windows on the flat stretches of every plate
+    // look alike in the simulator (the real plates differ in their own baselines).
+    let slides = v["slide_accuracy"].as_f64().expect("slide accuracy");
+    let windows = v["window_accuracy"].as_f64().expect("window accuracy");
+    assert!(slides >= 0.5, "sim→sim slide accuracy {slides}");
+    assert!(windows > 0.3, "sim→sim window accuracy {windows}");
+}
+
+#[test]
+fn compare_and_work_precision_write_their_figures() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let sim = tmp.path().join("type");
+    dataset(&sim, "recognition", "2", "1");
+    let png = tmp.path().join("cmp.png");
+    let o = crackbot(&[
+        "sim",
+        "compare",
+        "--real",
+        &format!("{DATA}/type"),
+        "--sim",
+        utf8(&sim),
+        "--out",
+        utf8(&png),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let img = image::open(&png).expect("png");
+    assert_eq!(img.width(), 1600);
+
+    let o = crackbot(&["sim", "dataset", "--experiment", "width", "--out"]);
+    assert!(!o.status.success());
+    let o = crackbot(&[
+        "sim",
+        "calibrate",
+        "--real",
+        utf8(tmp.path()),
+        "--repetition",
+        "1",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        text(&o.stderr).contains("no recording"),
+        "{}",
+        text(&o.stderr)
+    );
+}
