@@ -19,7 +19,7 @@
 use crackbot_recording::Recording;
 use serde::Serialize;
 
-use crate::experiment::{Experiment, ExperimentConfig};
+use crate::experiment::{Experiment, ExperimentConfig, PlateMount};
 use crate::finger::{FingerModel, Integrator};
 use crate::optics::OpticsParams;
 use crate::run::{ProximityGeometry, Sample, SlideLine, SlideSim, SAMPLE_RATE_HZ};
@@ -44,7 +44,91 @@ pub fn calibrated_sensor() -> SensorParams {
     o.proximity_height_mm = 1.704;
     o.proximity_offset_mm = -1.153;
     o.noise_counts = [1.384, 2.781, 5.189, 0.418];
+    // Spread between repetitions of one plate (medians of repetitions 1-3: about a count) and
+    // slow drift within a recording (slide medians vary by under a count over 80 s).
+    o.recording_offset_sigma_counts = 1.0;
+    o.recording_gain_sigma = 0.003;
+    o.drift_counts_per_sqrt_s = 0.07;
     sensor
+}
+
+/// How the paper's plates sit under the sensor, fitted on repetition 1 of the authors'
+/// recordings (`crackbot sim calibrate`), in the order of
+/// [`ExperimentConfig::surfaces`](crate::experiment::ExperimentConfig::surfaces).
+pub fn calibrated_mounts(experiment: Experiment) -> Vec<PlateMount> {
+    let table: &[([f64; 3], f64)] = match experiment {
+        // Flat, crack, bump, wavy.
+        Experiment::Recognition => &[
+            ([0.50, -2.74, -7.89], 0.9959),
+            ([1.89, -0.06, -0.44], 0.9934),
+            ([8.29, 2.10, 3.51], 0.9980),
+            ([3.82, 3.50, 1.27], 1.0086),
+        ],
+        // 0, 1, 2, 5, 8, 10 mm (another session: the cables sat differently).
+        Experiment::Width => &[
+            ([10.50, 9.26, 4.11], 1.0056),
+            ([10.87, 7.92, 4.62], 0.9950),
+            ([11.63, 0.93, -0.06], 1.0077),
+            ([9.66, 9.86, 6.36], 1.0136),
+            ([9.16, 9.86, 8.50], 1.0398),
+            ([10.48, 6.52, 8.85], 0.9419),
+        ],
+    };
+    table
+        .iter()
+        .map(|&(offset_counts, reflectivity)| PlateMount {
+            offset_counts,
+            reflectivity,
+        })
+        .collect()
+}
+
+/// Fits each plate's mount of `config`'s experiment to the `real` recordings (any number per
+/// plate, recognised by their label): the deformation channels' median offsets and the
+/// proximity channel's reflectivity ratio between real and simulated recordings.
+pub fn fit_mounts(config: &ExperimentConfig, real: &[Recording]) -> Result<Vec<PlateMount>, SimError> {
+    let mut neutral = config.clone();
+    neutral.mounts.clear();
+    let traces = simulate_traces(&neutral)?;
+    let dark = config.sensor.optics.proximity_dark_counts;
+    let median = |mut v: Vec<f64>| -> Option<f64> {
+        v.retain(|x| x.is_finite());
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_by(f64::total_cmp);
+        Some(v[v.len() / 2])
+    };
+    let mut mounts = Vec::with_capacity(traces.len());
+    for trace in &traces {
+        let rows: Vec<[f64; 4]> = real
+            .iter()
+            .flat_map(|r| r.rows.iter())
+            .filter(|row| row.label == trace.label)
+            .map(|row| [row.d1, row.d2, row.d3, row.p])
+            .collect();
+        if rows.is_empty() {
+            return Err(SimError::Invalid(format!(
+                "no real recording of the plate labelled {} to fit its mount to",
+                trace.label
+            )));
+        }
+        let mut m = PlateMount::default();
+        let real_med = |c: usize| median(rows.iter().map(|r| r[c]).collect());
+        let sim_med = |c: usize| median(trace.samples.iter().map(|s| s.analog[c]).collect());
+        for c in 0..3 {
+            if let (Some(a), Some(b)) = (real_med(c), sim_med(c)) {
+                m.offset_counts[c] = a - b;
+            }
+        }
+        if let (Some(a), Some(b)) = (real_med(3), sim_med(3)) {
+            if (b - dark).abs() > 1.0 {
+                m.reflectivity = ((a - dark) / (b - dark)).max(0.0);
+            }
+        }
+        mounts.push(m);
+    }
+    Ok(mounts)
 }
 
 /// Quantiles of one channel for one class and direction.
@@ -113,8 +197,21 @@ pub struct Trace {
     pub origin: f64,
 }
 
-/// Simulates one recording per surface of `config` (12 slides) for calibration.
+/// The sensor without its random parts (white noise, drift, per-recording offset and gain):
+/// what calibration compares with the real signals' levels.
+pub fn noise_free(sensor: &SensorParams) -> SensorParams {
+    let mut s = sensor.clone();
+    s.optics.noise_counts = [0.0; 4];
+    s.optics.drift_counts_per_sqrt_s = 0.0;
+    s.optics.recording_offset_sigma_counts = 0.0;
+    s.optics.recording_gain_sigma = 0.0;
+    s
+}
+
+/// Simulates one recording per surface of `config` (12 slides, noise-free electronics) for
+/// calibration.
 pub fn simulate_traces(config: &ExperimentConfig) -> Result<Vec<Trace>, SimError> {
+    let sensor = noise_free(&config.sensor);
     let mut traces = Vec::new();
     for (k, (_, label, surface, edge_x)) in config.surfaces().into_iter().enumerate() {
         let line = SlideLine {
@@ -127,7 +224,7 @@ pub fn simulate_traces(config: &ExperimentConfig) -> Result<Vec<Trace>, SimError
             &surface,
             1.0,
             &line,
-            &config.sensor,
+            &sensor,
             config.integrator,
             config.seed + k as u64,
         )?;
@@ -429,5 +526,6 @@ pub fn real_noise(real: &[Recording]) -> [f64; 4] {
 pub fn calibrate_paper(real: &[Recording], seed: u64) -> Result<CalibrationReport, SimError> {
     let mut config = ExperimentConfig::paper(Experiment::Recognition, seed);
     config.sensor = SensorParams::default();
+    config.mounts.clear();
     calibrate(&config, real, 400)
 }

@@ -69,6 +69,29 @@ impl Default for Samples {
     }
 }
 
+/// How one plate sits under the sensor in the real set-up, as far as the signals show it: its
+/// colour (the proximity fibre's reflectivity) and the shift of the deformation channels' resting
+/// levels that its mounting and the session's cable routing cause (the paper found that the
+/// fibre cables' position shifts the data). Fitted per plate by [`crate::calibrate`], not
+/// modelled.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlateMount {
+    /// Offset of D1, D2, D3, counts.
+    pub offset_counts: [f64; 3],
+    /// Reflectivity of the plate relative to the calibration plate.
+    pub reflectivity: f64,
+}
+
+impl Default for PlateMount {
+    fn default() -> Self {
+        PlateMount {
+            offset_counts: [0.0; 3],
+            reflectivity: 1.0,
+        }
+    }
+}
+
 /// Settings of a simulated experiment.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExperimentConfig {
@@ -89,6 +112,9 @@ pub struct ExperimentConfig {
     pub position_rate_hz: f64,
     /// The samples' geometry.
     pub samples: Samples,
+    /// How each plate (in the order of [`ExperimentConfig::surfaces`]) sits under the sensor;
+    /// empty for identical, neutral plates.
+    pub mounts: Vec<PlateMount>,
     /// The sensor.
     pub sensor: SensorParams,
     /// The integrator.
@@ -110,6 +136,7 @@ impl ExperimentConfig {
             position_rate_hz: 80.0,
             samples: Samples::default(),
             sensor: crate::calibrate::calibrated_sensor(),
+            mounts: crate::calibrate::calibrated_mounts(experiment),
             integrator: Integrator::default(),
             seed,
         }
@@ -135,9 +162,31 @@ impl ExperimentConfig {
                 self.position_rate_hz
             )));
         }
+        let n = self.surfaces().len();
+        if !self.mounts.is_empty() && self.mounts.len() != n {
+            return Err(SimError::Invalid(format!(
+                "{} plate mounts given for {n} plates",
+                self.mounts.len()
+            )));
+        }
+        for (k, m) in self.mounts.iter().enumerate() {
+            if !(m.offset_counts.iter().all(|v| v.is_finite())
+                && m.reflectivity.is_finite()
+                && m.reflectivity >= 0.0)
+            {
+                return Err(SimError::Invalid(format!(
+                    "plate mount {k}: offsets must be finite and reflectivity ≥ 0, got {m:?}"
+                )));
+            }
+        }
         self.sensor.finger.validate()?;
         self.sensor.optics.validate()?;
         self.integrator.validate()
+    }
+
+    /// The mount of plate `k` (neutral when none is given).
+    pub fn mount(&self, k: usize) -> PlateMount {
+        self.mounts.get(k).copied().unwrap_or_default()
     }
 
     /// The surfaces of the experiment: `(file stem, label, surface, x of the feature's near
@@ -211,12 +260,13 @@ fn fmt_width(w: f64) -> String {
     }
 }
 
-/// Simulates one recording of `slides` slides over `surface`: the arm starts `start_mm` before
-/// `edge_x` on the line y = `line_y`.
+/// Simulates one recording of `slides` slides over `surface` mounted as `mount`: the arm starts
+/// `start_mm` before `edge_x` on the line y = `line_y`.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_recording(
     config: &ExperimentConfig,
     surface: &Surface,
+    mount: PlateMount,
     label: f64,
     repetition: u32,
     edge_x: f64,
@@ -231,7 +281,18 @@ pub fn simulate_recording(
         stroke_mm: config.stroke_mm,
         speed_mm_s: config.speed_mm_s,
     };
-    let mut sim = SlideSim::new(surface, 1.0, &line, &config.sensor, config.integrator, seed)?;
+    let mut sensor = config.sensor.clone();
+    for (rest, off) in sensor.optics.rest_counts.iter_mut().zip(mount.offset_counts) {
+        *rest += off;
+    }
+    let mut sim = SlideSim::new(
+        surface,
+        mount.reflectivity,
+        &line,
+        &sensor,
+        config.integrator,
+        seed,
+    )?;
     let slide_time = sim.slide_time();
     let n = (config.slides as f64 * slide_time * SAMPLE_RATE_HZ).round() as usize;
     let hold = (SAMPLE_RATE_HZ / config.position_rate_hz).round().max(1.0) as usize;
@@ -295,7 +356,7 @@ pub fn generate(
     let total = surfaces.len() * config.recordings as usize;
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     let mut written = Vec::with_capacity(total);
-    for (stem, label, surface, edge_x) in &surfaces {
+    for (k, (stem, label, surface, edge_x)) in surfaces.iter().enumerate() {
         for r in 1..=config.recordings {
             let (lo, hi) = config.start_range_mm;
             let start = if hi > lo {
@@ -309,7 +370,16 @@ pub fn generate(
             let offset = rng.random_range(8.0..14.0);
             let seed = rng.random::<u64>();
             let rec = simulate_recording(
-                config, surface, *label, r, *edge_x, start, line_y, offset, seed,
+                config,
+                surface,
+                config.mount(k),
+                *label,
+                r,
+                *edge_x,
+                start,
+                line_y,
+                offset,
+                seed,
             )?;
             let path = out.join(format!("{stem}_complete_{r}.{ext}"));
             write_recording(&path, &rec)?;

@@ -117,6 +117,12 @@ impl FingerParams {
                 )));
             }
         }
+        if self.tip_radius_mm > 50.0 {
+            return Err(SimError::Invalid(format!(
+                "sensor.finger.tip_radius_mm must be at most 50 mm, got {}",
+                self.tip_radius_mm
+            )));
+        }
         let non_negative = [
             (
                 "sensor.finger.lateral_damping_ratio",
@@ -159,8 +165,9 @@ pub struct Envelope {
     surface: Vec<f64>,
 }
 
-/// Largest envelope slope used for the contact normal (about 87°): walls steeper than this are
-/// treated as this steep, which keeps the normal and the Jacobian finite.
+/// Largest envelope slope (about 87°): walls steeper than this are treated as this steep (the
+/// envelope is raised there, so the tip never enters the surface), which keeps the contact
+/// force and its Jacobian finite.
 pub const MAX_SLOPE: f64 = 20.0;
 
 impl Envelope {
@@ -189,6 +196,16 @@ impl Envelope {
             *e = (best - radius_mm) * 1e-3;
         }
         let step = step_mm * 1e-3;
+        // Limit the envelope's steepness to MAX_SLOPE by raising it (never lowering it) where it
+        // drops or rises faster: a wall taller than the tip's radius becomes an 87° ramp, which
+        // keeps the contact force and its Jacobian finite.
+        let max_rise = MAX_SLOPE * step;
+        for i in 1..n {
+            env[i] = env[i].max(env[i - 1] - max_rise);
+        }
+        for i in (0..n.saturating_sub(1)).rev() {
+            env[i] = env[i].max(env[i + 1] - max_rise);
+        }
         let slope = (0..n)
             .map(|i| {
                 let a = env[i.saturating_sub(1)];
@@ -219,13 +236,34 @@ impl Envelope {
         }
     }
 
-    /// Envelope height and slope at `x` metres along the line.
+    /// Envelope height and slope at `x` metres along the line: a C¹ cubic Hermite interpolant
+    /// of the tabulated heights and slopes, and its exact derivative (so the contact force is
+    /// the gradient of the contact energy and the contact does no work of its own).
     #[inline]
     pub fn at(&self, x: f64) -> (f64, f64) {
-        (
-            Self::lookup(&self.height, self.step, x),
-            Self::lookup(&self.slope, self.step, x),
-        )
+        let last = self.height.len() - 1;
+        if last == 0 {
+            return (self.height[0], 0.0);
+        }
+        let u = (x / self.step).clamp(0.0, last as f64);
+        let k = (u as usize).min(last - 1);
+        let t = u - k as f64;
+        let h = self.step;
+        let (e0, e1) = (self.height[k], self.height[k + 1]);
+        let (s0, s1) = (self.slope[k] * h, self.slope[k + 1] * h);
+        let t2 = t * t;
+        let t3 = t2 * t;
+        let e = (2.0 * t3 - 3.0 * t2 + 1.0) * e0
+            + (t3 - 2.0 * t2 + t) * s0
+            + (-2.0 * t3 + 3.0 * t2) * e1
+            + (t3 - t2) * s1;
+        let de = (6.0 * t2 - 6.0 * t) * e0
+            + (3.0 * t2 - 4.0 * t + 1.0) * s0
+            + (-6.0 * t2 + 6.0 * t) * e1
+            + (3.0 * t2 - 2.0 * t) * s1;
+        // Outside the table the envelope is continued flat.
+        let inside = x > 0.0 && x < last as f64 * h;
+        (e, if inside { de / h } else { 0.0 })
     }
 
     /// Surface height at `x` metres along the line, m.
@@ -281,7 +319,12 @@ pub struct Strokes {
 impl Strokes {
     /// Duration of one stroke (one way), s.
     pub fn stroke_time(&self) -> f64 {
-        self.stroke.abs() / self.speed + self.ramp
+        self.stroke.abs() / self.speed + self.ramp() / 2.0
+    }
+
+    /// The reversal time actually used: `ramp`, but no longer than the stroke takes at speed.
+    fn ramp(&self) -> f64 {
+        self.ramp.clamp(0.0, self.stroke.abs() / self.speed)
     }
 
     /// Duration of one slide (forth and back), s.
@@ -305,7 +348,7 @@ impl ArmPath for Strokes {
         } else {
             self.start + self.stroke
         };
-        let half = self.ramp / 2.0;
+        let half = self.ramp() / 2.0;
         let v = self.speed;
         let len = self.stroke.abs();
         let (s, ds) = if half <= 0.0 {
@@ -411,6 +454,10 @@ impl FingerModel {
 
     /// Contact force components acting on the tip `(f_x, f_z)`, the normal force magnitude and
     /// the friction force along the tangent.
+    ///
+    /// The penalty acts on the vertical penetration `δ = e(x_t) − z_t`: its energy is
+    /// `½ k_c δ²`, whose gradient is the force `k_c δ (−e′, 1)`, normal to the envelope. The
+    /// damping `c_c δ̇` acts along the same direction, and the total is never attractive.
     #[inline]
     fn contact(&self, y: &State) -> (f64, f64, f64, f64) {
         let (xt, zt, vx, vz) = (y[0], y[1], y[2], y[3]);
@@ -421,15 +468,16 @@ impl FingerModel {
         }
         let norm = (1.0 + s * s).sqrt();
         let inv = 1.0 / norm;
-        let pen_n = pen * inv;
-        // Rate of penetration along the normal: (s vx - vz)/norm.
-        let pen_rate = (s * vx - vz) * inv;
-        let fn_mag = (self.kc * pen_n + self.cc * pen_rate).max(0.0);
-        // Normal (-s, 1)/norm, tangent (1, s)/norm.
+        // Rate of the vertical penetration.
+        let pen_rate = s * vx - vz;
+        // Force per unit of the (unnormalised) normal (−s, 1).
+        let lambda = (self.kc * pen + self.cc * pen_rate).max(0.0);
+        let fn_mag = lambda * norm;
+        // Tangent (1, s)/norm.
         let vt = (vx + s * vz) * inv;
         let ft = -self.mu * fn_mag * (vt / self.v_eps).tanh();
-        let fx = -s * inv * fn_mag + ft * inv;
-        let fz = inv * fn_mag + ft * s * inv;
+        let fx = -s * lambda + ft * inv;
+        let fz = lambda + ft * s * inv;
         (fx, fz, fn_mag, ft)
     }
 
@@ -468,13 +516,13 @@ impl FingerModel {
     /// and no input it never grows.
     pub fn energy(&self, y: &State, arm_x: f64) -> f64 {
         let (xt, zt, vx, vz, zb, vzb) = (y[0], y[1], y[2], y[3], y[4], y[5]);
-        let (e, s) = self.env.at(xt);
-        let pen_n = (e - zt).max(0.0) / (1.0 + s * s).sqrt();
+        let (e, _) = self.env.at(xt);
+        let pen = (e - zt).max(0.0);
         0.5 * self.m * (vx * vx + vz * vz)
             + 0.5 * self.big_m * vzb * vzb
             + 0.5 * self.kx * (xt - arm_x).powi(2)
             + 0.5 * self.kz * (zt - zb).powi(2)
-            + 0.5 * self.kc * pen_n * pen_n
+            + 0.5 * self.kc * pen * pen
             + G * (self.m * zt + self.big_m * zb)
     }
 

@@ -15,6 +15,9 @@ pub const SAMPLE_RATE_HZ: f64 = 400.0;
 /// proximity fibre's look-ahead and the tip's radius).
 const MARGIN_MM: f64 = 8.0;
 
+/// Longest stroke simulated, mm (the profile is tabulated every few µm).
+pub const MAX_STROKE_MM: f64 = 2000.0;
+
 /// One slide line: where the strokes run on the plate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlideLine {
@@ -134,6 +137,17 @@ impl SlideSim {
         sensor.finger.validate()?;
         sensor.optics.validate()?;
         integrator.validate()?;
+        if !line.start.iter().all(|v| v.is_finite()) {
+            return Err(SimError::Invalid(format!(
+                "slide start {:?} must be finite mm",
+                line.start
+            )));
+        }
+        if !(plate_reflectivity.is_finite() && plate_reflectivity >= 0.0) {
+            return Err(SimError::Invalid(format!(
+                "plate reflectivity must be a number ≥ 0, got {plate_reflectivity}"
+            )));
+        }
         let norm = (line.direction[0].powi(2) + line.direction[1].powi(2)).sqrt();
         if !(norm.is_finite() && norm > 0.0) {
             return Err(SimError::Invalid(format!(
@@ -141,9 +155,9 @@ impl SlideSim {
                 line.direction
             )));
         }
-        if !(line.stroke_mm.is_finite() && line.stroke_mm > 0.0) {
+        if !(line.stroke_mm.is_finite() && line.stroke_mm > 0.0 && line.stroke_mm <= MAX_STROKE_MM) {
             return Err(SimError::Invalid(format!(
-                "stroke must be a positive length in mm, got {}",
+                "stroke must be a positive length up to {MAX_STROKE_MM} mm, got {}",
                 line.stroke_mm
             )));
         }
