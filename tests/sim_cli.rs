@@ -164,6 +164,27 @@ fn compare_and_work_precision_write_their_figures() {
     let img = image::open(&png).expect("png");
     assert_eq!(img.width(), 1600);
 
+    let wp = tmp.path().join("wp");
+    let o = crackbot(&["sim", "work-precision", "--out", utf8(&wp)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let rows: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(wp.join("work_precision.json")).expect("json"))
+            .expect("parse");
+    let rows = rows.as_array().expect("rows");
+    let row = |m: &str| {
+        rows.iter()
+            .find(|r| r["method"] == m)
+            .unwrap_or_else(|| panic!("{m} missing"))
+    };
+    // The default (SDIRK2, one step per sample) is far below the ADC's quantisation.
+    let default = row("sdirk2 x1")["rms_error_counts"]
+        .as_f64()
+        .expect("finite");
+    assert!(default < 0.1, "{default}");
+    // Explicit Euler at the output rate cannot carry the stiff contact.
+    assert!(row("symplectic-euler x1")["failure"].is_string());
+    assert!(image::open(wp.join("work_precision.png")).is_ok());
+
     let o = crackbot(&["sim", "dataset", "--experiment", "width", "--out"]);
     assert!(!o.status.success());
     let o = crackbot(&[

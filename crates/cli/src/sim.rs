@@ -24,6 +24,42 @@ pub enum SimCommand {
     WorkPrecision(WorkPrecisionArgs),
     /// Real and simulated slides side by side, per class and channel (PNG).
     Compare(CompareArgs),
+    /// Camera images of a scene with ground-truth boxes and the exact pixel↔mm homography
+    /// (PNG + JSON per frame, and a COCO file for `crackbot eval-detector`).
+    Render(RenderArgs),
+    /// Check a scene file and summarise it.
+    Scene(SceneArgs),
+}
+
+/// `crackbot sim render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML); the built-in default scene when left out.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Output folder: images/frame_NNNN.{png,json} and coco.json.
+    #[arg(long, default_value = "out/sim-images")]
+    out: PathBuf,
+    /// Frames to render (lighting and noise change from frame to frame).
+    #[arg(long, default_value_t = 4)]
+    frames: u32,
+    /// Seed of the first frame.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Keep the plate's texture and crack photos across frames (one physical plate).
+    #[arg(long)]
+    same_plate: bool,
+    /// Folder of the real crack photos and masks (default: $CRACKBOT_CRACKS_DIR or
+    /// ../shared/data/cracks).
+    #[arg(long)]
+    cracks: Option<PathBuf>,
+}
+
+/// `crackbot sim scene`.
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    /// Scene file (TOML); the built-in default scene when left out.
+    scene: Option<PathBuf>,
 }
 
 /// Which experiment.
@@ -82,11 +118,15 @@ pub struct CalibrateArgs {
     /// Folder of real recognition recordings (e.g. ../shared/data/tactile/type).
     #[arg(long)]
     real: PathBuf,
+    /// Folder of real width recordings (e.g. ../shared/data/tactile/width): fits that
+    /// experiment's plate mounts too.
+    #[arg(long)]
+    real_width: Option<PathBuf>,
     /// Use only this repetition (the others stay unseen for checking the transfer).
     #[arg(long, default_value_t = 1)]
     repetition: u32,
     /// Evaluations per Nelder–Mead run.
-    #[arg(long, default_value_t = 400)]
+    #[arg(long, default_value_t = 300)]
     evaluations: usize,
     /// Write the report as JSON here.
     #[arg(long)]
@@ -139,6 +179,8 @@ pub fn run(cmd: SimCommand) -> Result<()> {
         SimCommand::Calibrate(a) => calibrate(a),
         SimCommand::WorkPrecision(a) => work_precision_cmd(a),
         SimCommand::Compare(a) => compare(a),
+        SimCommand::Render(a) => render_cmd(a),
+        SimCommand::Scene(a) => scene_cmd(a),
     }
 }
 
@@ -180,20 +222,31 @@ fn load_all(dir: &Path) -> Result<Vec<Recording>> {
 }
 
 fn calibrate(a: CalibrateArgs) -> Result<()> {
-    let real: Vec<Recording> = load_all(&a.real)?
-        .into_iter()
-        .filter(|r| r.repetition() == Some(a.repetition))
-        .collect();
-    if real.is_empty() {
-        bail!(
-            "{}: no recording of repetition {}",
-            a.real.display(),
-            a.repetition
-        );
-    }
+    let of_repetition = |dir: &Path| -> Result<Vec<Recording>> {
+        let recs: Vec<Recording> = load_all(dir)?
+            .into_iter()
+            .filter(|r| r.repetition() == Some(a.repetition))
+            .collect();
+        if recs.is_empty() {
+            bail!(
+                "{}: no recording of repetition {}",
+                dir.display(),
+                a.repetition
+            );
+        }
+        Ok(recs)
+    };
+    let real = of_repetition(&a.real)?;
     let mut config = ExperimentConfig::paper(Experiment::Recognition, 7);
     config.sensor = crackbot_sim::SensorParams::default();
-    let report = crackbot_sim::calibrate::calibrate(&config, &real, a.evaluations)?;
+    config.samples = crackbot_sim::experiment::Samples::default();
+    config.mounts.clear();
+    let (d, r, h) = crackbot_sim::calibrate::GEOMETRY_GRID;
+    let pb = bar(d.len() * r.len() * h.len(), "fitting geometry and optics");
+    let report = crackbot_sim::calibrate::calibrate(&config, &real, a.evaluations, |k, _| {
+        pb.set_position(k as u64)
+    })?;
+    pb.finish_and_clear();
     println!("quantile distance (RMS counts)   D1      D2      D3      P");
     println!(
         "before (uncalibrated)        {:7.2} {:7.2} {:7.2} {:7.2}",
@@ -203,10 +256,40 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
         "after                        {:7.2} {:7.2} {:7.2} {:7.2}",
         report.rms_after[0], report.rms_after[1], report.rms_after[2], report.rms_after[3]
     );
+    println!(
+        "geometry: crack depth {} mm, bump radius {} mm, bump height {} mm",
+        report.samples.crack_depth_mm, report.samples.bump_radius_mm, report.samples.bump_height_mm
+    );
     println!("fitted optics (TOML, [sensor.optics]):");
     println!("{}", toml::to_string(&report.optics)?);
+    let mut calibrated = config.clone();
+    calibrated.sensor.optics = report.optics.clone();
+    calibrated.samples = report.samples.clone();
+    let mut mounts = vec![(
+        "recognition",
+        crackbot_sim::calibrate::fit_mounts(&calibrated, &real)?,
+    )];
+    if let Some(dir) = &a.real_width {
+        let width_real = of_repetition(dir)?;
+        let mut width = calibrated.clone();
+        width.experiment = Experiment::Width;
+        mounts.push((
+            "width",
+            crackbot_sim::calibrate::fit_mounts(&width, &width_real)?,
+        ));
+    }
+    for (name, m) in &mounts {
+        println!("plate mounts, {name} (D1, D2, D3 offsets in counts; reflectivity):");
+        for x in m {
+            println!(
+                "  [{:.2}, {:.2}, {:.2}], {:.4}",
+                x.offset_counts[0], x.offset_counts[1], x.offset_counts[2], x.reflectivity
+            );
+        }
+    }
     if let Some(path) = a.json {
-        std::fs::write(&path, serde_json::to_string_pretty(&report)?)
+        let doc = serde_json::json!({ "report": report, "mounts": mounts });
+        std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
             .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
@@ -436,5 +519,93 @@ fn compare(a: CompareArgs) -> Result<()> {
     };
     draw().map_err(|e| anyhow::anyhow!("{}: could not draw: {e}", a.out.display()))?;
     println!("wrote {}", a.out.display());
+    Ok(())
+}
+
+fn load_scene(path: Option<&Path>) -> Result<crackbot_sim::Scene> {
+    Ok(match path {
+        Some(p) => crackbot_sim::Scene::load(p)?,
+        None => crackbot_sim::Scene::builtin_default(),
+    })
+}
+
+fn scene_cmd(a: SceneArgs) -> Result<()> {
+    let scene = load_scene(a.scene.as_deref())?;
+    let name = if scene.name.is_empty() {
+        "(unnamed)"
+    } else {
+        &scene.name
+    };
+    println!(
+        "scene {name}: plate {} × {} mm ({}), {} features",
+        scene.plate.size_mm[0],
+        scene.plate.size_mm[1],
+        scene.plate.material.name,
+        scene.features.len()
+    );
+    for (k, f) in scene.features.iter().enumerate() {
+        let (lo, hi) = f.footprint();
+        println!(
+            "  features[{k}] {:<6} x {:.1}..{:.1} mm, y {:.1}..{:.1} mm",
+            f.kind(),
+            lo[0],
+            hi[0],
+            lo[1],
+            hi[1]
+        );
+    }
+    match &scene.camera {
+        Some(c) => println!(
+            "camera {}×{} px at ({}, {}, {}) mm looking at ({}, {}) mm",
+            c.resolution[0],
+            c.resolution[1],
+            c.position_mm[0],
+            c.position_mm[1],
+            c.position_mm[2],
+            c.look_at_mm[0],
+            c.look_at_mm[1]
+        ),
+        None => println!("no camera (tactile only)"),
+    }
+    println!("valid");
+    Ok(())
+}
+
+fn render_cmd(a: RenderArgs) -> Result<()> {
+    use crackbot_sim::render::{render, write_coco_dataset, CrackAssets, RenderOptions};
+    let scene = load_scene(a.scene.as_deref())?;
+    if scene.camera.is_none() {
+        bail!("the scene has no camera: nothing to render (add a [camera] table)");
+    }
+    if a.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let assets = match &a.cracks {
+        Some(dir) => CrackAssets::load(dir)?,
+        None => CrackAssets::load_default()?,
+    };
+    let options = RenderOptions {
+        appearance_seed: a.same_plate.then_some(a.seed),
+        ..RenderOptions::default()
+    };
+    let pb = bar(a.frames as usize, "rendering");
+    let start = std::time::Instant::now();
+    let mut frames = Vec::with_capacity(a.frames as usize);
+    for k in 0..a.frames {
+        frames.push(render(&scene, &assets, &options, a.seed + u64::from(k))?);
+        pb.set_position(u64::from(k) + 1);
+    }
+    pb.finish_and_clear();
+    let per_frame = start.elapsed().as_secs_f64() / f64::from(a.frames);
+    let coco = write_coco_dataset(&frames, &a.out)?;
+    let boxes: usize = frames.iter().map(|f| f.boxes.len()).sum();
+    println!(
+        "rendered {} frames ({:.0} ms each), {} ground-truth boxes; wrote {} (images in {})",
+        frames.len(),
+        per_frame * 1e3,
+        boxes,
+        coco.display(),
+        a.out.join("images").display()
+    );
     Ok(())
 }

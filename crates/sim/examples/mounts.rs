@@ -4,7 +4,10 @@ use crackbot_sim::experiment::{Experiment, ExperimentConfig};
 fn main() {
     let root = std::path::PathBuf::from(std::env::args().nth(1).unwrap());
     let rep = std::env::args().nth(2).unwrap_or("1".into());
-    for (e, sub) in [(Experiment::Recognition, "type"), (Experiment::Width, "width")] {
+    for (e, sub) in [
+        (Experiment::Recognition, "type"),
+        (Experiment::Width, "width"),
+    ] {
         let mut recs = Vec::new();
         for f in std::fs::read_dir(root.join(sub)).unwrap() {
             let p = f.unwrap().path();
@@ -16,7 +19,10 @@ fn main() {
         let m = crackbot_sim::calibrate::fit_mounts(&cfg, &recs).unwrap();
         println!("{sub}:");
         for x in m {
-            println!("            ([{:.2}, {:.2}, {:.2}], {:.4}),", x.offset_counts[0], x.offset_counts[1], x.offset_counts[2], x.reflectivity);
+            println!(
+                "            ([{:.2}, {:.2}, {:.2}], {:.4}),",
+                x.offset_counts[0], x.offset_counts[1], x.offset_counts[2], x.reflectivity
+            );
         }
     }
 }

@@ -19,7 +19,7 @@
 use crackbot_recording::Recording;
 use serde::Serialize;
 
-use crate::experiment::{Experiment, ExperimentConfig, PlateMount};
+use crate::experiment::{Experiment, ExperimentConfig, PlateMount, Samples};
 use crate::finger::{FingerModel, Integrator};
 use crate::optics::OpticsParams;
 use crate::run::{ProximityGeometry, Sample, SlideLine, SlideSim, SAMPLE_RATE_HZ};
@@ -33,16 +33,16 @@ pub const QUANTILES: [f64; 10] = [0.05, 0.15, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75
 pub fn calibrated_sensor() -> SensorParams {
     let mut sensor = SensorParams::default();
     let o = &mut sensor.optics;
-    o.rest_counts = [657.54, 434.73, 711.56];
-    o.lateral_gain = [14.364, 6.734, -17.101];
-    o.normal_gain = [22.814, 8.618, -19.393];
-    o.moment_gain = [-0.338, -0.808, 1.321];
-    o.proximity_spot_mm = 0.114;
-    o.proximity_dark_counts = 109.56;
-    o.proximity_peak_counts = 593.32;
-    o.proximity_peak_mm = 2.685;
-    o.proximity_height_mm = 1.704;
-    o.proximity_offset_mm = -1.153;
+    o.rest_counts = [658.191, 435.003, 710.766];
+    o.lateral_gain = [29.908, 12.844, -37.068];
+    o.normal_gain = [10.039, -4.457, -18.996];
+    o.moment_gain = [-1.815, -1.112, 2.785];
+    o.proximity_spot_mm = 1.560;
+    o.proximity_dark_counts = 198.56;
+    o.proximity_peak_counts = 574.17;
+    o.proximity_peak_mm = 2.208;
+    o.proximity_height_mm = 1.237;
+    o.proximity_offset_mm = 1.352;
     o.noise_counts = [1.384, 2.781, 5.189, 0.418];
     // Spread between repetitions of one plate (medians of repetitions 1-3: about a count) and
     // slow drift within a recording (slide medians vary by under a count over 80 s).
@@ -52,6 +52,19 @@ pub fn calibrated_sensor() -> SensorParams {
     sensor
 }
 
+/// The plates' geometry chosen by the same calibration from [`GEOMETRY_GRID`] (the paper gives
+/// only the crack widths and the wave).
+pub fn calibrated_samples() -> Samples {
+    Samples {
+        crack_depth_mm: 8.0,
+        bump_radius_mm: 6.0,
+        bump_height_mm: 1.0,
+        // `fit_roughness` on the flat plate, repetition 1.
+        roughness_rms_mm: 0.0087,
+        ..Samples::default()
+    }
+}
+
 /// How the paper's plates sit under the sensor, fitted on repetition 1 of the authors'
 /// recordings (`crackbot sim calibrate`), in the order of
 /// [`ExperimentConfig::surfaces`](crate::experiment::ExperimentConfig::surfaces).
@@ -59,19 +72,19 @@ pub fn calibrated_mounts(experiment: Experiment) -> Vec<PlateMount> {
     let table: &[([f64; 3], f64)] = match experiment {
         // Flat, crack, bump, wavy.
         Experiment::Recognition => &[
-            ([0.50, -2.74, -7.89], 0.9959),
-            ([1.89, -0.06, -0.44], 0.9934),
-            ([8.29, 2.10, 3.51], 0.9980),
-            ([3.82, 3.50, 1.27], 1.0086),
+            ([-1.06, -4.99, -5.88], 0.9896),
+            ([-0.14, 0.01, 1.18], 0.9958),
+            ([8.30, 3.51, 1.49], 1.0051),
+            ([2.82, 1.56, 2.47], 0.9939),
         ],
         // 0, 1, 2, 5, 8, 10 mm (another session: the cables sat differently).
         Experiment::Width => &[
-            ([10.50, 9.26, 4.11], 1.0056),
-            ([10.87, 7.92, 4.62], 0.9950),
-            ([11.63, 0.93, -0.06], 1.0077),
-            ([9.66, 9.86, 6.36], 1.0136),
-            ([9.16, 9.86, 8.50], 1.0398),
-            ([10.48, 6.52, 8.85], 0.9419),
+            ([8.94, 7.01, 6.12], 1.0051),
+            ([8.88, 8.01, 6.16], 0.9927),
+            ([8.87, 2.01, 0.19], 1.0112),
+            ([8.86, 8.01, 7.18], 1.0112),
+            ([8.03, 8.14, 8.89], 1.0020),
+            ([6.31, 7.49, 10.97], 0.9649),
         ],
     };
     table
@@ -86,7 +99,10 @@ pub fn calibrated_mounts(experiment: Experiment) -> Vec<PlateMount> {
 /// Fits each plate's mount of `config`'s experiment to the `real` recordings (any number per
 /// plate, recognised by their label): the deformation channels' median offsets and the
 /// proximity channel's reflectivity ratio between real and simulated recordings.
-pub fn fit_mounts(config: &ExperimentConfig, real: &[Recording]) -> Result<Vec<PlateMount>, SimError> {
+pub fn fit_mounts(
+    config: &ExperimentConfig,
+    real: &[Recording],
+) -> Result<Vec<PlateMount>, SimError> {
     let mut neutral = config.clone();
     neutral.mounts.clear();
     let traces = simulate_traces(&neutral)?;
@@ -121,7 +137,21 @@ pub fn fit_mounts(config: &ExperimentConfig, real: &[Recording]) -> Result<Vec<P
                 m.offset_counts[c] = a - b;
             }
         }
-        if let (Some(a), Some(b)) = (real_med(3), sim_med(3)) {
+        // Reflectivity: the ratio above dark of the medians of P's upper three quarters (the
+        // flat stretches of a crack plate, without its dips; the same rule for real and
+        // simulated recordings of every plate).
+        let upper_median = |mut v: Vec<f64>| -> Option<f64> {
+            v.retain(|x| x.is_finite());
+            if v.is_empty() {
+                return None;
+            }
+            v.sort_by(f64::total_cmp);
+            let upper = &v[v.len() / 4..];
+            Some(upper[upper.len() / 2])
+        };
+        let level_real = upper_median(rows.iter().map(|r| r[3]).collect());
+        let level_sim = upper_median(trace.samples.iter().map(|s| s.analog[3]).collect());
+        if let (Some(a), Some(b)) = (level_real, level_sim) {
             if (b - dark).abs() > 1.0 {
                 m.reflectivity = ((a - dark) / (b - dark)).max(0.0);
             }
@@ -292,9 +322,11 @@ pub fn channel_loss(
         let Some(trace) = traces.iter().find(|tr| tr.label == t.label) else {
             continue;
         };
+        // Every second sample: 200 Hz is plenty for quantiles and halves the cost.
         let values: Vec<f64> = trace
             .samples
             .iter()
+            .step_by(2)
             .filter(|s| direction_of(s) == t.direction)
             .map(|s| optics.saturate(channel_value(optics, static_mm, trace, s, channel)))
             .collect();
@@ -390,7 +422,8 @@ pub fn nelder_mead(
 /// What a calibration did.
 #[derive(Debug, Clone, Serialize)]
 pub struct CalibrationReport {
-    /// Quantile distance (RMS, counts) per channel before the fit (D1, D2, D3, P).
+    /// Quantile distance (RMS, counts) per channel before the fit (D1, D2, D3, P), with the
+    /// starting optics and geometry.
     pub rms_before: [f64; 4],
     /// After the fit.
     pub rms_after: [f64; 4],
@@ -398,14 +431,74 @@ pub struct CalibrationReport {
     pub noise_counts: [f64; 4],
     /// The fitted optics.
     pub optics: OpticsParams,
+    /// The plates' geometry chosen from the grid.
+    pub samples: Samples,
+    /// Proximity distance (RMS counts) of every geometry tried: `(crack depth, bump radius,
+    /// bump height, RMS)`.
+    pub geometry_grid: Vec<(f64, f64, f64, f64)>,
 }
 
-/// Fits the optics of `config.sensor` to `real` recordings of the recognition experiment
-/// (labels 0–3). `max_evals` bounds each Nelder–Mead run.
+/// Geometries tried by [`calibrate`]: crack depths, bump radii and bump heights, mm.
+pub const GEOMETRY_GRID: ([f64; 3], [f64; 4], [f64; 3]) =
+    ([3.0, 5.0, 8.0], [2.0, 3.0, 4.5, 6.0], [1.0, 2.0, 3.5]);
+
+/// Fits the proximity optics (dark level, peak, peak distance, fibre height, look-ahead, spot)
+/// to the real quantiles from a few starting points; returns the best optics and its RMS.
+fn fit_proximity(
+    start: &OpticsParams,
+    static_mm: f64,
+    traces: &[Trace],
+    targets: &[ChannelQuantiles],
+    max_evals: usize,
+) -> (OpticsParams, f64) {
+    let apply = |o: &mut OpticsParams, x: &[f64]| {
+        o.proximity_dark_counts = x[0];
+        o.proximity_peak_counts = x[1];
+        o.proximity_peak_mm = x[2].max(0.05);
+        o.proximity_height_mm = x[3];
+        o.proximity_offset_mm = x[4];
+        o.proximity_spot_mm = x[5].abs();
+    };
+    let mut best = (start.clone(), f64::INFINITY);
+    // Look-ahead behind, under and ahead of the tip; the fibre on either side of the curve's peak.
+    for (offset, height) in [(-1.5, 1.5), (0.0, 1.5), (1.5, 1.5), (0.0, 3.5)] {
+        let x0 = [
+            start.proximity_dark_counts,
+            start.proximity_peak_counts,
+            start.proximity_peak_mm,
+            height,
+            offset,
+            start.proximity_spot_mm,
+        ];
+        let (x, v) = nelder_mead(
+            |x| {
+                let mut o = start.clone();
+                apply(&mut o, x);
+                channel_loss(&o, static_mm, traces, targets, 3)
+            },
+            &x0,
+            &[20.0, 50.0, 0.3, 0.5, 0.5, 0.3],
+            max_evals,
+        );
+        if v < best.1 {
+            let mut o = start.clone();
+            apply(&mut o, &x);
+            best = (o, v);
+        }
+    }
+    (best.0, best.1.sqrt())
+}
+
+/// Fits the optics of `config.sensor` and the plates' geometry to `real` recordings of the
+/// recognition experiment (labels 0–3): for every geometry of [`GEOMETRY_GRID`] the proximity
+/// optics are fitted from several starts; the best geometry then gets its deformation channels
+/// fitted. `max_evals` bounds each Nelder–Mead run; `progress(done, total)` is called per
+/// geometry.
 pub fn calibrate(
     config: &ExperimentConfig,
     real: &[Recording],
     max_evals: usize,
+    mut progress: impl FnMut(usize, usize),
 ) -> Result<CalibrationReport, SimError> {
     if config.experiment != Experiment::Recognition {
         return Err(SimError::Invalid(
@@ -417,19 +510,48 @@ pub fn calibrate(
             "no real recordings to calibrate against".into(),
         ));
     }
-    let mut quiet = config.clone();
-    quiet.integrator = Integrator::default();
-    let traces = simulate_traces(&quiet)?;
     let targets = real_quantiles(real);
     let static_mm = {
         let s = &config.sensor.finger;
         s.body_mass_g * 1e-3 * 9.81 / (s.normal_stiffness_n_mm * 1e3) * 1e3
     };
-    let mut optics = config.sensor.optics.clone();
-    let rms = |o: &OpticsParams| -> [f64; 4] {
-        std::array::from_fn(|c| channel_loss(o, static_mm, &traces, &targets, c).sqrt())
+    let rms = |o: &OpticsParams, traces: &[Trace]| -> [f64; 4] {
+        std::array::from_fn(|c| channel_loss(o, static_mm, traces, &targets, c).sqrt())
     };
-    let rms_before = rms(&optics);
+    let mut quiet = config.clone();
+    quiet.integrator = Integrator::default();
+    quiet.mounts.clear();
+    let rms_before = rms(&config.sensor.optics, &simulate_traces(&quiet)?);
+    let (depths, radii, heights) = GEOMETRY_GRID;
+    let total = depths.len() * radii.len() * heights.len();
+    let mut grid = Vec::with_capacity(total);
+    let mut best: Option<(f64, Samples, OpticsParams, Vec<Trace>)> = None;
+    for &depth in &depths {
+        for &radius in &radii {
+            for &height in &heights {
+                let mut trial = quiet.clone();
+                trial.samples.crack_depth_mm = depth;
+                trial.samples.bump_radius_mm = radius;
+                trial.samples.bump_height_mm = height;
+                let traces = simulate_traces(&trial)?;
+                let (optics, p_rms) = fit_proximity(
+                    &config.sensor.optics,
+                    static_mm,
+                    &traces,
+                    &targets,
+                    max_evals,
+                );
+                grid.push((depth, radius, height, p_rms));
+                progress(grid.len(), total);
+                if best.as_ref().is_none_or(|b| p_rms < b.0) {
+                    best = Some((p_rms, trial.samples.clone(), optics, traces));
+                }
+            }
+        }
+    }
+    let Some((_, samples, mut optics, traces)) = best else {
+        return Err(SimError::Invalid("empty geometry grid".into()));
+    };
     for c in 0..3 {
         let x0 = [
             optics.rest_counts[c],
@@ -455,41 +577,43 @@ pub fn calibrate(
         optics.normal_gain[c] = x[2];
         optics.moment_gain[c] = x[3];
     }
-    let x0 = [
-        optics.proximity_dark_counts,
-        optics.proximity_peak_counts,
-        optics.proximity_peak_mm,
-        optics.proximity_height_mm,
-        optics.proximity_offset_mm,
-        optics.proximity_spot_mm,
-    ];
-    let apply = |o: &mut OpticsParams, x: &[f64]| {
-        o.proximity_dark_counts = x[0];
-        o.proximity_peak_counts = x[1];
-        o.proximity_peak_mm = x[2].max(0.05);
-        o.proximity_height_mm = x[3];
-        o.proximity_offset_mm = x[4];
-        o.proximity_spot_mm = x[5].abs();
-    };
-    let (x, _) = nelder_mead(
-        |x| {
-            let mut o = optics.clone();
-            apply(&mut o, x);
-            channel_loss(&o, static_mm, &traces, &targets, 3)
-        },
-        &x0,
-        &[20.0, 50.0, 0.3, 0.5, 0.5, 0.3],
-        max_evals,
-    );
-    apply(&mut optics, &x);
     let noise_counts = real_noise(real);
     optics.noise_counts = noise_counts;
     Ok(CalibrationReport {
         rms_before,
-        rms_after: rms(&optics),
+        rms_after: rms(&optics, &traces),
         noise_counts,
         optics,
+        samples,
+        geometry_grid: grid,
     })
+}
+
+/// The roughness (height rms, mm) that gives the real flat plate's proximity spread: the
+/// spread of P on the real flat recordings (label 0) beyond the white noise, divided by the
+/// proximity curve's slope at the flat contact distance under `optics`.
+pub fn fit_roughness(optics: &OpticsParams, real: &[Recording]) -> f64 {
+    let p: Vec<f64> = real
+        .iter()
+        .filter(|r| r.label() == Some(0.0))
+        .flat_map(|r| r.rows.iter().map(|row| row.p))
+        .collect();
+    if p.len() < 2 {
+        return 0.0;
+    }
+    let mean = p.iter().sum::<f64>() / p.len() as f64;
+    let var = p.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (p.len() - 1) as f64;
+    let excess = (var - optics.noise_counts[3].powi(2)).max(0.0).sqrt();
+    let d = optics.proximity_height_mm;
+    let h = 1e-3;
+    let slope = optics.proximity_peak_counts
+        * (optics.proximity_curve(d + h) - optics.proximity_curve(d - h))
+        / (2.0 * h);
+    if slope.abs() < 1e-9 {
+        0.0
+    } else {
+        excess / slope.abs()
+    }
 }
 
 /// White noise per channel of the real flat recordings (label 0): the standard deviation of
@@ -527,5 +651,6 @@ pub fn calibrate_paper(real: &[Recording], seed: u64) -> Result<CalibrationRepor
     let mut config = ExperimentConfig::paper(Experiment::Recognition, seed);
     config.sensor = SensorParams::default();
     config.mounts.clear();
-    calibrate(&config, real, 400)
+    config.samples = Samples::default();
+    calibrate(&config, real, 300, |_, _| {})
 }

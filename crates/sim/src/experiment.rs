@@ -52,6 +52,10 @@ pub struct Samples {
     pub wave_amplitude_mm: f64,
     /// Period of the wavy pattern, mm (the paper: 5 mm).
     pub wave_period_mm: f64,
+    /// Roughness of the printed plates: standard deviation of the height texture, mm.
+    pub roughness_rms_mm: f64,
+    /// Roughness: length of its features, mm.
+    pub roughness_correlation_mm: f64,
 }
 
 impl Default for Samples {
@@ -65,6 +69,8 @@ impl Default for Samples {
             bump_height_mm: 2.0,
             wave_amplitude_mm: 1.0,
             wave_period_mm: 5.0,
+            roughness_rms_mm: 0.0,
+            roughness_correlation_mm: 0.5,
         }
     }
 }
@@ -134,7 +140,7 @@ impl ExperimentConfig {
             speed_mm_s: 3.89,
             start_range_mm: (5.0, 10.0),
             position_rate_hz: 80.0,
-            samples: Samples::default(),
+            samples: crate::calibrate::calibrated_samples(),
             sensor: crate::calibrate::calibrated_sensor(),
             mounts: crate::calibrate::calibrated_mounts(experiment),
             integrator: Integrator::default(),
@@ -282,7 +288,12 @@ pub fn simulate_recording(
         speed_mm_s: config.speed_mm_s,
     };
     let mut sensor = config.sensor.clone();
-    for (rest, off) in sensor.optics.rest_counts.iter_mut().zip(mount.offset_counts) {
+    for (rest, off) in sensor
+        .optics
+        .rest_counts
+        .iter_mut()
+        .zip(mount.offset_counts)
+    {
         *rest += off;
     }
     let mut sim = SlideSim::new(
@@ -292,6 +303,11 @@ pub fn simulate_recording(
         &sensor,
         config.integrator,
         seed,
+    )?
+    .with_roughness(
+        config.samples.roughness_rms_mm,
+        config.samples.roughness_correlation_mm,
+        seed ^ 0x5eed_0f_7e87_u64,
     )?;
     let slide_time = sim.slide_time();
     let n = (config.slides as f64 * slide_time * SAMPLE_RATE_HZ).round() as usize;

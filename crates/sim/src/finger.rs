@@ -70,7 +70,7 @@ pub struct FingerParams {
 impl Default for FingerParams {
     fn default() -> Self {
         FingerParams {
-            tip_radius_mm: 6.0,
+            tip_radius_mm: 10.0,
             tip_mass_g: 2.0,
             body_mass_g: 200.0,
             lateral_stiffness_n_mm: 1.0,

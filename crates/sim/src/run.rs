@@ -1,11 +1,13 @@
 //! Running the finger along a line of a surface: mechanics + optics, one 400 Hz sample at a time.
 
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::finger::{ArmPath, Envelope, FingerModel, Integrator, State, Stepper, Strokes};
+use crate::finger::{
+    ArmPath, Envelope, FingerModel, FingerParams, Integrator, State, Stepper, Strokes,
+};
 use crate::optics::{proximity_intensity, Electronics, Scene1d, CHANNELS};
-use crate::surface::{Point, Surface};
+use crate::surface::{Point, Profile, Surface};
 use crate::{SensorParams, SimError};
 
 /// The sensor's sampling rate, Hz.
@@ -76,6 +78,8 @@ pub struct SlideSim {
     proximity_spot: f64,
     proximity_peak_mm: f64,
     plate_reflectivity: f64,
+    profile: Profile,
+    finger: FingerParams,
 }
 
 /// Points across the proximity fibre's spot.
@@ -155,7 +159,8 @@ impl SlideSim {
                 line.direction
             )));
         }
-        if !(line.stroke_mm.is_finite() && line.stroke_mm > 0.0 && line.stroke_mm <= MAX_STROKE_MM) {
+        if !(line.stroke_mm.is_finite() && line.stroke_mm > 0.0 && line.stroke_mm <= MAX_STROKE_MM)
+        {
             return Err(SimError::Invalid(format!(
                 "stroke must be a positive length up to {MAX_STROKE_MM} mm, got {}",
                 line.stroke_mm
@@ -206,8 +211,62 @@ impl SlideSim {
             proximity_offset: sensor.optics.proximity_offset_mm * 1e-3,
             proximity_spot: sensor.optics.proximity_spot_mm.max(0.0) * 1e-3,
             proximity_peak_mm: sensor.optics.proximity_peak_mm,
+            profile,
+            finger: sensor.finger.clone(),
             plate_reflectivity,
         })
+    }
+
+    /// Adds surface roughness along the line: a smooth random height texture of `rms_mm`
+    /// (standard deviation) with features about `correlation_mm` long (a sum of 16 cosines
+    /// with random wavelengths and phases drawn from `seed`), then rebuilds the envelope and
+    /// puts the finger back at rest. Printed plates are not flat to a few µm, and the proximity
+    /// fibre sees that.
+    pub fn with_roughness(
+        mut self,
+        rms_mm: f64,
+        correlation_mm: f64,
+        seed: u64,
+    ) -> Result<Self, SimError> {
+        if !(rms_mm.is_finite() && rms_mm >= 0.0) {
+            return Err(SimError::Invalid(format!(
+                "roughness must be a non-negative rms in mm, got {rms_mm}"
+            )));
+        }
+        if !(correlation_mm.is_finite() && correlation_mm > 0.0) {
+            return Err(SimError::Invalid(format!(
+                "roughness correlation length must be positive mm, got {correlation_mm}"
+            )));
+        }
+        if rms_mm == 0.0 {
+            return Ok(self);
+        }
+        const WAVES: usize = 16;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let amplitude = rms_mm * (2.0 / WAVES as f64).sqrt();
+        let waves: Vec<(f64, f64)> = (0..WAVES)
+            .map(|_| {
+                // Wavelengths spread around 2π × the correlation length.
+                let wavelength = correlation_mm * rng.random_range(2.0..12.0);
+                (
+                    std::f64::consts::TAU / wavelength,
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                )
+            })
+            .collect();
+        let step = self.profile.step_mm;
+        for (i, h) in self.profile.height.iter_mut().enumerate() {
+            let s = i as f64 * step;
+            *h += amplitude
+                * waves
+                    .iter()
+                    .map(|(k, phi)| (k * s + phi).cos())
+                    .sum::<f64>();
+        }
+        let env = Envelope::new(&self.profile, self.finger.tip_radius_mm);
+        self.model = FingerModel::new(&self.finger, env);
+        self.state = self.model.rest_state(self.origin);
+        Ok(self)
     }
 
     /// Duration of one slide (a stroke forth and back), s.
