@@ -165,6 +165,9 @@ pub struct Envelope {
     surface: Vec<f64>,
 }
 
+/// Penetration over which the contact damping fades in, m.
+const CONTACT_FADE: f64 = 1e-6;
+
 /// Largest envelope slope (about 87°): walls steeper than this are treated as this steep (the
 /// envelope is raised there, so the tip never enters the surface), which keeps the contact
 /// force and its Jacobian finite.
@@ -471,7 +474,10 @@ impl FingerModel {
         // Rate of the vertical penetration.
         let pen_rate = s * vx - vz;
         // Force per unit of the (unnormalised) normal (−s, 1).
-        let lambda = (self.kc * pen + self.cc * pen_rate).max(0.0);
+        // The damping fades in over the first micrometre of penetration, so the force is
+        // continuous at the contact's onset (no jump the Newton iteration cannot follow).
+        let fade = (pen / CONTACT_FADE).min(1.0);
+        let lambda = (self.kc * pen + self.cc * pen_rate * fade).max(0.0);
         let fn_mag = lambda * norm;
         // Tangent (1, s)/norm.
         let vt = (vx + s * vz) * inv;
@@ -618,6 +624,8 @@ pub struct Work {
     pub steps: u64,
     /// Steps rejected (Newton failure or error too large).
     pub rejected: u64,
+    /// Tiny steps taken explicitly because Newton could not converge even there.
+    pub explicit_fallbacks: u64,
 }
 
 /// Integrates a [`FingerModel`] from output sample to output sample.
@@ -814,10 +822,30 @@ impl Stepper {
             _ => {
                 self.work.rejected += 1;
                 if depth >= 16 {
-                    return Err(SimError::Integration {
-                        t,
-                        reason: format!("Newton did not converge even with a step of {:.3e} s", h),
-                    });
+                    // A step this small (tens of ns) is well inside an explicit method's
+                    // stability limit even on the stiff contact: where Newton cannot follow a
+                    // violent event (a jammed tip chattering on a wall corner), take it with
+                    // Heun's method rather than give up.
+                    let f0 = model.rhs(t, y, arm);
+                    let y1 = add(y, &f0, h);
+                    let f1 = model.rhs(t + h, &y1, arm);
+                    self.work.rhs_evals += 2;
+                    let mut next = *y;
+                    for i in 0..STATE {
+                        next[i] += 0.5 * h * (f0[i] + f1[i]);
+                    }
+                    if !finite(&next) {
+                        return Err(SimError::Integration {
+                            t,
+                            reason: format!(
+                                "Newton did not converge with a step of {h:.3e} s and the \
+                                 explicit fallback is not finite"
+                            ),
+                        });
+                    }
+                    *y = next;
+                    self.work.explicit_fallbacks += 1;
+                    return Ok(());
                 }
                 self.implicit_step(model, arm, t, h / 2.0, y, depth + 1)?;
                 self.implicit_step(model, arm, t + h / 2.0, h / 2.0, y, depth + 1)

@@ -341,6 +341,7 @@ fn proximity_fibre_at_or_inside_the_surface_clamps() {
     sensor.finger.tip_radius_mm = 6.0;
     sensor.optics.proximity_height_mm = 0.5;
     sensor.optics.proximity_offset_mm = 4.0;
+    sensor.optics.proximity_spot_mm = 0.0;
     let screw = Surface {
         size_mm: [200.0, 100.0],
         features: vec![Feature::Screw {
