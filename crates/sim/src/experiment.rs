@@ -307,7 +307,7 @@ pub fn simulate_recording(
     .with_roughness(
         config.samples.roughness_rms_mm,
         config.samples.roughness_correlation_mm,
-        seed ^ 0x5eed_0f_7e87_u64,
+        seed ^ 0x005e_ed0f_7e87_u64,
     )?;
     let slide_time = sim.slide_time();
     let n = (config.slides as f64 * slide_time * SAMPLE_RATE_HZ).round() as usize;

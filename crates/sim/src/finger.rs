@@ -634,9 +634,14 @@ pub struct Stepper {
     method: Integrator,
     /// Last accepted step of the adaptive method, s.
     h_adaptive: f64,
+    /// The factorised Newton matrix `I − a J` of the last implicit step and its `a`: reused by
+    /// the next step of the same size (Newton refreshes it where it stalls).
+    newton: Option<(f64, NewtonLu)>,
     /// Work done so far.
     pub work: Work,
 }
+
+type NewtonLu = nalgebra::LU<f64, nalgebra::Const<STATE>, nalgebra::Const<STATE>>;
 
 fn add(a: &State, b: &State, s: f64) -> State {
     let mut r = *a;
@@ -662,6 +667,7 @@ impl Stepper {
         Stepper {
             method,
             h_adaptive: 1e-4,
+            newton: None,
             work: Work::default(),
         }
     }
@@ -795,9 +801,14 @@ impl Stepper {
         } else {
             1.0
         };
-        let j = self.jacobian(model, arm, t, y);
-        let m = Mat6::identity() - j * (h * gamma);
-        let mut lu = m.lu();
+        let a = h * gamma;
+        let mut lu = match self.newton.take() {
+            Some((cached, lu)) if cached == a => lu,
+            _ => {
+                let j = self.jacobian(model, arm, t, y);
+                (Mat6::identity() - j * a).lu()
+            }
+        };
         let f0 = model.rhs(t, y, arm);
         self.work.rhs_evals += 1;
         let result = (|| {
@@ -817,6 +828,7 @@ impl Stepper {
             Some(next) if finite(&next) => {
                 *y = next;
                 self.work.steps += 1;
+                self.newton = Some((a, lu));
                 Ok(())
             }
             _ => {

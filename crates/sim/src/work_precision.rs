@@ -45,8 +45,9 @@ fn family(m: &Integrator) -> &'static str {
     }
 }
 
-/// The slide used for the comparison.
-fn slide(method: Integrator) -> Result<SlideSim, SimError> {
+/// The slide used for the comparison (and by the benches): the calibrated sensor without
+/// noise, one slide across a 5 mm crack.
+pub fn slide(method: Integrator) -> Result<SlideSim, SimError> {
     let surface = Surface {
         size_mm: [200.0, 100.0],
         features: vec![Feature::Crack {
