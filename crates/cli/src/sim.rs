@@ -110,6 +110,13 @@ pub struct DatasetArgs {
     /// File format.
     #[arg(long, value_enum, default_value_t = FormatArg::Csv)]
     format: FormatArg,
+    /// Leave out the per-plate mounts fitted to the real recordings (resting-level offsets and
+    /// reflectivity of each plate): every plate sits the same.
+    #[arg(long)]
+    no_plate_mounts: bool,
+    /// Leave out the plates' surface roughness.
+    #[arg(long)]
+    no_roughness: bool,
 }
 
 /// `crackbot sim calibrate`.
@@ -188,6 +195,12 @@ fn dataset(a: DatasetArgs) -> Result<()> {
     let mut config = ExperimentConfig::paper(a.experiment.into(), a.seed);
     config.recordings = a.recordings;
     config.slides = a.slides;
+    if a.no_plate_mounts {
+        config.mounts.clear();
+    }
+    if a.no_roughness {
+        config.samples.roughness_rms_mm = 0.0;
+    }
     let ext = match a.format {
         FormatArg::Csv => "csv",
         FormatArg::Mat => "mat",
@@ -238,7 +251,7 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
     };
     let real = of_repetition(&a.real)?;
     let mut config = ExperimentConfig::paper(Experiment::Recognition, 7);
-    config.sensor = crackbot_sim::SensorParams::default();
+    config.sensor.optics = crackbot_sim::OpticsParams::first_guess();
     config.samples = crackbot_sim::experiment::Samples::default();
     config.mounts.clear();
     let (d, r, h) = crackbot_sim::calibrate::GEOMETRY_GRID;

@@ -31,25 +31,8 @@ pub const QUANTILES: [f64; 10] = [0.05, 0.15, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75
 /// The sensor as calibrated against repetition 1 of the authors' recognition recordings
 /// (`crackbot sim calibrate --real ../shared/data/tactile/type --repetition 1`).
 pub fn calibrated_sensor() -> SensorParams {
-    let mut sensor = SensorParams::default();
-    let o = &mut sensor.optics;
-    o.rest_counts = [658.191, 435.003, 710.766];
-    o.lateral_gain = [29.908, 12.844, -37.068];
-    o.normal_gain = [10.039, -4.457, -18.996];
-    o.moment_gain = [-1.815, -1.112, 2.785];
-    o.proximity_spot_mm = 1.560;
-    o.proximity_dark_counts = 198.56;
-    o.proximity_peak_counts = 574.17;
-    o.proximity_peak_mm = 2.208;
-    o.proximity_height_mm = 1.237;
-    o.proximity_offset_mm = 1.352;
-    o.noise_counts = [1.384, 2.781, 5.189, 0.418];
-    // Spread between repetitions of one plate (medians of repetitions 1-3: about a count) and
-    // slow drift within a recording (slide medians vary by under a count over 80 s).
-    o.recording_offset_sigma_counts = 1.0;
-    o.recording_gain_sigma = 0.003;
-    o.drift_counts_per_sqrt_s = 0.07;
-    sensor
+    // The calibrated values are the defaults (see `OpticsParams::default`).
+    SensorParams::default()
 }
 
 /// The plates' geometry chosen by the same calibration from [`GEOMETRY_GRID`] (the paper gives
@@ -649,7 +632,7 @@ pub fn real_noise(real: &[Recording]) -> [f64; 4] {
 /// Runs the calibration with the paper's recognition settings (one trace per class).
 pub fn calibrate_paper(real: &[Recording], seed: u64) -> Result<CalibrationReport, SimError> {
     let mut config = ExperimentConfig::paper(Experiment::Recognition, seed);
-    config.sensor = SensorParams::default();
+    config.sensor.optics = OpticsParams::first_guess();
     config.mounts.clear();
     config.samples = Samples::default();
     calibrate(&config, real, 300, |_, _| {})

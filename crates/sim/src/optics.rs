@@ -63,8 +63,39 @@ pub struct OpticsParams {
     pub adc_bits: u32,
 }
 
+/// The defaults are the calibration against the authors' recordings
+/// (`crackbot sim calibrate`, repetition 1 of `../shared/data/tactile/type`; see
+/// [`crate::calibrate`]): a scene that leaves `[sensor.optics]` out gets the calibrated sensor.
 impl Default for OpticsParams {
     fn default() -> Self {
+        OpticsParams {
+            rest_counts: [658.191, 435.003, 710.766],
+            lateral_gain: [29.908, 12.844, -37.068],
+            normal_gain: [10.039, -4.457, -18.996],
+            moment_gain: [-1.815, -1.112, 2.785],
+            proximity_spot_mm: 1.560,
+            proximity_dark_counts: 198.56,
+            proximity_peak_counts: 574.17,
+            proximity_peak_mm: 2.208,
+            proximity_height_mm: 1.237,
+            proximity_offset_mm: 1.352,
+            saturation_counts: 1000.0,
+            noise_counts: [1.384, 2.781, 5.189, 0.418],
+            // Spread between repetitions of one plate (medians of repetitions 1-3: about a
+            // count) and slow drift within a recording (slide medians vary by under a count
+            // over 80 s).
+            drift_counts_per_sqrt_s: 0.07,
+            recording_offset_sigma_counts: 1.0,
+            recording_gain_sigma: 0.003,
+            adc_bits: 10,
+        }
+    }
+}
+
+impl OpticsParams {
+    /// The physical first guess the calibration starts from (resting levels read off the real
+    /// flat recordings, gains and proximity geometry guessed).
+    pub fn first_guess() -> Self {
         OpticsParams {
             rest_counts: [655.0, 431.0, 708.0],
             lateral_gain: [13.0, 5.0, -10.0],
@@ -84,9 +115,7 @@ impl Default for OpticsParams {
             adc_bits: 10,
         }
     }
-}
 
-impl OpticsParams {
     /// Checks every parameter, naming the first bad one.
     pub fn validate(&self) -> Result<(), SimError> {
         let finite = self
