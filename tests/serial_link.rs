@@ -1,35 +1,12 @@
 //! The firmware, emulated on the host, streaming to the acquisition over a real pseudo-terminal.
 
 use std::collections::BTreeSet;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use crackbot_acquisition::{AcquisitionError, LinkStats, PortConfig, Sample, SensorStream};
-use crackbot_tests::Emulator;
+use crackbot_tests::{read_all, Emulator};
 
 /// Reads until the stream ends; returns the samples, the error that ended it and the stats.
-fn read_all(
-    stream: &mut SensorStream,
-    limit: Duration,
-) -> (Vec<Sample>, Option<AcquisitionError>, LinkStats) {
-    let start = Instant::now();
-    let mut samples = Vec::new();
-    let mut error = None;
-    while let Some(item) = stream.blocking_next() {
-        match item {
-            Ok(s) => samples.push(s),
-            Err(e) => {
-                error = Some(e);
-                break;
-            }
-        }
-        assert!(
-            start.elapsed() < limit,
-            "stream did not end within {limit:?}"
-        );
-    }
-    (samples, error, stream.stats())
-}
-
 fn run_link(
     frames: u64,
     extra: &[&str],

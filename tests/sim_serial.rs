@@ -1,10 +1,10 @@
 //! The physics simulator as the emulated board's analog front end: simulator → firmware frames →
 //! pseudo-terminal → acquisition, over the real serial path.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use crackbot_acquisition::{AcquisitionError, LinkStats, PortConfig, Sample, SensorStream};
-use crackbot_tests::Emulator;
+use crackbot_tests::{read_all, Emulator};
 
 /// Seconds streamed: a stroke starts 7 mm before the crack's near edge at 3.89 mm/s, so the tip
 /// is past a 5 mm crack after about 3.1 s.
@@ -37,23 +37,7 @@ fn stream_sim(
     let mut stream = SensorStream::open(&PortConfig::new(&emulator.pty)).expect("opening the PTY");
     emulator.start();
     let limit = Duration::from_secs(DURATION_S + 30);
-    let start = Instant::now();
-    let mut samples = Vec::new();
-    let mut error = None;
-    while let Some(item) = stream.blocking_next() {
-        match item {
-            Ok(s) => samples.push(s),
-            Err(e) => {
-                error = Some(e);
-                break;
-            }
-        }
-        assert!(
-            start.elapsed() < limit,
-            "stream did not end within {limit:?}"
-        );
-    }
-    let stats = stream.stats();
+    let (samples, error, stats) = read_all(&mut stream, limit);
     let report = emulator.wait();
     (samples, error, stats, report)
 }

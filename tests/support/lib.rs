@@ -130,3 +130,32 @@ pub fn csv_rows(path: &Path) -> usize {
     let text = std::fs::read_to_string(path).expect("reading the CSV");
     text.lines().count().saturating_sub(1)
 }
+
+/// Reads `stream` until it ends (or errs) and returns the samples, the error that ended it and
+/// the link statistics; fails the test if that takes longer than `limit`.
+pub fn read_all(
+    stream: &mut crackbot_acquisition::SensorStream,
+    limit: std::time::Duration,
+) -> (
+    Vec<crackbot_acquisition::Sample>,
+    Option<crackbot_acquisition::AcquisitionError>,
+    crackbot_acquisition::LinkStats,
+) {
+    let start = std::time::Instant::now();
+    let mut samples = Vec::new();
+    let mut error = None;
+    while let Some(item) = stream.blocking_next() {
+        match item {
+            Ok(s) => samples.push(s),
+            Err(e) => {
+                error = Some(e);
+                break;
+            }
+        }
+        assert!(
+            start.elapsed() < limit,
+            "stream did not end within {limit:?}"
+        );
+    }
+    (samples, error, stream.stats())
+}
