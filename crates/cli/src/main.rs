@@ -43,7 +43,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Acquisition demo: emulated sensor → pseudo-terminal → acquisition → CSV → summary.
+    /// Acquisition demo on the built-in default scene: simulated finger → emulated sensor →
+    /// pseudo-terminal → acquisition → CSV → summary.
     Demo(DemoArgs),
     /// Record a sensor's serial stream to CSV.
     Record(RecordArgs),
@@ -80,9 +81,13 @@ struct DemoArgs {
     /// Probability of a flipped byte on the emulated line (shows the decoder's resync).
     #[arg(long, default_value_t = 0.0)]
     flip_rate: f64,
-    /// Crack width of the emulated surface, mm.
-    #[arg(long, default_value_t = 5.0)]
-    crack_width: f64,
+    /// Scene the simulated finger slides on, across its first crack (default: the built-in
+    /// default scene).
+    #[arg(long, conflicts_with = "crack_width")]
+    scene: Option<PathBuf>,
+    /// Instead of a scene: a plate with one crack of this width, mm.
+    #[arg(long)]
+    crack_width: Option<f64>,
     /// Calibration file to report physical units with (default: the example calibration).
     #[arg(long)]
     calibration: Option<PathBuf>,
@@ -418,8 +423,18 @@ async fn demo(args: DemoArgs) -> Result<()> {
     config.corruption.validate()?;
     let stop = Arc::new(AtomicBool::new(false));
     let emulator_stop = stop.clone();
-    let mut source = crackbot_emulator::SyntheticSlide::new(7);
-    source.crack_width_mm = args.crack_width;
+    // The simulator drives the emulated sensor: the finger sliding across the scene's first
+    // crack (or a plate with one crack of the given width).
+    let source = match (&args.crack_width, &args.scene) {
+        (Some(width), _) => crackbot_emulator::SimSource::over_crack(*width, 7)?,
+        (None, Some(path)) => {
+            crackbot_emulator::SimSource::across_first_crack(&crackbot_sim::Scene::load(path)?, 7)?
+        }
+        (None, None) => crackbot_emulator::SimSource::across_first_crack(
+            &crackbot_sim::Scene::builtin_default(),
+            7,
+        )?,
+    };
     let emulator = std::thread::spawn(move || {
         let mut master = master;
         let report = crackbot_emulator::run(&config, source, &mut master, &emulator_stop);
