@@ -117,6 +117,9 @@ pub struct DatasetArgs {
     /// Leave out the plates' surface roughness.
     #[arg(long)]
     no_roughness: bool,
+    /// Sliding speed, mm/s (the paper states about 3.89; the authors' files move at about 4.6).
+    #[arg(long, default_value_t = 3.89)]
+    speed_mm_s: f64,
 }
 
 /// `crackbot sim calibrate`.
@@ -201,6 +204,13 @@ fn dataset(a: DatasetArgs) -> Result<()> {
     if a.no_roughness {
         config.samples.roughness_rms_mm = 0.0;
     }
+    if !(a.speed_mm_s.is_finite() && a.speed_mm_s > 0.0) {
+        bail!(
+            "--speed-mm-s must be a positive speed, got {}",
+            a.speed_mm_s
+        );
+    }
+    config.speed_mm_s = a.speed_mm_s;
     let ext = match a.format {
         FormatArg::Csv => "csv",
         FormatArg::Mat => "mat",
