@@ -90,14 +90,7 @@ pub fn fit_mounts(
     neutral.mounts.clear();
     let traces = simulate_traces(&neutral)?;
     let dark = config.sensor.optics.proximity_dark_counts;
-    let median = |mut v: Vec<f64>| -> Option<f64> {
-        v.retain(|x| x.is_finite());
-        if v.is_empty() {
-            return None;
-        }
-        v.sort_by(f64::total_cmp);
-        Some(v[v.len() / 2])
-    };
+    let median = |v: Vec<f64>| sorted_finite(v).map(|v| v[v.len() / 2]);
     let mut mounts = Vec::with_capacity(traces.len());
     for trace in &traces {
         let rows: Vec<[f64; 4]> = real
@@ -123,14 +116,11 @@ pub fn fit_mounts(
         // Reflectivity: the ratio above dark of the medians of P's upper three quarters (the
         // flat stretches of a crack plate, without its dips; the same rule for real and
         // simulated recordings of every plate).
-        let upper_median = |mut v: Vec<f64>| -> Option<f64> {
-            v.retain(|x| x.is_finite());
-            if v.is_empty() {
-                return None;
-            }
-            v.sort_by(f64::total_cmp);
-            let upper = &v[v.len() / 4..];
-            Some(upper[upper.len() / 2])
+        let upper_median = |v: Vec<f64>| {
+            sorted_finite(v).map(|v| {
+                let upper = &v[v.len() / 4..];
+                upper[upper.len() / 2]
+            })
         };
         let level_real = upper_median(rows.iter().map(|r| r[3]).collect());
         let level_sim = upper_median(trace.samples.iter().map(|s| s.analog[3]).collect());
@@ -157,16 +147,21 @@ pub struct ChannelQuantiles {
     pub values: Vec<f64>,
 }
 
-fn quantiles(mut v: Vec<f64>) -> Vec<f64> {
+/// The finite values of `v`, sorted; `None` when there are none.
+fn sorted_finite(mut v: Vec<f64>) -> Option<Vec<f64>> {
     v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return vec![0.0; QUANTILES.len()];
-    }
     v.sort_by(f64::total_cmp);
-    QUANTILES
-        .iter()
-        .map(|q| v[((v.len() - 1) as f64 * q).round() as usize])
-        .collect()
+    (!v.is_empty()).then_some(v)
+}
+
+fn quantiles(v: Vec<f64>) -> Vec<f64> {
+    match sorted_finite(v) {
+        Some(v) => QUANTILES
+            .iter()
+            .map(|q| v[((v.len() - 1) as f64 * q).round() as usize])
+            .collect(),
+        None => vec![0.0; QUANTILES.len()],
+    }
 }
 
 /// The real targets: channel quantiles per class and direction, from `recordings` (each with
@@ -274,13 +269,7 @@ fn channel_value(
             + optics.normal_gain[channel] * (s.normal_mm - static_mm)
             + optics.moment_gain[channel] * s.moment_nmm
     } else {
-        let geometry = ProximityGeometry {
-            height: optics.proximity_height_mm * 1e-3,
-            offset: optics.proximity_offset_mm * 1e-3,
-            spot: optics.proximity_spot_mm.max(0.0) * 1e-3,
-            peak_mm: optics.proximity_peak_mm,
-        };
-        let view = geometry.view(
+        let view = ProximityGeometry::of(optics).view(
             &trace.model,
             trace.origin + s.tip_x_mm * 1e-3,
             s.tip_z_mm * 1e-3,
@@ -627,13 +616,4 @@ pub fn real_noise(real: &[Recording]) -> [f64; 4] {
         // For Gaussian noise E|Δ| = 2σ/√π.
         mad * std::f64::consts::PI.sqrt() / 2.0
     })
-}
-
-/// Runs the calibration with the paper's recognition settings (one trace per class).
-pub fn calibrate_paper(real: &[Recording], seed: u64) -> Result<CalibrationReport, SimError> {
-    let mut config = ExperimentConfig::paper(Experiment::Recognition, seed);
-    config.sensor.optics = OpticsParams::first_guess();
-    config.mounts.clear();
-    config.samples = Samples::default();
-    calibrate(&config, real, 300, |_, _| {})
 }

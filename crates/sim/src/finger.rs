@@ -226,19 +226,6 @@ impl Envelope {
         }
     }
 
-    #[inline]
-    fn lookup(values: &[f64], step: f64, x: f64) -> f64 {
-        let last = values.len() - 1;
-        let u = (x / step).clamp(0.0, last as f64);
-        let k = (u as usize).min(last.saturating_sub(1));
-        let f = u - k as f64;
-        if last == 0 {
-            values[0]
-        } else {
-            values[k] + (values[k + 1] - values[k]) * f
-        }
-    }
-
     /// Envelope height and slope at `x` metres along the line: a C¹ cubic Hermite interpolant
     /// of the tabulated heights and slopes, and its exact derivative (so the contact force is
     /// the gradient of the contact energy and the contact does no work of its own).
@@ -272,13 +259,13 @@ impl Envelope {
     /// Surface height at `x` metres along the line, m.
     #[inline]
     pub fn surface_at(&self, x: f64) -> f64 {
-        Self::lookup(&self.surface, self.step, x)
+        Profile::sample(&self.surface, self.step, x)
     }
 
     /// Reflectivity at `x` metres along the line.
     #[inline]
     pub fn reflectivity_at(&self, x: f64) -> f64 {
-        Self::lookup(&self.reflectivity, self.step, x)
+        Profile::sample(&self.reflectivity, self.step, x)
     }
 
     /// Length of the line, m.

@@ -6,7 +6,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::finger::{
     ArmPath, Envelope, FingerModel, FingerParams, Integrator, State, Stepper, Strokes,
 };
-use crate::optics::{proximity_intensity, Electronics, Scene1d, CHANNELS};
+use crate::optics::{proximity_intensity, Electronics, OpticsParams, Scene1d, CHANNELS};
 use crate::surface::{Point, Profile, Surface};
 use crate::{SensorParams, SimError};
 
@@ -73,10 +73,7 @@ pub struct SlideSim {
     t: f64,
     /// Offset of the stroke start in the tabulated profile, m.
     origin: f64,
-    proximity_height: f64,
-    proximity_offset: f64,
-    proximity_spot: f64,
-    proximity_peak_mm: f64,
+    proximity: ProximityGeometry,
     plate_reflectivity: f64,
     profile: Profile,
     finger: FingerParams,
@@ -99,6 +96,16 @@ pub struct ProximityGeometry {
 }
 
 impl ProximityGeometry {
+    /// The geometry described by `optics` (mm there, SI here).
+    pub fn of(optics: &OpticsParams) -> Self {
+        ProximityGeometry {
+            height: optics.proximity_height_mm * 1e-3,
+            offset: optics.proximity_offset_mm * 1e-3,
+            spot: optics.proximity_spot_mm.max(0.0) * 1e-3,
+            peak_mm: optics.proximity_peak_mm,
+        }
+    }
+
     /// The proximity view with the tip at `(tip_x, tip_z)` (m) on `model`'s line: the distance
     /// curve averaged over the spot's [`SPOT_POINTS`] points, times the reflectivity there.
     pub fn view(
@@ -207,10 +214,7 @@ impl SlideSim {
             state,
             t: 0.0,
             origin,
-            proximity_height: sensor.optics.proximity_height_mm * 1e-3,
-            proximity_offset: sensor.optics.proximity_offset_mm * 1e-3,
-            proximity_spot: sensor.optics.proximity_spot_mm.max(0.0) * 1e-3,
-            proximity_peak_mm: sensor.optics.proximity_peak_mm,
+            proximity: ProximityGeometry::of(&sensor.optics),
             profile,
             finger: sensor.finger.clone(),
             plate_reflectivity,
@@ -291,13 +295,7 @@ impl SlideSim {
 
     /// What the proximity fibre sees now.
     pub fn proximity_view(&self) -> Scene1d {
-        let geometry = ProximityGeometry {
-            height: self.proximity_height,
-            offset: self.proximity_offset,
-            spot: self.proximity_spot,
-            peak_mm: self.proximity_peak_mm,
-        };
-        geometry.view(
+        self.proximity.view(
             &self.model,
             self.state[0],
             self.state[1],

@@ -347,19 +347,20 @@ impl Profile {
         self.step_mm * (self.height.len().saturating_sub(1)) as f64
     }
 
-    /// Linear interpolation of `values` at `s` mm along the line (clamped at the ends).
-    pub fn sample(values: &[f64], step_mm: f64, s: f64) -> f64 {
-        if values.is_empty() {
+    /// Linear interpolation of `values`, tabulated every `step`, at `s` (same unit as `step`),
+    /// clamped at the ends; 0 for an empty table.
+    #[inline]
+    pub fn sample(values: &[f64], step: f64, s: f64) -> f64 {
+        let Some(last) = values.len().checked_sub(1) else {
             return 0.0;
+        };
+        if last == 0 {
+            return values[0];
         }
-        let u = (s / step_mm).clamp(0.0, (values.len() - 1) as f64);
-        let k = (u.floor() as usize).min(values.len() - 1);
+        let u = (s / step).clamp(0.0, last as f64);
+        let k = (u as usize).min(last - 1);
         let f = u - k as f64;
-        if k + 1 < values.len() {
-            values[k] * (1.0 - f) + values[k + 1] * f
-        } else {
-            values[k]
-        }
+        values[k] + (values[k + 1] - values[k]) * f
     }
 }
 

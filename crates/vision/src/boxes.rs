@@ -112,16 +112,18 @@ pub fn nms(
     kept
 }
 
+/// A detection from its corners and score (shared by the crate's tests).
+#[cfg(test)]
+pub(crate) fn det(x0: f32, y0: f32, x1: f32, y1: f32, score: f32) -> Detection {
+    Detection {
+        bbox: BoundingBox { x0, y0, x1, y1 },
+        score,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn det(x0: f32, y0: f32, x1: f32, y1: f32, score: f32) -> Detection {
-        Detection {
-            bbox: BoundingBox { x0, y0, x1, y1 },
-            score,
-        }
-    }
 
     #[test]
     fn iou_of_known_boxes() {

@@ -155,13 +155,7 @@ pub fn fuse(frames: &[Vec<Detection>], params: &FusionParams) -> Vec<FusedDetect
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn det(x0: f32, y0: f32, x1: f32, y1: f32, score: f32) -> Detection {
-        Detection {
-            bbox: BoundingBox { x0, y0, x1, y1 },
-            score,
-        }
-    }
+    use crate::boxes::det;
 
     #[test]
     fn a_crack_missing_in_one_of_five_frames_is_still_reported() {
