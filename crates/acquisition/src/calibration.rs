@@ -18,10 +18,19 @@
 
 use std::path::{Path, PathBuf};
 
+use crackbot_protocol::Channel;
 use nalgebra::{Matrix4, Vector4};
 
 /// Names of the four raw channels, in vector order.
-pub const CHANNELS: [&str; 4] = ["D1", "D2", "D3", "P"];
+pub const CHANNELS: [&str; 4] = [
+    Channel::D1.name(),
+    Channel::D2.name(),
+    Channel::D3.name(),
+    Channel::P.name(),
+];
+
+/// The text of `calibration/example.toml`.
+pub const EXAMPLE_TOML: &str = include_str!("../calibration/example.toml");
 
 /// Full scale of the microcontroller's 10-bit ADC, the default for [`Calibration::adc_max`].
 pub const DEFAULT_ADC_MAX: u16 = 1023;
@@ -61,6 +70,7 @@ pub struct Calibration {
 /// Errors loading, saving, validating or using a [`Calibration`]. Every variant names the file (or, for a
 /// calibration that lives only in memory, `<in-memory calibration "sensor_id">`).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum CalibrationError {
     /// The file could not be read or written.
     #[error("calibration {}: {source}", path.display())]
@@ -170,6 +180,13 @@ impl Calibration {
             source,
         })?;
         Self::parse(&text, path)
+    }
+
+    /// The example calibration shipped with crackbot (`calibration/example.toml`), used when a run
+    /// is given no calibration file of its own.
+    pub fn example() -> Self {
+        Self::from_toml_str(EXAMPLE_TOML, "built-in example calibration")
+            .unwrap_or_else(|_| Self::identity("identity"))
     }
 
     /// Parses and validates a calibration from TOML text; `source_name` names it in error messages.

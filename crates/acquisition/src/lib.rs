@@ -2,7 +2,9 @@
 //! frames into typed [`Sample`]s with host receive times, tracks link health ([`LinkStats`]:
 //! CRC errors, resyncs, sequence gaps), converts raw counts to physical units
 //! ([`calibration::Calibration`]), records samples to the nine-column CSV of the authors' data
-//! ([`SampleRecorder`]) and replays recordings as a stream ([`Replay`]).
+//! ([`SampleRecorder`]; whole sessions that end on a time limit, Ctrl-C or a disconnect without
+//! losing a sample: [`RecordSession`]), summarises streams ([`StreamSummary`] → [`StreamReport`])
+//! and replays recordings as a stream ([`Replay`]).
 //!
 //! ```no_run
 //! # async fn demo() -> Result<(), crackbot_acquisition::AcquisitionError> {
@@ -18,14 +20,19 @@
 pub mod calibration;
 mod record;
 mod replay;
+pub mod session;
 mod stream;
+pub mod summary;
 
 pub use record::{RecordMeta, SampleRecorder};
 pub use replay::{samples_of, Replay, ReplaySpeed};
+pub use session::{record_stream, RecordEnd, RecordOutcome, RecordReport, RecordSession};
 pub use stream::{LinkStats, PortConfig, Sample, SensorStream, SequenceTracker};
+pub use summary::{StreamReport, StreamSummary};
 
 /// Errors of the acquisition library.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum AcquisitionError {
     /// The serial device path does not exist.
     #[error("serial port {path} does not exist (is the sensor plugged in? list ports with `ls /dev/tty*`)")]
@@ -56,6 +63,15 @@ pub enum AcquisitionError {
     /// The reader thread could not be started.
     #[error("cannot start the serial reader thread: {source}")]
     Thread {
+        /// What the OS said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A folder or file could not be created.
+    #[error("{path}: {source}")]
+    Io {
+        /// The folder or file.
+        path: std::path::PathBuf,
         /// What the OS said.
         #[source]
         source: std::io::Error,

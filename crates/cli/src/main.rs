@@ -13,21 +13,19 @@
 //!   classical baseline), with surface millimetres given a homography calibration.
 //! * `crackbot eval-detector --coco FILE` — COCO metrics of a detector on any COCO file.
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::path::PathBuf;
+use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use crackbot_acquisition::calibration::Calibration;
+use crackbot_acquisition::session::summarise_replay;
 use crackbot_acquisition::{
-    AcquisitionError, LinkStats, PortConfig, RecordMeta, Replay, ReplaySpeed, Sample,
-    SampleRecorder, SensorStream,
+    PortConfig, RecordEnd, RecordMeta, RecordSession, Replay, ReplaySpeed, StreamReport,
 };
+use crackbot_mission::{run_demo, DemoConfig, DemoSurface};
+use crackbot_protocol::SAMPLE_RATE_HZ;
 use indicatif::{ProgressBar, ProgressStyle};
-use serde_json::json;
-use serialport::SerialPort as _;
 
 mod sim;
 mod tactile;
@@ -180,126 +178,51 @@ fn main() -> Result<()> {
     }
 }
 
-/// Statistics of the samples of a run.
-#[derive(Debug, Default)]
-struct Summary {
-    samples: u64,
-    first_host: Option<Duration>,
-    last_host: Duration,
-    first_device: Option<u64>,
-    last_device: u64,
-    backwards_device_time: u64,
-    min: [u16; 4],
-    max: [u16; 4],
-    sum: [f64; 4],
-}
-
-impl Summary {
-    fn add(&mut self, s: &Sample) {
-        if self.samples == 0 {
-            self.min = s.raw;
-            self.max = s.raw;
-        }
-        if self.first_device.is_some() && s.device_time_us < self.last_device {
-            self.backwards_device_time += 1;
-        }
-        self.samples += 1;
-        self.first_host.get_or_insert(s.host_time);
-        self.first_device.get_or_insert(s.device_time_us);
-        self.last_host = s.host_time;
-        self.last_device = s.device_time_us;
-        for c in 0..4 {
-            self.min[c] = self.min[c].min(s.raw[c]);
-            self.max[c] = self.max[c].max(s.raw[c]);
-            self.sum[c] += f64::from(s.raw[c]);
-        }
-    }
-
-    fn rate(span_us: f64, samples: u64) -> Option<f64> {
-        (samples > 1 && span_us > 0.0).then(|| (samples - 1) as f64 / (span_us * 1e-6))
-    }
-
-    fn to_json(&self, link: &LinkStats, calibration: Option<&Calibration>) -> serde_json::Value {
-        let host_span = self
-            .last_host
-            .saturating_sub(self.first_host.unwrap_or_default())
-            .as_micros() as f64;
-        let device_span = (self.last_device - self.first_device.unwrap_or(0)) as f64;
-        let mean = self.sum.map(|s| {
-            if self.samples > 0 {
-                s / self.samples as f64
-            } else {
-                f64::NAN
-            }
-        });
-        let physical = calibration.map(|c| {
-            let p = c.apply(mean.map(|m| m.round().clamp(0.0, 65535.0) as u16));
-            json!({ "sensor": c.sensor_id, "outputs": c.outputs, "units": c.units, "mean": p })
-        });
-        json!({
-            "samples": self.samples,
-            "host_rate_hz": Self::rate(host_span, self.samples),
-            "device_rate_hz": Self::rate(device_span, self.samples),
-            "device_time_monotonic": self.backwards_device_time == 0,
-            "channels": ["D1", "D2", "D3", "P"],
-            "min": self.min, "max": self.max, "mean": mean,
-            "calibrated_mean": physical,
-            "link": link,
-            "delivery_ratio": link.delivery_ratio(),
-        })
-    }
-}
-
-fn print_summary(title: &str, value: &serde_json::Value, json: bool) {
+/// Prints a stream summary: human text, or one JSON object with `--json`.
+fn print_summary(title: &str, report: &StreamReport, json: bool) -> Result<()> {
     if json {
-        println!("{value}");
-        return;
+        println!("{}", serde_json::to_string(report)?);
+        return Ok(());
     }
-    let f = |k: &str| {
-        value[k]
-            .as_f64()
-            .map_or("-".to_string(), |v| format!("{v:.2}"))
-    };
+    print_summary_text(title, report);
+    Ok(())
+}
+
+fn print_summary_text(title: &str, r: &StreamReport) {
+    let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}"));
     println!("{title}");
-    println!("  samples            {}", value["samples"]);
-    println!("  rate, host clock   {} Hz", f("host_rate_hz"));
-    println!("  rate, device clock {} Hz", f("device_rate_hz"));
+    println!("  samples            {}", r.samples);
+    println!("  rate, host clock   {} Hz", f(r.host_rate_hz));
+    println!("  rate, device clock {} Hz", f(r.device_rate_hz));
     println!(
         "  device time        {}",
-        if value["device_time_monotonic"] == true {
+        if r.device_time_monotonic {
             "monotonic"
         } else {
             "NOT monotonic"
         }
     );
     println!("  channel    min    max     mean");
-    for (c, name) in ["D1", "D2", "D3", "P"].iter().enumerate() {
+    for (c, name) in r.channels.iter().enumerate() {
         println!(
             "  {name:<7} {:>6} {:>6} {:>8.1}",
-            value["min"][c].as_u64().unwrap_or(0),
-            value["max"][c].as_u64().unwrap_or(0),
-            value["mean"][c].as_f64().unwrap_or(f64::NAN)
+            r.min[c], r.max[c], r.mean[c]
         );
     }
-    if let Some(cal) = value["calibrated_mean"].as_object() {
-        println!(
-            "  calibrated mean ({}):",
-            cal["sensor"].as_str().unwrap_or("?")
-        );
+    if let Some(cal) = &r.calibrated_mean {
+        println!("  calibrated mean ({}):", cal.sensor);
         for i in 0..4 {
             println!(
                 "    {:<40} {:>10.4} {}",
-                cal["outputs"][i].as_str().unwrap_or("?"),
-                cal["mean"][i].as_f64().unwrap_or(f64::NAN),
-                cal["units"][i].as_str().unwrap_or("")
+                cal.outputs[i], cal.mean[i], cal.units[i]
             );
         }
     }
-    let l = &value["link"];
+    let l = &r.link;
     println!(
         "  link: {} bytes, {} frames, {} CRC errors, {} resyncs, {} gaps ({} frames missing), {} overrun flags, delivery {:.4}",
-        l["bytes"], l["frames"], l["crc_errors"], l["resyncs"], l["gaps"], l["missing_frames"], l["overrun_flags"],
-        value["delivery_ratio"].as_f64().unwrap_or(f64::NAN)
+        l.decoder.bytes, l.decoder.frames, l.decoder.crc_errors, l.resyncs, l.gaps, l.missing_frames, l.overrun_flags,
+        r.delivery_ratio
     );
 }
 
@@ -317,82 +240,49 @@ fn progress(total: Option<u64>) -> ProgressBar {
     bar
 }
 
-/// Reads `stream` into `recorder` until `deadline_samples`, Ctrl-C or a disconnect. Returns the
-/// summary and the disconnect error, if that is how it ended.
-async fn pump(
-    stream: &mut SensorStream,
-    recorder: &mut SampleRecorder,
-    meta: &RecordMeta,
-    max_seconds: Option<f64>,
-    bar: &ProgressBar,
-) -> Result<(Summary, Option<AcquisitionError>)> {
-    let mut summary = Summary::default();
-    let limit = max_seconds.map(Duration::from_secs_f64);
-    let started = Instant::now();
-    let ctrl_c = tokio::signal::ctrl_c();
-    tokio::pin!(ctrl_c);
-    let mut ended_by = None;
-    loop {
-        let remaining = limit.map(|l| l.saturating_sub(started.elapsed()));
-        if remaining == Some(Duration::ZERO) {
-            break;
-        }
-        let timeout = tokio::time::sleep(remaining.unwrap_or(Duration::from_secs(3600)));
-        tokio::select! {
-            item = stream.next() => match item {
-                Some(Ok(sample)) => {
-                    recorder.record(&sample, meta)?;
-                    summary.add(&sample);
-                    bar.inc(1);
-                }
-                Some(Err(e)) => { ended_by = Some(e); break; }
-                None => break,
-            },
-            _ = &mut ctrl_c => { bar.println("interrupted: flushing the recording"); break; }
-            _ = timeout => {}
-        }
+/// Completes on Ctrl-C (never, if the handler cannot be installed).
+async fn ctrl_c() {
+    if tokio::signal::ctrl_c().await.is_err() {
+        std::future::pending::<()>().await;
     }
-    // Whatever the reader thread already received is recorded too.
-    stream.stop();
-    while let Ok(Some(Ok(sample))) =
-        tokio::time::timeout(Duration::from_millis(200), stream.next()).await
-    {
-        recorder.record(&sample, meta)?;
-        summary.add(&sample);
-    }
-    Ok((summary, ended_by))
 }
 
 async fn record(args: RecordArgs) -> Result<()> {
-    let mut config = PortConfig::new(&args.port);
-    config.baud = args.baud;
-    let mut stream = SensorStream::open(&config)?;
-    create_parent(&args.out)?;
-    let mut recorder = SampleRecorder::create(&args.out)?;
-    let meta = RecordMeta {
-        label: args.label,
-        repetition: args.repetition,
-        ..RecordMeta::default()
+    let mut port = PortConfig::new(&args.port);
+    port.baud = args.baud;
+    let session = RecordSession {
+        port,
+        out: args.out.clone(),
+        meta: RecordMeta {
+            label: args.label,
+            repetition: args.repetition,
+            ..RecordMeta::default()
+        },
+        limit: args.seconds.map(Duration::from_secs_f64),
     };
     let bar = if args.json {
         ProgressBar::hidden()
     } else {
         progress(None)
     };
-    let outcome = pump(&mut stream, &mut recorder, &meta, args.seconds, &bar).await;
+    let report = session.run(ctrl_c(), |_| bar.inc(1)).await;
     bar.finish_and_clear();
-    let link = stream.stats();
-    // Flush before anything else can fail.
-    let rows = recorder.finish()?;
-    let (summary, ended_by) = outcome?;
-    let value = summary.to_json(&link, None);
-    eprintln!("recorded {rows} rows to {}", args.out.display());
-    print_summary(&format!("recording of {}", args.port), &value, args.json);
-    if let Some(e) = ended_by {
+    let report = report?;
+    if matches!(report.ended_by, RecordEnd::Stopped) {
+        eprintln!("interrupted: the recording is flushed");
+    }
+    eprintln!("recorded {} rows to {}", report.rows, report.out.display());
+    print_summary(
+        &format!("recording of {}", args.port),
+        &report.stream,
+        args.json,
+    )?;
+    if let RecordEnd::Disconnected(e) = report.ended_by {
         return Err(e).with_context(|| {
             format!(
-                "recording stopped; {rows} rows saved to {}",
-                args.out.display()
+                "recording stopped; {} rows saved to {}",
+                report.rows,
+                report.out.display()
             )
         });
     }
@@ -400,96 +290,60 @@ async fn record(args: RecordArgs) -> Result<()> {
 }
 
 async fn demo(args: DemoArgs) -> Result<()> {
-    if !(args.seconds.is_finite() && args.seconds > 0.0) {
-        bail!("--seconds must be positive, got {}", args.seconds);
-    }
     let calibration = match &args.calibration {
         Some(path) => Calibration::load(path)?,
-        None => Calibration::from_toml_str(EXAMPLE_CALIBRATION, "built-in example calibration")?,
+        None => Calibration::example(),
     };
-    let (master, slave) = serialport::TTYPort::pair().context("creating a pseudo-terminal pair")?;
-    let path = slave
-        .name()
-        .context("the pseudo-terminal has no device path")?;
-    let mut stream = SensorStream::open(&PortConfig::new(&path))?;
-    let config = crackbot_emulator::EmulatorConfig {
-        ticks: Some((args.seconds * 400.0).round() as u64),
-        corruption: crackbot_emulator::Corruption {
-            flip_rate: args.flip_rate,
-            ..Default::default()
-        },
-        ..Default::default()
+    let surface = match (&args.crack_width, &args.scene) {
+        (Some(width), _) => DemoSurface::Crack { width_mm: *width },
+        (None, Some(path)) => DemoSurface::SceneFile(path.clone()),
+        (None, None) => DemoSurface::BuiltinScene,
     };
-    config.corruption.validate()?;
-    let stop = Arc::new(AtomicBool::new(false));
-    let emulator_stop = stop.clone();
-    // The simulator drives the emulated sensor: the finger sliding across the scene's first
-    // crack (or a plate with one crack of the given width).
-    let source = match (&args.crack_width, &args.scene) {
-        (Some(width), _) => crackbot_emulator::SimSource::over_crack(*width, 7)?,
-        (None, Some(path)) => {
-            crackbot_emulator::SimSource::across_first_crack(&crackbot_sim::Scene::load(path)?, 7)?
-        }
-        (None, None) => crackbot_emulator::SimSource::across_first_crack(
-            &crackbot_sim::Scene::builtin_default(),
-            7,
-        )?,
+    let config = DemoConfig {
+        seconds: args.seconds,
+        out: args.out.clone(),
+        flip_rate: args.flip_rate,
+        surface,
+        calibration,
     };
-    let emulator = std::thread::spawn(move || {
-        let mut master = master;
-        let report = crackbot_emulator::run(&config, source, &mut master, &emulator_stop);
-        // Keep the PTY open until the reader has drained it.
-        std::thread::sleep(Duration::from_millis(300));
-        drop(slave);
-        report
-    });
-    create_parent(&args.out)?;
-    let mut recorder = SampleRecorder::create(&args.out)?;
-    let bar = if args.json {
+    let bar = if args.json || !(args.seconds.is_finite() && args.seconds > 0.0) {
         ProgressBar::hidden()
     } else {
-        progress(Some((args.seconds * 400.0) as u64))
+        progress(Some(
+            (args.seconds * f64::from(SAMPLE_RATE_HZ)).round() as u64
+        ))
     };
-    if !args.json {
-        eprintln!(
-            "emulated sensor on {path} (400 Hz, 115200 baud) → acquisition → {}",
-            args.out.display()
-        );
-    }
-    let outcome = pump(
-        &mut stream,
-        &mut recorder,
-        &RecordMeta::default(),
-        Some(args.seconds + 1.0),
-        &bar,
+    let out = args.out.display().to_string();
+    let report = run_demo(
+        &config,
+        ctrl_c(),
+        |port| {
+            if !args.json {
+                bar.println(format!(
+                    "emulated sensor on {port} ({SAMPLE_RATE_HZ} Hz, 115200 baud) → acquisition → {out}"
+                ));
+            }
+        },
+        |_| bar.inc(1),
     )
     .await;
     bar.finish_and_clear();
-    stop.store(true, Ordering::Relaxed);
-    let report = emulator
-        .join()
-        .map_err(|_| anyhow::anyhow!("the emulator thread panicked"))??;
-    let link = stream.stats();
-    let rows = recorder.finish()?;
-    let (summary, _) = outcome?;
-    let mut value = summary.to_json(&link, Some(&calibration));
-    value["recording"] = json!(args.out.display().to_string());
-    value["rows_written"] = json!(rows);
-    value["emulator"] = serde_json::to_value(&report)?;
-    print_summary(
+    let report = report?;
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+        return Ok(());
+    }
+    print_summary_text(
         &format!(
-            "acquisition demo: {} s of emulated sensor over {path}",
-            args.seconds
+            "acquisition demo: {} s of emulated sensor over {}",
+            args.seconds, report.port
         ),
-        &value,
-        args.json,
+        &report.stream,
     );
-    if !args.json {
-        println!("  recording          {} ({rows} rows)", args.out.display());
-    }
-    if summary.samples == 0 {
-        bail!("no sample arrived over {path}");
-    }
+    println!(
+        "  recording          {} ({} rows)",
+        report.recording, report.rows_written
+    );
     Ok(())
 }
 
@@ -502,33 +356,17 @@ async fn replay(args: ReplayArgs) -> Result<()> {
     } else {
         bail!("--speed must be a positive factor, got {}", args.speed)
     };
-    let mut replay = Replay::new(&recording, speed);
+    let replay = Replay::new(&recording, speed);
     let bar = if args.json {
         ProgressBar::hidden()
     } else {
         progress(Some(replay.remaining() as u64))
     };
-    let mut summary = Summary::default();
-    while let Some(sample) = replay.next().await {
-        summary.add(&sample);
-        bar.inc(1);
-    }
+    let report = summarise_replay(replay, None, |_| bar.inc(1)).await;
     bar.finish_and_clear();
-    let value = summary.to_json(&LinkStats::default(), None);
     print_summary(
         &format!("replay of {}", args.file.display()),
-        &value,
+        &report,
         args.json,
-    );
-    Ok(())
+    )
 }
-
-fn create_parent(path: &Path) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("creating folder {}", dir.display()))?;
-    }
-    Ok(())
-}
-
-const EXAMPLE_CALIBRATION: &str = include_str!("../../acquisition/calibration/example.toml");

@@ -17,6 +17,8 @@
 //! * [`PacedUart`] is the host implementation of the firmware's UART: it accepts bytes at the
 //!   configured baud rate (8N1, 10 bits per byte) and never faster, so the firmware's ring buffer
 //!   and overrun logic behave as on the board.
+//! * [`Pty`] and [`PtyEmulator`] put the emulator on a new pseudo-terminal, which a reader opens
+//!   like any serial port (the emulator binary's `--pty`, the acquisition demo, simulated runs).
 //! * [`LineCorruptor`] flips bytes, drops bytes and inserts garbage bursts at given rates, and logs
 //!   which frames it damaged, so tests can check the host's decoder frame by frame.
 
@@ -30,9 +32,11 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
+mod pty;
 mod signal;
 mod sim_source;
 
+pub use pty::{Pty, PtyEmulator};
 pub use signal::{RecordingSource, SignalSource, SyntheticSlide};
 pub use sim_source::{SimSource, CRACK_LEAD_IN_MM, PAPER_SPEED_MM_S, PAPER_STROKE_MM};
 
@@ -41,6 +45,7 @@ pub const TX_RING_BYTES: usize = 8 * WIRE_LEN;
 
 /// Errors of the emulator library.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum EmulatorError {
     /// Writing to the serial device failed (e.g. the reader closed a pseudo-terminal).
     #[error("writing to the serial device failed after {frames_sent} frames: {source}")]
@@ -54,6 +59,15 @@ pub enum EmulatorError {
     /// A configuration value is out of range.
     #[error("invalid emulator setting: {0}")]
     Config(String),
+    /// A pseudo-terminal pair could not be created.
+    #[error("creating a pseudo-terminal pair: {0}")]
+    Pty(#[source] serialport::Error),
+    /// The emulator thread could not be started.
+    #[error("cannot start the emulator thread: {0}")]
+    Thread(#[source] std::io::Error),
+    /// The emulator thread panicked.
+    #[error("the emulator thread panicked")]
+    Panicked,
     /// Reading a recording for replay failed.
     #[error(transparent)]
     Recording(#[from] crackbot_recording::RecordingError),
@@ -324,7 +338,7 @@ pub struct EmulatorConfig {
 impl Default for EmulatorConfig {
     fn default() -> Self {
         EmulatorConfig {
-            rate_hz: 400.0,
+            rate_hz: f64::from(crackbot_protocol::SAMPLE_RATE_HZ),
             baud: 115_200,
             ticks: None,
             corruption: Corruption::default(),

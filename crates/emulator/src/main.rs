@@ -30,8 +30,9 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, ValueEnum};
 use crackbot_emulator::{
-    run, Corruption, EmulatorConfig, RecordingSource, SimSource, SyntheticSlide,
+    run, Corruption, EmulatorConfig, Pty, RecordingSource, SimSource, SyntheticSlide,
 };
+use crackbot_protocol::SAMPLE_RATE_HZ;
 use crackbot_sim::Scene;
 use serialport::SerialPort;
 
@@ -75,7 +76,7 @@ struct Args {
     #[arg(long, default_value_t = 115_200)]
     baud: u32,
     /// Sample rate, Hz.
-    #[arg(long, default_value_t = 400.0)]
+    #[arg(long, default_value_t = f64::from(SAMPLE_RATE_HZ))]
     rate: f64,
     /// Stop after this many seconds (default: run until interrupted).
     #[arg(long, conflicts_with = "frames")]
@@ -148,11 +149,12 @@ fn main() -> Result<()> {
     // Set up the simulator before the port opens, so a bad scene fails before anything streams.
     let mut sim = match source {
         Source::Sim => {
-            if args.rate != 400.0 {
+            let native = f64::from(SAMPLE_RATE_HZ);
+            if args.rate != native {
                 tracing::warn!(
-                    "the simulator advances 1/400 s per tick: at {} Hz the simulated slide runs {:.2}× real time",
+                    "the simulator advances 1/{native} s per tick: at {} Hz the simulated slide runs {:.2}× real time",
                     args.rate,
-                    args.rate / 400.0
+                    args.rate / native
                 );
             }
             Some(sim_source(&args)?)
@@ -176,13 +178,10 @@ fn main() -> Result<()> {
 
     // Keep the slave side of a PTY open for the whole run so its raw settings stay in force.
     let (mut port, _slave): (Box<dyn SerialPort>, Option<Box<dyn SerialPort>>) = if args.pty {
-        let (master, slave) =
-            serialport::TTYPort::pair().context("creating a pseudo-terminal pair")?;
-        let name = slave
-            .name()
-            .context("the pseudo-terminal has no device path")?;
-        println!("PTY {name}");
+        let pty = Pty::open()?;
+        println!("PTY {}", pty.path());
         std::io::stdout().flush()?;
+        let (master, slave) = pty.into_parts();
         (Box::new(master), Some(Box::new(slave)))
     } else {
         let path = args.port.clone().unwrap_or_default();

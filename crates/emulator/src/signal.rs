@@ -124,8 +124,9 @@ mod tests {
         let period = 2.0 * 16.0 / 3.89;
         let mut p_max: f64 = 0.0;
         let mut p_min: f64 = 1e9;
-        for k in 0..(period * 400.0) as usize {
-            let v = s.sample(k as f64 / 400.0);
+        let rate = f64::from(crackbot_protocol::SAMPLE_RATE_HZ);
+        for k in 0..(period * rate) as usize {
+            let v = s.sample(k as f64 / rate);
             assert!(v.iter().all(|x| (200.0..=900.0).contains(x)), "{v:?}");
             p_max = p_max.max(v[3]);
             p_min = p_min.min(v[3]);

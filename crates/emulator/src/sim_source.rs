@@ -272,7 +272,8 @@ mod tests {
     /// Proximity swing over one slide (a stroke forth and back), counts.
     fn proximity_swing(width_mm: f64) -> f64 {
         let mut source = SimSource::over_crack(width_mm, 3).expect("source");
-        let n = (source.sim().slide_time() * 400.0).ceil() as usize;
+        let n = (source.sim().slide_time() * f64::from(crackbot_protocol::SAMPLE_RATE_HZ)).ceil()
+            as usize;
         let p: Vec<f64> = (0..n).map(|_| source.sample(0.0)[3]).collect();
         assert!(source.error().is_none(), "{:?}", source.error());
         // Robust range: 2nd to 98th percentile.
