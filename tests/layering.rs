@@ -1,0 +1,339 @@
+//! The workspace's layering, checked from `cargo metadata` and `cargo tree` so it cannot decay
+//! unnoticed:
+//!
+//! * every crate sits in one layer and depends (normal or build) only on crates of lower layers;
+//! * no crate depends on a binary-only crate;
+//! * the `no_std` crates stay `no_std` and pull only `no_std` dependencies;
+//! * the robot path (the headless `crackbot` binary and every library it uses) builds without
+//!   plotters, statistics, GUI or Zenoh crates by default;
+//! * plotting lives in `crackbot-plots` only; a GUI toolkit only in the operator app;
+//! * libraries report errors with their own enums and progress through callbacks: no `anyhow`,
+//!   `clap` or `indicatif` in a library-only crate.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+use std::process::Command;
+
+use serde_json::Value;
+
+/// The layers, lowest first. A crate may depend on crates of lower layers only; a new crate must
+/// be placed here (the test fails until it is).
+const LAYERS: &[(&str, &[&str])] = &[
+    (
+        "foundations: wire format, data location",
+        &["crackbot-protocol", "crackbot-datasets"],
+    ),
+    (
+        "data: firmware, recordings, image geometry and annotations",
+        &["crackbot-firmware", "crackbot-recording", "crackbot-imaging"],
+    ),
+    (
+        "components: sensor link, signals, classifiers, camera, simulator",
+        &[
+            "crackbot-acquisition",
+            "crackbot-dsp",
+            "crackbot-forest",
+            "crackbot-vision",
+            "crackbot-sim",
+        ],
+    ),
+    (
+        "pipelines: the emulated sensor, the tactile pipeline",
+        &["crackbot-emulator", "crackbot-tactile"],
+    ),
+    (
+        "services: missions, figures",
+        &["crackbot-mission", "crackbot-plots"],
+    ),
+    (
+        "front ends: binaries and cross-crate tests",
+        &["crackbot-cli", "crackbot-lab", "crackbot-tests"],
+    ),
+];
+
+/// Crates that must stay `no_std` (the firmware runs on the microcontroller).
+const NO_STD: &[&str] = &["crackbot-protocol", "crackbot-firmware"];
+
+/// What a `no_std` crate may pull in (all `no_std` themselves).
+const NO_STD_ALLOWED: &[&str] = &[
+    "crackbot-protocol",
+    "crackbot-firmware",
+    "thiserror",
+    "crc",
+    "crc-catalog",
+    "cobs",
+    "memchr",
+    "heapless",
+    "hash32",
+    "byteorder",
+    "stable_deref_trait",
+    "embedded-hal",
+    "embedded-hal-nb",
+    "nb",
+];
+
+/// The robot path: the headless binary and the libraries it runs, with default features.
+const ROBOT_PATH: &[&str] = &[
+    "crackbot-cli",
+    "crackbot-mission",
+    "crackbot-acquisition",
+    "crackbot-emulator",
+    "crackbot-dsp",
+    "crackbot-forest",
+    "crackbot-tactile",
+    "crackbot-vision",
+    "crackbot-sim",
+];
+
+/// Crates the robot path must not compile by default.
+const HEAVY: &[&str] = &[
+    "plotters",
+    "statrs",
+    "egui",
+    "eframe",
+    "egui_plot",
+    "winit",
+    "wgpu",
+    "glow",
+    "zenoh",
+];
+
+/// Direct dependencies allowed in one crate only: (dependency, the crate that may have it).
+const ONLY_IN: &[(&str, &str)] = &[
+    ("plotters", "crackbot-plots"),
+    ("egui", "crackbot-operator"),
+    ("eframe", "crackbot-operator"),
+    ("egui_plot", "crackbot-operator"),
+    ("winit", "crackbot-operator"),
+    ("statrs", "crackbot-tactile"),
+];
+
+/// Dependencies of binaries, not of library-only crates.
+const BINARY_ONLY_DEPS: &[&str] = &["anyhow", "clap", "indicatif", "tracing-subscriber"];
+
+fn cargo() -> Command {
+    let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
+    cmd
+}
+
+fn run(cmd: &mut Command) -> String {
+    let out = cmd.output().expect("running cargo");
+    assert!(
+        out.status.success(),
+        "{cmd:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("cargo prints UTF-8")
+}
+
+/// A workspace member as `cargo metadata --no-deps` describes it.
+struct Package {
+    manifest: String,
+    has_lib: bool,
+    has_bin: bool,
+    /// (name, kind: "normal" | "build" | "dev", optional)
+    deps: Vec<(String, String, bool)>,
+}
+
+fn workspace() -> BTreeMap<String, Package> {
+    let text = run(cargo().args(["metadata", "--format-version", "1", "--no-deps", "--locked"]));
+    let meta: Value = serde_json::from_str(&text).expect("cargo metadata JSON");
+    let mut out = BTreeMap::new();
+    for p in meta["packages"].as_array().expect("packages") {
+        let kinds: Vec<&str> = p["targets"]
+            .as_array()
+            .expect("targets")
+            .iter()
+            .flat_map(|t| t["kind"].as_array().expect("kind").iter())
+            .filter_map(Value::as_str)
+            .collect();
+        let deps = p["dependencies"]
+            .as_array()
+            .expect("dependencies")
+            .iter()
+            .map(|d| {
+                (
+                    d["name"].as_str().expect("name").to_string(),
+                    d["kind"].as_str().unwrap_or("normal").to_string(),
+                    d["optional"].as_bool().unwrap_or(false),
+                )
+            })
+            .collect();
+        out.insert(
+            p["name"].as_str().expect("name").to_string(),
+            Package {
+                manifest: p["manifest_path"].as_str().expect("manifest").to_string(),
+                has_lib: kinds.iter().any(|k| k.contains("lib")),
+                has_bin: kinds.contains(&"bin"),
+                deps,
+            },
+        );
+    }
+    out
+}
+
+fn layer_of(name: &str) -> Option<usize> {
+    LAYERS.iter().position(|(_, crates)| crates.contains(&name))
+}
+
+/// The lines of `cargo tree -p package -e edges` (no prefix), for its default features.
+fn tree_lines(package: &str, edges: &str) -> Vec<String> {
+    let text = run(cargo().args([
+        "tree", "--locked", "-p", package, "-e", edges, "--prefix", "none",
+    ]));
+    text.lines().map(str::to_string).collect()
+}
+
+/// The crates `package` compiles for its normal build with default features.
+fn normal_tree(package: &str) -> BTreeSet<String> {
+    tree_lines(package, "normal")
+        .iter()
+        .filter_map(|l| l.split_whitespace().next())
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn every_crate_depends_only_on_lower_layers() {
+    let ws = workspace();
+    let mut problems = Vec::new();
+    for (name, p) in &ws {
+        let Some(layer) = layer_of(name) else {
+            problems.push(format!(
+                "{name} is in no layer: place it in LAYERS of tests/layering.rs"
+            ));
+            continue;
+        };
+        for (dep, kind, _) in &p.deps {
+            if kind == "dev" || !ws.contains_key(dep) {
+                continue;
+            }
+            match layer_of(dep) {
+                Some(l) if l < layer => {}
+                Some(l) => problems.push(format!(
+                    "{name} (layer {layer}: {}) depends on {dep} (layer {l}: {}), which is not below it",
+                    LAYERS[layer].0, LAYERS[l].0
+                )),
+                None => {} // reported as a crate without a layer
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn no_crate_depends_on_a_binary_crate() {
+    let ws = workspace();
+    let binaries: BTreeSet<&String> = ws
+        .iter()
+        .filter(|(_, p)| p.has_bin && !p.has_lib)
+        .map(|(n, _)| n)
+        .collect();
+    assert!(binaries.iter().any(|n| n.as_str() == "crackbot-cli"));
+    let mut problems = Vec::new();
+    for (name, p) in &ws {
+        for (dep, kind, _) in &p.deps {
+            if binaries.contains(dep) {
+                problems.push(format!("{name} depends ({kind}) on the binary crate {dep}"));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn no_std_crates_stay_no_std() {
+    let ws = workspace();
+    for name in NO_STD {
+        let p = ws
+            .get(*name)
+            .unwrap_or_else(|| panic!("{name} is missing"));
+        let lib = Path::new(&p.manifest)
+            .parent()
+            .expect("crate folder")
+            .join("src/lib.rs");
+        let source = std::fs::read_to_string(&lib).expect("reading lib.rs");
+        assert!(
+            source.lines().any(|l| l.trim() == "#![no_std]"),
+            "{} lost its #![no_std]",
+            lib.display()
+        );
+        // Proc-macros run on the build host; what is compiled for the target must be no_std.
+        let lines = tree_lines(name, "normal,no-proc-macro,features");
+        let foreign: BTreeSet<&str> = lines
+            .iter()
+            .filter_map(|l| l.split_whitespace().next())
+            .filter(|c| !NO_STD_ALLOWED.contains(c))
+            .collect();
+        assert!(
+            foreign.is_empty(),
+            "{name} pulls in {foreign:?}, not on the no_std allow-list of tests/layering.rs"
+        );
+        let with_std: Vec<&String> = lines
+            .iter()
+            .filter(|l| l.contains("feature \"std\""))
+            .collect();
+        assert!(
+            with_std.is_empty(),
+            "{name} turns on the std feature of a dependency: {with_std:?}"
+        );
+    }
+}
+
+#[test]
+fn the_robot_path_builds_without_research_gui_or_fleet_crates() {
+    let mut problems = Vec::new();
+    for name in ROBOT_PATH {
+        let tree = normal_tree(name);
+        assert!(tree.contains(*name), "cargo tree of {name} lists {tree:?}");
+        for heavy in HEAVY {
+            if tree.contains(*heavy) {
+                problems.push(format!(
+                    "{name} compiles {heavy} in its default build (put it behind a feature)"
+                ));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn heavy_dependencies_live_in_their_own_crate() {
+    let ws = workspace();
+    let mut problems = Vec::new();
+    for (name, p) in &ws {
+        for (dep, kind, _) in &p.deps {
+            if kind == "dev" {
+                continue;
+            }
+            if let Some((_, owner)) = ONLY_IN.iter().find(|(d, _)| d == dep) {
+                if name != owner {
+                    problems.push(format!("{name} depends on {dep}; only {owner} may"));
+                }
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn libraries_leave_errors_text_and_progress_bars_to_binaries() {
+    let ws = workspace();
+    let mut problems = Vec::new();
+    for (name, p) in &ws {
+        let library_only = p.has_lib && !p.has_bin && name != "crackbot-tests";
+        if !library_only {
+            continue;
+        }
+        for (dep, kind, _) in &p.deps {
+            if kind != "dev" && BINARY_ONLY_DEPS.contains(&dep.as_str()) {
+                problems.push(format!(
+                    "the library {name} depends on {dep}: errors as thiserror enums, progress \
+                     through callbacks, argument parsing in binaries"
+                ));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
