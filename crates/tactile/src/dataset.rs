@@ -262,13 +262,9 @@ impl Pipeline {
                 Normalisation::None => [0.0; 4],
                 Normalisation::RecordingMedian => channel_medians(rec),
             };
-            let corrected = |r: &crackbot_recording::Row| {
-                [
-                    r.d1 - offset[0],
-                    r.d2 - offset[1],
-                    r.d3 - offset[2],
-                    r.p - offset[3],
-                ]
+            let corrected = |r: &crackbot_recording::Row| -> [f64; 4] {
+                let c = r.channels();
+                std::array::from_fn(|i| c[i] - offset[i])
             };
             // The whole recording, offset-corrected, and its directions: what context spans see.
             let (all_samples, all_directions): (Vec<[f64; 4]>, Vec<u8>) =
