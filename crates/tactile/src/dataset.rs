@@ -392,6 +392,46 @@ mod tests {
     }
 
     #[test]
+    fn errors_keep_their_source_and_name_the_slide() {
+        let mut rec = synthetic(1.0);
+        rec.rows[250].d2 = f64::NAN;
+        let recs = vec![(PathBuf::from("bad.csv"), rec)];
+        let config = PipelineConfig {
+            segmentation: Segmentation::None,
+            ..PipelineConfig::default()
+        };
+        let err = build_windows(&recs, Experiment::Recognition, &config).unwrap_err();
+        assert!(
+            matches!(
+                &err,
+                TactileError::Features {
+                    slide: 2,
+                    source: crackbot_dsp::DspError::NonFinite { .. },
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        let text = err.to_string();
+        assert!(
+            text.starts_with("bad.csv: slide 2: sample 50, channel D2"),
+            "{text}"
+        );
+        assert!(std::error::Error::source(&err).is_some());
+        let wavy = vec![(PathBuf::from("wavy.csv"), synthetic(3.0))];
+        let err = build_windows(&wavy, Experiment::Width, &config).unwrap_err();
+        assert!(matches!(err, TactileError::UnknownLabel { .. }), "{err:?}");
+        let mixed = detect_experiment(&[(PathBuf::from("x"), synthetic(4.0))]).unwrap_err();
+        assert!(
+            matches!(
+                mixed,
+                TactileError::Experiment(ExperimentError::Unknown { .. })
+            ),
+            "{mixed:?}"
+        );
+    }
+
+    #[test]
     fn context_features_are_appended_per_window_and_may_cross_slides() {
         let recs = vec![(PathBuf::from("a"), synthetic(1.0))];
         let mut config = PipelineConfig {
