@@ -74,7 +74,7 @@ impl<'a> Stream<'a> {
 }
 
 fn bench(c: &mut Criterion) {
-    let real = windows::load(std::path::Path::new(linfa_forest::DATA));
+    let real = windows::load(&windows::data_dir());
     let nf = real.test.n_features;
     let n_test = real.test.n_rows();
     let n_classes = real.test.experiment.n_classes();

@@ -12,7 +12,7 @@ use linfa::prelude::Predict;
 
 #[test]
 fn converted_linfa_forest_predicts_like_linfa_on_real_windows() {
-    let real = windows::load(std::path::Path::new(linfa_forest::DATA));
+    let real = windows::load(&windows::data_dir());
     // Small enough for a debug build (linfa is not optimised in test builds): 20 trees (an even count, so exact ties occur), depth ≤ 12.
     let rf = linfa_forest::train_linfa(&real.train, 20, Some(12), 6_000, 3);
     let nf = real.test.n_features;

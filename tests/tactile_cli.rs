@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 use crackbot_recording::{read_csv, read_mat, Recording, Row};
 use crackbot_tests::{crackbot, text};
 
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/tactile");
-
+/// A file or folder of the authors' recordings (`../shared/data/tactile/...`); stops the test with one
+/// clear message when the shared data is missing.
 fn data(rel: &str) -> PathBuf {
-    Path::new(DATA).join(rel)
+    crackbot_datasets::require(crackbot_datasets::TACTILE).join(rel)
 }
 
 fn utf8(p: &Path) -> &str {
@@ -176,8 +176,7 @@ fn bad_inputs_are_named_errors_not_panics() {
 }
 
 fn tactile_data(experiment: &str, repetition: u32) -> Vec<String> {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/tactile");
-    let mut files: Vec<String> = std::fs::read_dir(format!("{dir}/{experiment}"))
+    let mut files: Vec<String> = std::fs::read_dir(data(experiment))
         .expect("the authors' recordings beside the clone")
         .map(|e| e.expect("dir entry").path().display().to_string())
         .filter(|p| p.ends_with(&format!("_{repetition}.mat")))

@@ -10,9 +10,6 @@ use linfa_trees::{DecisionTree, TreeNode};
 use ndarray16::{Array1, Array2};
 use rand08::{rngs::SmallRng, SeedableRng};
 
-/// The authors' surface-type recordings (4 classes, repetitions 1–3), from the root package.
-pub const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/tactile/type");
-
 /// linfa's forest on `f32` features and class indices.
 pub type LinfaForest = linfa_ensemble::RandomForest<f32, usize>;
 

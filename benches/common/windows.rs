@@ -4,10 +4,16 @@
 //! crackbot-tactile, so every benchmark sees the same windows.
 #![allow(dead_code)] // each including crate uses a different subset
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crackbot_recording::collect_recordings;
 use crackbot_tactile::dataset::{build_windows, detect_experiment, PipelineConfig, WindowSet};
+
+/// The authors' surface-type recordings (4 classes, repetitions 1–3): `../shared/data/tactile/type`, or a
+/// clear stop naming the missing folder (see `crackbot-datasets`).
+pub fn data_dir() -> PathBuf {
+    crackbot_datasets::require(crackbot_datasets::TACTILE_TYPE)
+}
 
 /// The paper's pipeline: eq. 2 segmentation, 10-sample windows every 2 samples, MAV of D1, D2, P.
 pub fn config() -> PipelineConfig {
@@ -47,7 +53,7 @@ pub fn load(dir: &Path) -> Real {
     let test = build_windows(&rep2, experiment, &cfg).expect("windows of repetition 2");
     let test_samples = rep2
         .iter()
-        .flat_map(|(_, rec)| rec.rows.iter().map(|r| [r.d1, r.d2, r.d3, r.p]))
+        .flat_map(|(_, rec)| rec.rows.iter().map(|r| r.channels()))
         .collect();
     Real {
         train,

@@ -10,13 +10,17 @@
 //! * `crackbot tactile tradeoff --train PATH... --test PATH... --out DIR` — the random forest's accuracy against
 //!   its training time, size and single-window latency, over tree counts × depth limits (table and plot).
 
-use std::collections::HashMap;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::sync::Mutex;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::{Args, Subcommand, ValueEnum};
-use crackbot_recording::{collect_recordings, write_recording, Format, Recording};
+use crackbot_recording::{
+    collect_recordings, conversion_targets, write_recording, Format, Recording,
+};
+use crackbot_tactile::dataset::Experiment;
+use indicatif::{ProgressBar, ProgressStyle};
 
 /// Subcommands of `crackbot tactile`.
 #[derive(Debug, Subcommand)]
@@ -87,20 +91,11 @@ pub struct PipelineArgs {
 }
 
 impl PipelineArgs {
-    /// The experiment: as given, or detected from the labels of all recordings.
-    fn experiment(
-        &self,
-        train: &[(PathBuf, Recording)],
-        test: &[(PathBuf, Recording)],
-    ) -> Result<crackbot_tactile::dataset::Experiment> {
-        use crackbot_tactile::dataset::{detect_experiment, Experiment};
-        Ok(match self.experiment {
-            Some(ExperimentArg::Recognition) => Experiment::Recognition,
-            Some(ExperimentArg::Width) => Experiment::Width,
-            None => {
-                let all: Vec<(PathBuf, Recording)> = train.iter().chain(test).cloned().collect();
-                detect_experiment(&all)?
-            }
+    /// The experiment when given (`None`: detected from the labels).
+    fn experiment(&self) -> Option<Experiment> {
+        self.experiment.map(|e| match e {
+            ExperimentArg::Recognition => Experiment::Recognition,
+            ExperimentArg::Width => Experiment::Width,
         })
     }
 
@@ -320,60 +315,11 @@ pub fn run(cmd: TactileCommand) -> Result<()> {
     }
 }
 
-/// Whether `--out` names a file (an extension of a recording form, and not an existing folder).
-fn is_file_target(out: &Path) -> bool {
-    Format::of_path(out).is_ok() && !out.is_dir()
-}
-
 fn convert(args: ConvertArgs) -> Result<()> {
     // Everything is read (and checked) before anything is written.
     let recordings = collect_recordings(&args.inputs)?;
-    let targets: Vec<PathBuf> = if is_file_target(&args.out) {
-        if recordings.len() != 1 {
-            bail!(
-                "--out {} names one file but the inputs hold {} recordings; give a folder",
-                args.out.display(),
-                recordings.len()
-            );
-        }
-        create_parent(&args.out)?;
-        vec![args.out.clone()]
-    } else {
-        if args.out.extension().is_some() && !args.out.is_dir() {
-            bail!(
-                "--out {}: a single output file must end in .csv or .mat; an output folder must exist \
-                 already or have no extension",
-                args.out.display()
-            );
-        }
-        if args.out.exists() && !args.out.is_dir() {
-            bail!(
-                "--out {} exists and is not a folder (a single output file must end in .csv or .mat)",
-                args.out.display()
-            );
-        }
-        std::fs::create_dir_all(&args.out)
-            .with_context(|| format!("creating folder {}", args.out.display()))?;
-        let ext = Format::from(args.format).extension();
-        let mut seen: HashMap<PathBuf, &Path> = HashMap::new();
-        let mut targets = Vec::with_capacity(recordings.len());
-        for (input, _) in &recordings {
-            let stem = input
-                .file_stem()
-                .with_context(|| format!("{}: no file name", input.display()))?;
-            let target = args.out.join(stem).with_extension(ext);
-            if let Some(other) = seen.insert(target.clone(), input) {
-                bail!(
-                    "{} and {} would both be written to {}",
-                    other.display(),
-                    input.display(),
-                    target.display()
-                );
-            }
-            targets.push(target);
-        }
-        targets
-    };
+    let inputs: Vec<PathBuf> = recordings.iter().map(|(p, _)| p.clone()).collect();
+    let targets = conversion_targets(&inputs, &args.out, args.format.into())?;
     let mut stdout = std::io::stdout().lock();
     for ((input, rec), target) in recordings.iter().zip(&targets) {
         write_recording(target, rec)?;
@@ -404,166 +350,140 @@ fn describe(rec: &Recording) -> String {
     )
 }
 
-fn create_parent(path: &Path) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("creating folder {}", dir.display()))?;
+/// A progress bar on stderr for one forest after another (`total` trees each), when stderr is a
+/// terminal and `show`; the library reports, this draws.
+struct TreeBars {
+    show: bool,
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl TreeBars {
+    fn new(show: bool) -> Self {
+        TreeBars {
+            show: show && std::io::stderr().is_terminal(),
+            bar: Mutex::new(None),
+        }
     }
-    Ok(())
+
+    /// One finished tree of a forest of `total` (reports come one at a time, `done` = 1..=total).
+    fn tree(&self, done: usize, total: usize) {
+        if !self.show {
+            return;
+        }
+        let Ok(mut slot) = self.bar.lock() else {
+            return;
+        };
+        let bar = slot.get_or_insert_with(|| {
+            let b = ProgressBar::new(total as u64);
+            if let Ok(style) = ProgressStyle::with_template(
+                "training {bar:40} {pos}/{len} trees [{elapsed_precise}, eta {eta}]",
+            ) {
+                b.set_style(style);
+            }
+            b
+        });
+        bar.set_position(done as u64);
+        if done >= total {
+            bar.finish_and_clear();
+            *slot = None;
+        }
+    }
 }
 
 fn eval(args: EvalArgs) -> Result<()> {
     use crackbot_dsp::WindowConfig;
     use crackbot_tactile::context::ContextConfig;
-    use crackbot_tactile::dataset::{build_windows, Experiment, PipelineConfig};
-    use crackbot_tactile::eval::{
-        test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
-        width_regression_tuned, ClassifierKind, ForestTuning,
-    };
+    use crackbot_tactile::dataset::PipelineConfig;
+    use crackbot_tactile::eval::ForestTuning;
+    use crackbot_tactile::evaluation::{evaluate, EvalConfig, SlideVote};
 
-    if args.trees == 0 {
-        bail!("--trees must be at least 1");
-    }
-    let train = collect_recordings(&args.train)?;
-    let test = collect_recordings(&args.test)?;
-    let experiment = args.pipeline.experiment(&train, &test)?;
-    let (feature, set) = (feature_of(args.pipeline.feature), set_of(args.pipeline.set));
-    let config = PipelineConfig {
-        context: args.context.then(|| ContextConfig {
-            scales: args.context_scales.clone(),
-            baseline_len: args.context_baseline,
-            prefix: !args.no_prefix,
-            direction: !args.no_direction,
-            keep_window: args.keep_window,
-            across_slides: !args.within_slides,
-            shape: args.context_shape,
-        }),
-        ..args.pipeline.config(WindowConfig {
-            len: args.window_len,
-            step: args.window_step,
-        })
-    };
-    let tuning = ForestTuning {
-        max_features_fraction: args.max_features,
-        max_depth: args.max_depth,
-        min_samples_leaf: args.min_samples_leaf,
-    };
-    let train_set = build_windows(&train, experiment, &config)?;
-    let test_set = build_windows(&test, experiment, &config)?;
-    let kind = match args.classifier {
-        ClassifierArg::Rf => ClassifierKind::Forest {
-            n_trees: args.trees,
+    let config = EvalConfig {
+        experiment: args.pipeline.experiment(),
+        pipeline: PipelineConfig {
+            context: args.context.then(|| ContextConfig {
+                scales: args.context_scales.clone(),
+                baseline_len: args.context_baseline,
+                prefix: !args.no_prefix,
+                direction: !args.no_direction,
+                keep_window: args.keep_window,
+                across_slides: !args.within_slides,
+                shape: args.context_shape,
+            }),
+            ..args.pipeline.config(WindowConfig {
+                len: args.window_len,
+                step: args.window_step,
+            })
         },
-        ClassifierArg::Knn => ClassifierKind::Knn,
-        ClassifierArg::Qda => ClassifierKind::Qda,
+        classifier: classifier_of(args.classifier, args.trees),
+        n_trees: args.trees,
+        tuning: ForestTuning {
+            max_features_fraction: args.max_features,
+            max_depth: args.max_depth,
+            min_samples_leaf: args.min_samples_leaf,
+        },
+        seed: args.pipeline.seed,
+        slide_vote: match args.slide_vote {
+            SlideVoteArg::Both => SlideVote::Both,
+            SlideVoteArg::Context => SlideVote::Context,
+        },
     };
-    let quiet = args.json;
-    let started = std::time::Instant::now();
-    let model = train_classifier_tuned(&train_set, kind, tuning, args.pipeline.seed, quiet)?;
-    // With context, a forest on the paper's own window features (same segmentation and windows,
-    // so the same slides) joins the slide verdicts.
-    let voter = if config.context.is_some() && args.slide_vote == SlideVoteArg::Both {
-        let plain = PipelineConfig {
-            context: None,
-            ..config.clone()
-        };
-        let vote_train = build_windows(&train, experiment, &plain)?;
-        let vote_test = build_windows(&test, experiment, &plain)?;
-        let vote_model =
-            train_classifier_tuned(&vote_train, kind, tuning, args.pipeline.seed, quiet)?;
-        Some((vote_model, vote_test))
-    } else {
-        None
-    };
-    let train_seconds = started.elapsed().as_secs_f64();
-    let outcome = match &voter {
-        Some((vote_model, vote_test)) => test_classifier_with_slide_voters(
-            model.as_ref(),
-            &test_set,
-            &[(vote_model.as_ref(), vote_test)],
-        )?,
-        None => test_classifier(model.as_ref(), &test_set)?,
-    };
-    let width = match experiment {
-        Experiment::Width => Some(width_regression_tuned(
-            &train_set,
-            &test_set,
-            args.trees,
-            tuning,
-            args.pipeline.seed,
-            quiet,
-        )?),
-        Experiment::Recognition => None,
-    };
-    let w = &outcome.windows;
-    let s = &outcome.slides;
-    let summary = serde_json::json!({
-        "experiment": experiment.name(),
-        "classes": experiment.class_names(),
-        "classifier": kind.name(),
-        "feature": feature.name(),
-        "set": set.name(),
-        "segmentation": config.segmentation.name(),
-        "normalisation": format!("{:?}", config.normalisation),
-        "window": config.window,
-        "context": config.context,
-        "slide_vote": if voter.is_some() { "context+paper" } else if config.context.is_some() { "context" } else { "paper" },
-        "forest_tuning": tuning,
-        "n_features": train_set.n_features,
-        "train_recordings": train.len(),
-        "test_recordings": test.len(),
-        "train_windows": train_set.n_rows(),
-        "test_windows": test_set.n_rows(),
-        "test_slides": s.total(),
-        "train_seconds": train_seconds,
-        "window_accuracy": w.accuracy(),
-        "window_precision": w.weighted_precision(),
-        "window_recall": w.weighted_recall(),
-        "slide_accuracy": s.accuracy(),
-        "slide_precision": s.weighted_precision(),
-        "slide_recall": s.weighted_recall(),
-        "window_confusion": w.rows(),
-        "slide_confusion": s.rows(),
-        "width_mae_mm": width.as_ref().map(|x| x.window_mae_mm),
-        "slide_width_mae_mm": width.as_ref().map(|x| x.slide_mae_mm),
-    });
+    let bars = TreeBars::new(!args.json);
+    let report = evaluate(&config, &args.train, &args.test, |_, done, total| {
+        bars.tree(done, total)
+    })?;
     if args.json {
-        println!("{summary}");
+        // Through a `Value`: its maps sort their keys, at every level, as this output always has.
+        println!("{}", serde_json::to_value(&report)?);
         return Ok(());
     }
     println!(
         "{} experiment, {} on {} {}, segmentation {}: trained on {} windows of {} recordings in {:.2} s, tested on {} windows / {} slides of {} recordings",
-        experiment.name(),
-        kind.name(),
-        feature.name(),
-        set.name(),
-        config.segmentation.name(),
-        train_set.n_rows(),
-        train.len(),
-        train_seconds,
-        test_set.n_rows(),
-        s.total(),
-        test.len()
+        report.experiment,
+        report.classifier,
+        report.feature,
+        report.set,
+        report.segmentation,
+        report.train_windows,
+        report.train_recordings,
+        report.train_seconds,
+        report.test_windows,
+        report.test_slides,
+        report.test_recordings
     );
-    for (title, m) in [("windows", w), ("slides", s)] {
+    for (title, accuracy, precision, recall, rows) in [
+        (
+            "windows",
+            report.window_accuracy,
+            report.window_precision,
+            report.window_recall,
+            &report.window_confusion,
+        ),
+        (
+            "slides",
+            report.slide_accuracy,
+            report.slide_precision,
+            report.slide_recall,
+            &report.slide_confusion,
+        ),
+    ] {
         println!(
             "\n{title}: accuracy {:.2}%, weighted precision {:.2}%, weighted recall {:.2}%",
-            100.0 * m.accuracy(),
-            100.0 * m.weighted_precision(),
-            100.0 * m.weighted_recall()
+            100.0 * accuracy,
+            100.0 * precision,
+            100.0 * recall
         );
-        print_confusion(experiment.class_names(), &m.rows());
+        print_confusion(&report.classes, rows);
     }
-    if let Some(x) = width {
+    if let (Some(window_mae), Some(slide_mae)) = (report.width_mae_mm, report.slide_width_mae_mm) {
         println!(
             "\nwidth regression ({} trees): MAE {:.2} mm per window, {:.2} mm per slide",
-            args.trees, x.window_mae_mm, x.slide_mae_mm
+            args.trees, window_mae, slide_mae
         );
     }
     Ok(())
 }
 
-fn print_confusion(names: &[&str], rows: &[Vec<u64>]) {
+fn print_confusion(names: &[String], rows: &[Vec<u64>]) {
     const CORNER: &str = "true \\ predicted";
     let label = names
         .iter()
@@ -610,49 +530,45 @@ fn classifier_of(arg: ClassifierArg, trees: usize) -> crackbot_tactile::eval::Cl
 }
 
 fn paper(args: PaperArgs) -> Result<()> {
-    use crackbot_tactile::dataset::{detect_experiment, PipelineConfig};
-    use crackbot_tactile::paper::{by_repetition, run_grid};
+    use crackbot_tactile::dataset::PipelineConfig;
+    use crackbot_tactile::paper::{paper_study, PaperConfig, PaperEvent};
+    use crackbot_tactile::plots::{paper_plots, plots_markdown};
 
-    if args.trees == 0 {
-        bail!("--trees must be at least 1");
-    }
-    let classifiers: Vec<_> = args
-        .classifiers
-        .iter()
-        .map(|&c| classifier_of(c, args.trees))
-        .collect();
-    let base = PipelineConfig {
-        segmentation: segmentation_of(args.segmentation),
-        ..PipelineConfig::default()
+    let config = PaperConfig {
+        classifiers: args
+            .classifiers
+            .iter()
+            .map(|&c| classifier_of(c, args.trees))
+            .collect(),
+        n_trees: args.trees,
+        base: PipelineConfig {
+            segmentation: segmentation_of(args.segmentation),
+            ..PipelineConfig::default()
+        },
+        seed: args.seed,
     };
     // Fail before the long grid, not after it, when the plots cannot draw text.
     crackbot_tactile::plots::load_font()?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    let mut markdown =
-        String::from("# The paper's tables, reproduced by `crackbot tactile paper`\n\n");
-    let mut json = Vec::new();
-    for folder in &args.data {
-        let recordings = collect_recordings(std::slice::from_ref(folder))?;
-        let experiment = detect_experiment(&recordings)?;
-        let repetitions = by_repetition(recordings)?;
-        let cells = 3 * 4 * classifiers.len();
-        let bar = indicatif::ProgressBar::new(cells as u64);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{msg} [{elapsed_precise}] {bar:30} {pos}/{len} cells",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        bar.set_message(experiment.name());
-        let tables = run_grid(
-            experiment,
-            &repetitions,
-            &classifiers,
-            &base,
-            args.seed,
-            |cell| {
-                bar.inc(1);
+    let mut bar: Option<ProgressBar> = None;
+    let report = paper_study(
+        &config,
+        &args.data,
+        &args.out,
+        |event| match event {
+            PaperEvent::Folder {
+                experiment, cells, ..
+            } => {
+                let b = ProgressBar::new(cells as u64);
+                b.set_style(
+                    ProgressStyle::with_template(
+                        "{msg} [{elapsed_precise}] {bar:30} {pos}/{len} cells",
+                    )
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+                );
+                b.set_message(experiment.name());
+                bar = Some(b);
+            }
+            PaperEvent::Cell { experiment, cell } => {
                 let line = format!(
                     "{} {:<4} {} {:<9} accuracy {:6.2}% ± {:5.2}  slides {:6.2}%",
                     experiment.name(),
@@ -663,29 +579,32 @@ fn paper(args: PaperArgs) -> Result<()> {
                     100.0 * cell.accuracy_std,
                     100.0 * cell.slide_accuracy_mean
                 );
-                if bar.is_hidden() {
-                    eprintln!("{line}");
-                } else {
-                    bar.println(line);
+                match &bar {
+                    Some(b) if !b.is_hidden() => {
+                        b.inc(1);
+                        b.println(line);
+                    }
+                    _ => eprintln!("{line}"),
                 }
-            },
-        )?;
-        bar.finish_and_clear();
-        markdown.push_str(&format!("Data: {}\n\n", folder.display()));
-        markdown.push_str(&tables.to_markdown());
-        markdown.push('\n');
-        let plots = crackbot_tactile::plots::paper_plots(&args.out, &tables)?;
-        markdown.push_str(&crackbot_tactile::plots::plots_markdown(&plots, &args.out));
-        json.push(tables);
-    }
-    let md_path = args.out.join("paper-tables.md");
-    let json_path = args.out.join("paper-tables.json");
-    std::fs::write(&md_path, &markdown)
-        .with_context(|| format!("writing {}", md_path.display()))?;
-    std::fs::write(&json_path, serde_json::to_string_pretty(&json)?)
-        .with_context(|| format!("writing {}", json_path.display()))?;
-    println!("{markdown}");
-    println!("wrote {} and {}", md_path.display(), json_path.display());
+            }
+            PaperEvent::FolderDone { .. } => {
+                if let Some(b) = bar.take() {
+                    b.finish_and_clear();
+                }
+            }
+            _ => {}
+        },
+        |out, tables| {
+            let plots = paper_plots(out, tables)?;
+            Ok(plots_markdown(&plots, out))
+        },
+    )?;
+    println!("{}", report.markdown);
+    println!(
+        "wrote {} and {}",
+        report.markdown_path.display(),
+        report.json_path.display()
+    );
     Ok(())
 }
 
@@ -721,84 +640,49 @@ fn parse_depth(s: &str) -> Result<Option<usize>> {
 
 fn tradeoff(args: TradeoffArgs) -> Result<()> {
     use crackbot_dsp::WindowConfig;
-    use crackbot_tactile::dataset::build_windows;
-    use crackbot_tactile::tradeoff::{depth_name, run_tradeoff, TradeoffConfig};
+    use crackbot_tactile::tradeoff::{depth_name, tradeoff_study, TradeoffConfig, TradeoffStudy};
 
-    if args.trees.is_empty() || args.trees.contains(&0) {
-        bail!("--trees: every tree count must be at least 1");
-    }
-    if args.batch == 0 {
-        bail!("--batch must be at least 1");
-    }
     let max_depths: Vec<Option<usize>> = args
         .depths
         .iter()
         .map(|d| parse_depth(d))
         .collect::<Result<_>>()?;
     crackbot_tactile::plots::load_font()?;
-    let train = collect_recordings(&args.train)?;
-    let test = collect_recordings(&args.test)?;
-    let experiment = args.pipeline.experiment(&train, &test)?;
-    let (feature, set) = (feature_of(args.pipeline.feature), set_of(args.pipeline.set));
-    let config = args.pipeline.config(WindowConfig::default());
-    let train_set = build_windows(&train, experiment, &config)?;
-    let test_set = build_windows(&test, experiment, &config)?;
-    let grid = TradeoffConfig {
-        n_trees: args.trees.clone(),
-        max_depths,
-        seed: args.pipeline.seed,
-        latency_batch: args.batch,
+    let study = TradeoffStudy {
+        train: args.train.clone(),
+        test: args.test.clone(),
+        experiment: args.pipeline.experiment(),
+        pipeline: args.pipeline.config(WindowConfig::default()),
+        grid: TradeoffConfig {
+            n_trees: args.trees.clone(),
+            max_depths,
+            seed: args.pipeline.seed,
+            latency_batch: args.batch,
+        },
     };
-    let result = run_tradeoff(&train_set, &test_set, &grid, |r| {
-        eprintln!(
-            "max depth {:>4}, {:>3} trees: {:>8} nodes, trained in {:7.3} s, {:8.2} µs/window, window accuracy {:6.2}%, slides {:6.2}%",
-            depth_name(r.max_depth),
-            r.n_trees,
-            r.n_nodes,
-            r.train_seconds,
-            1e6 * r.latency_seconds,
-            100.0 * r.window_accuracy,
-            100.0 * r.slide_accuracy
-        );
-    })?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    let png = args.out.join("tradeoff.png");
-    crackbot_tactile::plots::tradeoff_png(&png, &result)?;
-    let files = |paths: &[PathBuf]| {
-        paths
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let markdown = format!(
-        "# Random forest: accuracy against run time (`crackbot tactile tradeoff`)\n\n\
-         {} on {} {}, segmentation {}; trained on {} ({} recordings), tested on {} ({} recordings); seed {}.\n\n\
-         {}\n![accuracy against latency](tradeoff.png)\n",
-        experiment.name(),
-        feature.name(),
-        set.name(),
-        config.segmentation.name(),
-        files(&args.train),
-        train.len(),
-        files(&args.test),
-        test.len(),
-        args.pipeline.seed,
-        result.to_markdown()
-    );
-    let md_path = args.out.join("tradeoff.md");
-    let json_path = args.out.join("tradeoff.json");
-    std::fs::write(&md_path, &markdown)
-        .with_context(|| format!("writing {}", md_path.display()))?;
-    std::fs::write(&json_path, serde_json::to_string_pretty(&result)?)
-        .with_context(|| format!("writing {}", json_path.display()))?;
-    println!("{markdown}");
+    let report = tradeoff_study(
+        &study,
+        &args.out,
+        |r| {
+            eprintln!(
+                "max depth {:>4}, {:>3} trees: {:>8} nodes, trained in {:7.3} s, {:8.2} µs/window, window accuracy {:6.2}%, slides {:6.2}%",
+                depth_name(r.max_depth),
+                r.n_trees,
+                r.n_nodes,
+                r.train_seconds,
+                1e6 * r.latency_seconds,
+                100.0 * r.window_accuracy,
+                100.0 * r.slide_accuracy
+            );
+        },
+        |png, result| Ok(crackbot_tactile::plots::tradeoff_png(png, result)?),
+    )?;
+    println!("{}", report.markdown);
     println!(
         "wrote {}, {} and {}",
-        md_path.display(),
-        json_path.display(),
-        png.display()
+        report.markdown_path.display(),
+        report.json_path.display(),
+        report.png_path.display()
     );
     Ok(())
 }

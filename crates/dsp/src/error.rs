@@ -5,6 +5,7 @@ use crate::Channel;
 /// Everything that can go wrong in this crate. No function of the crate panics on bad input; it returns one of
 /// these instead.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum DspError {
     /// A sample holds NaN or ±∞.
     #[error("sample {index}, channel {channel}: non-finite value {value}")]

@@ -277,6 +277,9 @@ pub(crate) fn channel_features(
 /// index and channel. Windows follow `window` (see [`WindowConfig`]); a signal shorter than one window gives an empty
 /// matrix. Row `k` is aligned to sample `window_ends[k] = k·step + len − 1`. Features are in ADC counts, stored as
 /// `f32`, bit-for-bit equal to what [`StreamingFeatures`](crate::StreamingFeatures) emits for the same samples.
+///
+/// Checks `spec` and `window` on every call; to extract many signals with one configuration, check it once
+/// with [`FeatureExtractor::new`].
 pub fn extract_features(
     samples: &[[f64; 4]],
     spec: &FeatureSpec,
@@ -284,6 +287,79 @@ pub fn extract_features(
 ) -> Result<FeatureMatrix, DspError> {
     spec.validate()?;
     window.validate()?;
+    extract_checked(samples, spec, window)
+}
+
+/// Computes the feature rows of the parts of a trial a segmentation kept: windows are taken inside each of the
+/// segment's ranges (never across a gap between two ranges), and `window_ends` index into `samples` (the whole
+/// trial). The samples inside the ranges are checked as in [`extract_features`].
+///
+/// Checks `spec` and `window` on every call; to extract many trials with one configuration (one call per slide),
+/// check it once with [`FeatureExtractor::new`].
+pub fn extract_segment_features(
+    samples: &[[f64; 4]],
+    segment: &Segment,
+    spec: &FeatureSpec,
+    window: WindowConfig,
+) -> Result<FeatureMatrix, DspError> {
+    spec.validate()?;
+    window.validate()?;
+    extract_segment_checked(samples, segment, spec, window)
+}
+
+/// A [`FeatureSpec`] and a [`WindowConfig`] checked once ([`FeatureSpec::validate`],
+/// [`WindowConfig::validate`]), so that extracting the features of many signals (one per slide) does not check
+/// them again: the checked-parameters pattern of linfa's `ParamGuard`. Gives exactly the rows of
+/// [`extract_features`] and [`extract_segment_features`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FeatureExtractor {
+    spec: FeatureSpec,
+    window: WindowConfig,
+}
+
+impl FeatureExtractor {
+    /// Checks `spec` and `window`.
+    pub fn new(spec: FeatureSpec, window: WindowConfig) -> Result<Self, DspError> {
+        spec.validate()?;
+        window.validate()?;
+        Ok(FeatureExtractor { spec, window })
+    }
+
+    /// The features and channels.
+    pub fn spec(&self) -> &FeatureSpec {
+        &self.spec
+    }
+
+    /// The windows.
+    pub fn window(&self) -> WindowConfig {
+        self.window
+    }
+
+    /// Values per row.
+    pub fn n_features(&self) -> usize {
+        self.spec.n_features()
+    }
+
+    /// [`extract_features`] with the checked configuration.
+    pub fn extract(&self, samples: &[[f64; 4]]) -> Result<FeatureMatrix, DspError> {
+        extract_checked(samples, &self.spec, self.window)
+    }
+
+    /// [`extract_segment_features`] with the checked configuration.
+    pub fn extract_segment(
+        &self,
+        samples: &[[f64; 4]],
+        segment: &Segment,
+    ) -> Result<FeatureMatrix, DspError> {
+        extract_segment_checked(samples, segment, &self.spec, self.window)
+    }
+}
+
+fn extract_checked(
+    samples: &[[f64; 4]],
+    spec: &FeatureSpec,
+    window: WindowConfig,
+) -> Result<FeatureMatrix, DspError> {
     for (index, sample) in samples.iter().enumerate() {
         check_sample(index, sample)?;
     }
@@ -296,17 +372,12 @@ pub fn extract_features(
     Ok(m)
 }
 
-/// Computes the feature rows of the parts of a trial a segmentation kept: windows are taken inside each of the
-/// segment's ranges (never across a gap between two ranges), and `window_ends` index into `samples` (the whole
-/// trial). The samples inside the ranges are checked as in [`extract_features`].
-pub fn extract_segment_features(
+fn extract_segment_checked(
     samples: &[[f64; 4]],
     segment: &Segment,
     spec: &FeatureSpec,
     window: WindowConfig,
 ) -> Result<FeatureMatrix, DspError> {
-    spec.validate()?;
-    window.validate()?;
     if segment.trial_len != samples.len() {
         return Err(DspError::LengthMismatch {
             segment_len: segment.trial_len,

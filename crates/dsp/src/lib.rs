@@ -91,51 +91,77 @@ mod streaming;
 
 pub use error::DspError;
 pub use features::{
-    extract_features, extract_segment_features, mav, rms, Feature, FeatureMatrix, FeatureSet,
-    FeatureSpec, WindowConfig,
+    extract_features, extract_segment_features, mav, rms, Feature, FeatureExtractor, FeatureMatrix,
+    FeatureSet, FeatureSpec, WindowConfig,
 };
 pub use segment::{
     measure_segmentation, segment_paper, segment_robust, Extent, MarginBase, PaperSegmentation,
     RobustSegmentation, Segment, SegmentationMethod, SegmentationReport, SegmentationSummary,
-    SlideStats,
+    Segmenter, SlideStats,
 };
 pub use streaming::StreamingFeatures;
 
-/// One of the finger's four channels; a sample is `[D1, D2, D3, P]`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-pub enum Channel {
-    /// Left deformation.
-    D1,
-    /// Right deformation.
-    D2,
-    /// Back/normal deformation.
-    D3,
-    /// Proximity.
-    P,
-}
+/// One of the finger's four channels; a sample is `[D1, D2, D3, P]` ([`Channel::index`]). Defined once, in
+/// `crackbot-protocol` (the wire format's channel order), and re-exported here.
+pub use crackbot_protocol::Channel;
 
-impl Channel {
-    /// The channels in sample order.
-    pub const ALL: [Channel; 4] = [Channel::D1, Channel::D2, Channel::D3, Channel::P];
+#[cfg(test)]
+mod tests {
+    use super::Channel;
 
-    /// Index into a sample `[D1, D2, D3, P]`.
-    pub fn index(self) -> usize {
-        self as usize
-    }
-
-    /// `"D1"`, `"D2"`, `"D3"` or `"P"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Channel::D1 => "D1",
-            Channel::D2 => "D2",
-            Channel::D3 => "D3",
-            Channel::P => "P",
+    #[test]
+    fn channels_serialise_by_name_and_index_samples() {
+        for (i, c) in Channel::ALL.into_iter().enumerate() {
+            assert_eq!(c.index(), i);
+            let json = serde_json::to_string(&c).expect("serialise");
+            assert_eq!(json, format!("\"{c}\""));
+            assert_eq!(
+                serde_json::from_str::<Channel>(&json).expect("deserialise"),
+                c
+            );
         }
+        assert_eq!(serde_json::to_string(&Channel::D1).expect("json"), "\"D1\"");
+        assert_eq!(Channel::P.to_string(), "P");
     }
-}
 
-impl std::fmt::Display for Channel {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+    #[test]
+    fn checked_configurations_give_the_rows_and_segments_of_the_free_functions() {
+        use super::*;
+        let samples: Vec<[f64; 4]> = (0..300)
+            .map(|i| {
+                let p = if (100..140).contains(&i) {
+                    270.0
+                } else {
+                    520.0
+                };
+                [650.0 + f64::from(i % 7), 430.0, 710.0, p]
+            })
+            .collect();
+        let p: Vec<f64> = samples.iter().map(|s| s[Channel::P.index()]).collect();
+        let spec = FeatureSpec::new(Feature::Rms, FeatureSet::D1D2D3P);
+        let window = WindowConfig { len: 8, step: 3 };
+        let extractor = FeatureExtractor::new(spec.clone(), window).expect("valid");
+        assert_eq!(
+            extractor.extract(&samples),
+            extract_features(&samples, &spec, window)
+        );
+        for method in [
+            SegmentationMethod::Paper(PaperSegmentation::default()),
+            SegmentationMethod::Robust(RobustSegmentation::default()),
+        ] {
+            let segmenter = method.check().expect("valid");
+            let segment = segmenter.segment(&p).expect("segment");
+            assert_eq!(Ok(&segment), method.segment(&p).as_ref());
+            assert_eq!(
+                extractor.extract_segment(&samples, &segment),
+                extract_segment_features(&samples, &segment, &spec, window)
+            );
+        }
+        assert!(FeatureExtractor::new(spec, WindowConfig { len: 0, step: 1 }).is_err());
+        let bad = PaperSegmentation {
+            n: 0,
+            ..PaperSegmentation::default()
+        };
+        assert!(SegmentationMethod::Paper(bad).check().is_err());
     }
 }

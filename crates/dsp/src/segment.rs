@@ -156,6 +156,11 @@ impl PaperSegmentation {
     /// derivatives); values must be finite and within the `f32` range.
     pub fn segment(&self, p: &[f64]) -> Result<Segment, DspError> {
         self.validate()?;
+        self.segment_checked(p)
+    }
+
+    /// [`segment`](Self::segment) with parameters already validated.
+    fn segment_checked(&self, p: &[f64]) -> Result<Segment, DspError> {
         check_signal(p, Channel::P)?;
         let m = p.len();
         let n = self.n;
@@ -332,6 +337,11 @@ impl RobustSegmentation {
     /// Segments one trial given its proximity `p` (ADC counts, finite, within the `f32` range, at least 1 sample).
     pub fn segment(&self, p: &[f64]) -> Result<Segment, DspError> {
         self.validate()?;
+        self.segment_checked(p)
+    }
+
+    /// [`segment`](Self::segment) with parameters already validated.
+    fn segment_checked(&self, p: &[f64]) -> Result<Segment, DspError> {
         check_signal(p, Channel::P)?;
         let m = p.len();
         if m == 0 {
@@ -421,12 +431,23 @@ pub enum SegmentationMethod {
 }
 
 impl SegmentationMethod {
-    /// Segments one trial given its proximity.
+    /// Segments one trial given its proximity. Checks the parameters on every call; to segment many trials
+    /// (one call per slide), check them once with [`check`](Self::check).
     pub fn segment(&self, p: &[f64]) -> Result<Segment, DspError> {
         match self {
             SegmentationMethod::Paper(c) => c.segment(p),
             SegmentationMethod::Robust(c) => c.segment(p),
         }
+    }
+
+    /// Checks the parameters once ([`PaperSegmentation::validate`], [`RobustSegmentation::validate`]) into a
+    /// [`Segmenter`] that segments without checking them again.
+    pub fn check(self) -> Result<Segmenter, DspError> {
+        match &self {
+            SegmentationMethod::Paper(c) => c.validate()?,
+            SegmentationMethod::Robust(c) => c.validate()?,
+        }
+        Ok(Segmenter { method: self })
     }
 
     /// `"paper"` or `"robust"`.
@@ -435,6 +456,28 @@ impl SegmentationMethod {
             SegmentationMethod::Paper(_) => "paper",
             SegmentationMethod::Robust(_) => "robust",
         }
+    }
+}
+
+/// A [`SegmentationMethod`] whose parameters were checked once ([`SegmentationMethod::check`]): the
+/// checked-parameters pattern of linfa's `ParamGuard`. Segments exactly as the method does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segmenter {
+    method: SegmentationMethod,
+}
+
+impl Segmenter {
+    /// Segments one trial given its proximity (values checked, parameters not again).
+    pub fn segment(&self, p: &[f64]) -> Result<Segment, DspError> {
+        match &self.method {
+            SegmentationMethod::Paper(c) => c.segment_checked(p),
+            SegmentationMethod::Robust(c) => c.segment_checked(p),
+        }
+    }
+
+    /// The checked method.
+    pub fn method(&self) -> &SegmentationMethod {
+        &self.method
     }
 }
 

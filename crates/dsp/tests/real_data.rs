@@ -4,7 +4,7 @@
 
 #![allow(clippy::unwrap_used, clippy::single_range_in_vec_init)]
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crackbot_dsp::{
     extract_features, extract_segment_features, measure_segmentation, Extent, Feature, FeatureSet,
@@ -12,8 +12,6 @@ use crackbot_dsp::{
     StreamingFeatures, WindowConfig,
 };
 use crackbot_recording::{read_mat, Recording};
-
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/tactile");
 
 /// Slides shorter than this are the trailing one-sample "slide 13" of some files, not movements.
 const MIN_SLIDE: usize = 100;
@@ -26,14 +24,20 @@ struct File {
 }
 
 fn files() -> Vec<File> {
+    let data = crackbot_datasets::require(crackbot_datasets::TACTILE);
     let mut paths: Vec<PathBuf> = ["type", "width"]
         .iter()
-        .flat_map(|d| std::fs::read_dir(Path::new(DATA).join(d)).unwrap())
+        .flat_map(|d| std::fs::read_dir(data.join(d)).unwrap())
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "mat"))
         .collect();
     paths.sort();
-    assert_eq!(paths.len(), 30, "expected the 30 recordings under {DATA}");
+    assert_eq!(
+        paths.len(),
+        30,
+        "expected the 30 recordings under {}",
+        data.display()
+    );
     paths
         .into_iter()
         .map(|path| {
@@ -66,7 +70,7 @@ fn proximity_slides(rec: &Recording) -> Vec<Vec<f64>> {
 }
 
 fn samples(rec: &Recording) -> Vec<[f64; 4]> {
-    rec.rows.iter().map(|r| [r.d1, r.d2, r.d3, r.p]).collect()
+    rec.rows.iter().map(|r| r.channels()).collect()
 }
 
 fn methods() -> Vec<(&'static str, SegmentationMethod)> {

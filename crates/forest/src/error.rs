@@ -5,6 +5,7 @@ use std::path::PathBuf;
 /// Everything that can go wrong in this crate. No public function panics on bad input; it returns one of
 /// these instead.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ForestError {
     /// A data set or an input row is malformed (lengths, counts).
     #[error("invalid data: {0}")]
@@ -51,6 +52,7 @@ pub enum ForestError {
 
 /// Why a serialised model was rejected.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FormatError {
     /// Reading or writing failed.
     #[error("I/O error: {0}")]

@@ -28,11 +28,23 @@ impl RandomForest {
     /// Trains a forest on `data` (see [`ForestParams`] and the crate docs for the algorithm). Class labels
     /// default to `0.0, 1.0, …`; set them with [`with_class_labels`](Self::with_class_labels).
     pub fn fit(data: &Dataset, params: &ForestParams) -> Result<Self> {
+        Self::fit_with_progress(data, params, |_, _| {})
+    }
+
+    /// [`fit`](Self::fit), reporting progress: `progress(done, total)` after each tree, one call at a time
+    /// (from the training threads), `done` going 1, 2, … `total` = `params.n_trees` in order. Nothing is
+    /// reported when `params.quiet` is set. The model is the same as [`fit`](Self::fit)'s.
+    pub fn fit_with_progress(
+        data: &Dataset,
+        params: &ForestParams,
+        mut progress: impl FnMut(usize, usize) + Send,
+    ) -> Result<Self> {
         let task = Gini {
             y: data.y(),
             n_classes: data.n_classes(),
         };
-        let (trees, importances) = train(&task, data.x(), data.n_features(), params)?;
+        let (trees, importances) =
+            train(&task, data.x(), data.n_features(), params, &mut progress)?;
         let labels = (0..data.n_classes()).map(|c| c as f64).collect();
         Ok(Self {
             trees,

@@ -28,7 +28,8 @@
 //!
 //! Determinism: tree `i` draws from a ChaCha8 stream `(seed, i)`; trees are built independently in rayon
 //! and collected in order, so a model depends on the data and the parameters only, not on the thread
-//! count. A progress bar (indicatif) is drawn on stderr unless `quiet` is set or stderr is not a terminal.
+//! count. Nothing is drawn: [`RandomForest::fit_with_progress`] reports each finished tree to a callback (a
+//! binary draws the progress bar), unless [`ForestParams::quiet`] is set.
 //!
 //! # Inference design
 //!

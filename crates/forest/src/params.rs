@@ -73,7 +73,9 @@ pub struct ForestParams {
     pub seed: u64,
     /// Threads for training: `None` uses rayon's global pool, `Some(n)` a private pool of `n` threads.
     pub n_threads: Option<usize>,
-    /// Hide the progress bar (it is also hidden when stderr is not a terminal).
+    /// Report no progress: the callback of
+    /// [`RandomForest::fit_with_progress`](crate::RandomForest::fit_with_progress) is not called. (This crate
+    /// draws nothing itself; a binary draws a progress bar from the callback.)
     pub quiet: bool,
 }
 
@@ -141,7 +143,7 @@ impl ForestParams {
         self.n_threads = n;
         self
     }
-    /// Hides (or shows) the progress bar.
+    /// Turns the progress reports off (or on).
     pub fn quiet(mut self, q: bool) -> Self {
         self.quiet = q;
         self

@@ -20,8 +20,19 @@ pub struct RandomForestRegressor {
 impl RandomForestRegressor {
     /// Trains on `data`; use [`ForestParams::regressor`] for scikit-learn's regressor defaults.
     pub fn fit(data: &RegressionDataset, params: &ForestParams) -> Result<Self> {
+        Self::fit_with_progress(data, params, |_, _| {})
+    }
+
+    /// [`fit`](Self::fit), reporting progress as
+    /// [`RandomForest::fit_with_progress`](crate::RandomForest::fit_with_progress) does.
+    pub fn fit_with_progress(
+        data: &RegressionDataset,
+        params: &ForestParams,
+        mut progress: impl FnMut(usize, usize) + Send,
+    ) -> Result<Self> {
         let task = Mse { y: data.y() };
-        let (trees, importances) = train(&task, data.x(), data.n_features(), params)?;
+        let (trees, importances) =
+            train(&task, data.x(), data.n_features(), params, &mut progress)?;
         Ok(Self {
             trees,
             importances: Some(importances),

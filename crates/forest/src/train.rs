@@ -14,11 +14,11 @@
 //! 5. Nodes are produced in depth-first pre-order with an explicit stack, which is directly the flat layout
 //!    of [`crate::flat`] (left child adjacent, right child index patched when it is produced).
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::sync::Mutex;
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use std::io::IsTerminal;
 
 use crate::error::{ForestError, Result};
 use crate::flat::{midpoint_threshold, FlatTrees, Node};
@@ -441,39 +441,38 @@ fn build_tree<T: Task>(task: &T, p: &Prepared<'_>, tree: usize) -> TreeOut {
     }
 }
 
+/// Reports training progress: called with `(trees done, trees in all)` after each tree.
+pub(crate) type Progress<'p> = &'p mut (dyn FnMut(usize, usize) + Send);
+
 /// Trains `params.n_trees` trees in parallel and flattens them. Returns the trees and the normalised
-/// mean-decrease-in-impurity feature importances.
+/// mean-decrease-in-impurity feature importances. `progress` (unless `params.quiet`) is called once per finished
+/// tree, from the training threads but one call at a time, with `done` going 1, 2, … `n_trees` in order.
 pub(crate) fn train<T: Task>(
     task: &T,
     x: &[f32],
     n_features: usize,
     params: &ForestParams,
+    progress: Progress<'_>,
 ) -> Result<(FlatTrees, Vec<f64>)> {
+    let total = params.n_trees;
+    let done = Mutex::new((0usize, progress));
     let run = || -> Result<(FlatTrees, Vec<f64>)> {
         let prep = Prepared::new(x, n_features, params)?;
-        let bar = if params.quiet || !std::io::stderr().is_terminal() {
-            ProgressBar::hidden()
-        } else {
-            let b = ProgressBar::with_draw_target(
-                Some(params.n_trees as u64),
-                ProgressDrawTarget::stderr(),
-            );
-            if let Ok(style) = ProgressStyle::with_template(
-                "training {bar:40} {pos}/{len} trees [{elapsed_precise}, eta {eta}]",
-            ) {
-                b.set_style(style);
-            }
-            b
-        };
         let trees: Vec<TreeOut> = (0..params.n_trees)
             .into_par_iter()
             .map(|t| {
                 let out = build_tree(task, &prep, t);
-                bar.inc(1);
+                if !params.quiet {
+                    // A panicking callback poisons the lock; later reports are then skipped.
+                    if let Ok(mut guard) = done.lock() {
+                        let (n, report) = &mut *guard;
+                        *n += 1;
+                        report(*n, total);
+                    }
+                }
                 out
             })
             .collect();
-        bar.finish_and_clear();
         assemble(trees, n_features, task.width())
     };
     match params.n_threads {

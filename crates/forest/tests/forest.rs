@@ -220,3 +220,28 @@ fn training_is_not_absurdly_slow() {
         forest.n_nodes() / 10
     );
 }
+
+#[test]
+fn progress_is_reported_once_per_tree_in_order_and_changes_nothing() {
+    let data = synthetic::blobs(1_500, 3, 4, 40.0, 2).unwrap();
+    let params = ForestParams::classifier().n_trees(9).seed(5);
+    let mut seen = Vec::new();
+    let with = RandomForest::fit_with_progress(&data, &params, |done, total| {
+        seen.push((done, total));
+    })
+    .unwrap();
+    assert_eq!(seen, (1..=9).map(|d| (d, 9)).collect::<Vec<_>>());
+    assert_eq!(with, RandomForest::fit(&data, &params).unwrap());
+    let mut calls = 0;
+    RandomForest::fit_with_progress(&data, &params.clone().quiet(true), |_, _| calls += 1).unwrap();
+    assert_eq!(calls, 0, "quiet reports nothing");
+    let reg = synthetic::width_regression(800, 0.1, 3).unwrap();
+    let mut last = (0, 0);
+    crackbot_forest::RandomForestRegressor::fit_with_progress(
+        &reg,
+        &ForestParams::regressor().n_trees(4),
+        |done, total| last = (done, total),
+    )
+    .unwrap();
+    assert_eq!(last, (4, 4));
+}

@@ -6,6 +6,7 @@ use crate::{Frame, COBS_LEN, DELIMITER, PAYLOAD_LEN};
 
 /// Why a chunk of bytes between two delimiters was not a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum DecodeError {
     /// The CRC-32C in the frame does not match its contents (bit flips on the line).
     Crc {

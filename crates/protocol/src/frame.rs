@@ -8,8 +8,12 @@ use crate::{
 /// Number of ADC channels in a frame.
 pub const CHANNELS: usize = 4;
 
-/// The four sensor channels, in frame order.
+/// The four sensor channels, in frame order: a sample is `[D1, D2, D3, P]`.
+///
+/// The one definition of a channel for the whole workspace (`crackbot-dsp` re-exports it). With the
+/// `serde` feature it serialises as its name (`"D1"`, `"D2"`, `"D3"`, `"P"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Channel {
     /// Left deformation fibre.
     D1 = 0,
@@ -25,6 +29,11 @@ impl Channel {
     /// All channels in frame order.
     pub const ALL: [Channel; CHANNELS] = [Channel::D1, Channel::D2, Channel::D3, Channel::P];
 
+    /// Index into a sample or a frame's channels `[D1, D2, D3, P]`.
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
     /// Short name as used in the papers and in recordings (`D1`, `D2`, `D3`, `P`).
     pub const fn name(self) -> &'static str {
         match self {
@@ -33,6 +42,12 @@ impl Channel {
             Channel::D3 => "D3",
             Channel::P => "P",
         }
+    }
+}
+
+impl core::fmt::Display for Channel {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -100,7 +115,7 @@ pub struct Frame {
 impl Frame {
     /// Raw ADC count of one channel.
     pub const fn channel(&self, channel: Channel) -> u16 {
-        self.channels[channel as usize]
+        self.channels[channel.index()]
     }
 
     /// The payload: header, channels and CRC-32C.

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used)]
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crackbot_recording::{
     collect_recordings, read_csv, read_mat, read_mat_from, read_recording, write_csv, write_mat,
@@ -12,13 +12,13 @@ use crackbot_recording::{
 };
 use proptest::prelude::*;
 
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/tactile");
-
+/// A file of the authors' recordings (`../shared/data/tactile/...`); the test stops with one clear message
+/// when the shared data is missing.
 fn data(rel: &str) -> PathBuf {
-    Path::new(DATA).join(rel)
+    crackbot_datasets::require(crackbot_datasets::TACTILE).join(rel)
 }
 
-/// Every real file: (path relative to DATA, label, repetition).
+/// Every real file: (path relative to the tactile data folder, label, repetition).
 fn real_files() -> Vec<(String, f64, u32)> {
     let mut out = Vec::new();
     for (name, label) in [
@@ -159,7 +159,7 @@ fn every_authors_file_loads_with_its_label_repetition_and_slides() {
             assert!((410.0..=472.0).contains(&r.d2), "{}", ctx());
             assert!((676.0..=767.0).contains(&r.d3), "{}", ctx());
             assert!((242.0..=787.0).contains(&r.p), "{}", ctx());
-            for v in [r.d1, r.d2, r.d3, r.p] {
+            for v in r.channels() {
                 assert_eq!(v.fract(), 0.0, "raw ADC counts: {}", ctx());
             }
         }

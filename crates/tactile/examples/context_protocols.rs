@@ -59,10 +59,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (tr, te) = (of(&train), of(&[test]));
         let paper_train = build_windows(&tr, experiment, &paper)?;
         let paper_test = build_windows(&te, experiment, &paper)?;
-        let paper_model = train_classifier(&paper_train, kind, 1, true)?;
+        let paper_model = train_classifier(&paper_train, kind, 1)?;
         let ctx_train = build_windows(&tr, experiment, &context)?;
         let ctx_test = build_windows(&te, experiment, &context)?;
-        let ctx_model = train_classifier(&ctx_train, kind, 1, true)?;
+        let ctx_model = train_classifier(&ctx_train, kind, 1)?;
         let p = test_classifier(paper_model.as_ref(), &paper_test)?;
         let c = test_classifier(ctx_model.as_ref(), &ctx_test)?;
         let both = test_classifier_with_slide_voters(

@@ -12,11 +12,6 @@ use crackbot_tactile::dataset::WindowSet;
 #[path = "../../../benches/common/windows.rs"]
 mod windows;
 
-const DATA: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/tactile/type"
-);
-
 fn write(path: &Path, set: &WindowSet) -> std::io::Result<()> {
     let mut s = String::from("mav_d1,mav_d2,mav_p,class\n");
     for (i, &class) in set.y.iter().enumerate() {
@@ -36,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .unwrap_or_else(|| "benches/out".into()),
     );
     std::fs::create_dir_all(&out)?;
-    let real = windows::load(Path::new(DATA));
+    let real = windows::load(&windows::data_dir());
     write(&out.join("train.csv"), &real.train)?;
     write(&out.join("test.csv"), &real.test)?;
     println!(

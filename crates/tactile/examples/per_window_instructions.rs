@@ -20,15 +20,11 @@ use crackbot_forest::{Classifier, Dataset, ForestParams, RandomForest};
 #[path = "../../../benches/common/windows.rs"]
 mod windows;
 
-const DATA: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/tactile/type"
-);
 /// Samples of repetition 2 kept for the measurement (the loop wraps around).
 const SAMPLES: usize = 50_000;
 
 fn prepare(dir: &Path) -> Result<(), Box<dyn std::error::Error>> {
-    let real = windows::load(Path::new(DATA));
+    let real = windows::load(&windows::data_dir());
     let n_classes = real.train.experiment.n_classes();
     let train = Dataset::with_classes(
         real.train.x.clone(),

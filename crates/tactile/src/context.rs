@@ -47,6 +47,8 @@
 
 use serde::Serialize;
 
+use crate::TactileError;
+
 /// Which context features are appended to (or replace) the window's own features.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct ContextConfig {
@@ -96,12 +98,16 @@ const PER_PREFIX: usize = 3;
 
 impl ContextConfig {
     /// Checks that every scale and the baseline length are at least 1.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), TactileError> {
         if self.scales.contains(&0) {
-            return Err("context scales must be at least 1 sample".into());
+            return Err(TactileError::Context {
+                reason: "context scales must be at least 1 sample",
+            });
         }
         if self.baseline_len == 0 {
-            return Err("the baseline length must be at least 1 sample".into());
+            return Err(TactileError::Context {
+                reason: "the baseline length must be at least 1 sample",
+            });
         }
         Ok(())
     }

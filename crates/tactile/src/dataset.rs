@@ -5,7 +5,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crackbot_dsp::{
-    extract_segment_features, FeatureSpec, Segment, SegmentationMethod, WindowConfig,
+    FeatureExtractor, FeatureSpec, Segment, SegmentationMethod, Segmenter, WindowConfig,
 };
 use crackbot_recording::Recording;
 use serde::Serialize;
@@ -13,73 +13,9 @@ use serde::Serialize;
 use crate::context::{context_row, slide_baseline, ContextConfig, WindowPlace};
 use crate::TactileError;
 
-/// Which of the paper's two experiments a set of recordings belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum Experiment {
-    /// Surface type: 0 flat (no crack), 1 crack, 2 bump, 3 wavy pattern.
-    Recognition,
-    /// Crack width: 0, 1, 2, 5, 8, 10 mm.
-    Width,
-}
-
-impl Experiment {
-    /// The label values of the experiment's classes, in class order.
-    pub fn labels(self) -> &'static [f64] {
-        match self {
-            Experiment::Recognition => &[0.0, 1.0, 2.0, 3.0],
-            Experiment::Width => &[0.0, 1.0, 2.0, 5.0, 8.0, 10.0],
-        }
-    }
-
-    /// Human names of the classes.
-    pub fn class_names(self) -> &'static [&'static str] {
-        match self {
-            Experiment::Recognition => &["no crack", "crack", "bump", "wavy"],
-            Experiment::Width => &["0 mm", "1 mm", "2 mm", "5 mm", "8 mm", "10 mm"],
-        }
-    }
-
-    /// Number of classes.
-    pub fn n_classes(self) -> usize {
-        self.labels().len()
-    }
-
-    /// Class index of a label value.
-    pub fn class_of(self, label: f64) -> Option<u32> {
-        self.labels()
-            .iter()
-            .position(|&l| l == label)
-            .map(|i| i as u32)
-    }
-
-    /// `"recognition"` or `"width"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Experiment::Recognition => "recognition",
-            Experiment::Width => "width",
-        }
-    }
-
-    /// Recognises the experiment from the labels found: widths 5, 8 or 10 mm mean the width
-    /// experiment, a wavy pattern (3) means recognition; labels that fit both (only 0, 1, 2) or
-    /// neither are an error that says so.
-    pub fn detect(labels: &[f64]) -> Result<Experiment, TactileError> {
-        let fits = |e: Experiment| labels.iter().all(|&l| e.class_of(l).is_some());
-        let has = |v: &[f64]| labels.iter().any(|l| v.contains(l));
-        match (fits(Experiment::Recognition), fits(Experiment::Width)) {
-            (true, false) => Ok(Experiment::Recognition),
-            (false, true) => Ok(Experiment::Width),
-            (true, true) if has(&[3.0]) => Ok(Experiment::Recognition),
-            (true, true) if has(&[5.0, 8.0, 10.0]) => Ok(Experiment::Width),
-            (true, true) => Err(TactileError::Invalid(format!(
-                "labels {labels:?} fit both experiments (recognition 0–3, width 0/1/2/5/8/10 mm): name it with --experiment"
-            ))),
-            (false, false) => Err(TactileError::Invalid(format!(
-                "labels {labels:?} fit neither experiment (recognition: 0 flat, 1 crack, 2 bump, 3 wavy; width: 0, 1, 2, 5, 8, 10 mm)"
-            ))),
-        }
-    }
-}
+/// Which of the paper's two experiments a set of recordings belongs to: defined with the label column it
+/// gives a meaning to, in `crackbot-recording`.
+pub use crackbot_recording::{Experiment, ExperimentError};
 
 /// How slides are cut before windowing.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -147,6 +83,26 @@ impl Default for PipelineConfig {
 }
 
 impl PipelineConfig {
+    /// Checks every parameter once (segmentation, windows, features, context) into a [`Pipeline`] that
+    /// builds windows without checking them again: the checked-parameters pattern of linfa's
+    /// `ParamGuard`.
+    pub fn check(&self) -> Result<Pipeline, TactileError> {
+        if let Some(c) = &self.context {
+            c.validate()?;
+        }
+        let segmenter = match &self.segmentation {
+            Segmentation::None => None,
+            Segmentation::Method(m) => Some(m.check().map_err(TactileError::Pipeline)?),
+        };
+        let extractor = FeatureExtractor::new(self.spec.clone(), self.window)
+            .map_err(TactileError::Pipeline)?;
+        Ok(Pipeline {
+            config: self.clone(),
+            segmenter,
+            extractor,
+        })
+    }
+
     /// Values per feature row.
     pub fn n_features(&self) -> usize {
         match &self.context {
@@ -204,16 +160,31 @@ impl WindowSet {
 
 /// The label shared by every row of a recording, or an error naming the file.
 pub fn recording_label(path: &Path, rec: &Recording) -> Result<f64, TactileError> {
-    rec.label().ok_or_else(|| {
-        TactileError::Invalid(format!(
-            "{}: the label (column 8) is not constant over the recording",
-            path.display()
-        ))
+    rec.label().ok_or_else(|| TactileError::MixedLabels {
+        path: path.to_path_buf(),
     })
 }
 
 /// Detects the experiment from the labels of all recordings.
 pub fn detect_experiment(recordings: &[(PathBuf, Recording)]) -> Result<Experiment, TactileError> {
+    detect_experiment_of(recordings)
+}
+
+/// The experiment: `given`, or detected from the labels of `train` and `test` together.
+pub fn choose_experiment(
+    given: Option<Experiment>,
+    train: &[(PathBuf, Recording)],
+    test: &[(PathBuf, Recording)],
+) -> Result<Experiment, TactileError> {
+    match given {
+        Some(e) => Ok(e),
+        None => detect_experiment_of(train.iter().chain(test)),
+    }
+}
+
+fn detect_experiment_of<'a>(
+    recordings: impl IntoIterator<Item = &'a (PathBuf, Recording)>,
+) -> Result<Experiment, TactileError> {
     let mut labels = Vec::new();
     for (path, rec) in recordings {
         let l = recording_label(path, rec)?;
@@ -222,17 +193,13 @@ pub fn detect_experiment(recordings: &[(PathBuf, Recording)]) -> Result<Experime
         }
     }
     labels.sort_by(f64::total_cmp);
-    Experiment::detect(&labels)
+    Ok(Experiment::detect(&labels)?)
 }
 
 fn channel_medians(rec: &Recording) -> [f64; 4] {
     let mut out = [0.0; 4];
     for (c, slot) in out.iter_mut().enumerate() {
-        let mut v: Vec<f64> = rec
-            .rows
-            .iter()
-            .map(|r| [r.d1, r.d2, r.d3, r.p][c])
-            .collect();
+        let mut v: Vec<f64> = rec.rows.iter().map(|r| r.channels()[c]).collect();
         if v.is_empty() {
             continue;
         }
@@ -242,125 +209,143 @@ fn channel_medians(rec: &Recording) -> [f64; 4] {
     out
 }
 
-/// Builds the labelled windows of `recordings` under `experiment`.
+/// Builds the labelled windows of `recordings` under `experiment` ([`PipelineConfig::check`], then
+/// [`Pipeline::build_windows`]).
 pub fn build_windows(
     recordings: &[(PathBuf, Recording)],
     experiment: Experiment,
     config: &PipelineConfig,
 ) -> Result<WindowSet, TactileError> {
-    if let Some(c) = &config.context {
-        c.validate().map_err(TactileError::Invalid)?;
+    config.check()?.build_windows(recordings, experiment)
+}
+
+/// A [`PipelineConfig`] whose parameters were checked ([`PipelineConfig::check`]).
+#[derive(Debug, Clone)]
+pub struct Pipeline {
+    config: PipelineConfig,
+    segmenter: Option<Segmenter>,
+    extractor: FeatureExtractor,
+}
+
+impl Pipeline {
+    /// The checked configuration.
+    pub fn config(&self) -> &PipelineConfig {
+        &self.config
     }
-    let mut set = WindowSet {
-        experiment,
-        x: Vec::new(),
-        n_features: config.n_features(),
-        y: Vec::new(),
-        label: Vec::new(),
-        slides: Vec::new(),
-        sources: recordings.iter().map(|(p, _)| p.clone()).collect(),
-    };
-    for (index, (path, rec)) in recordings.iter().enumerate() {
-        let label = recording_label(path, rec)?;
-        let class = experiment.class_of(label).ok_or_else(|| {
-            TactileError::Invalid(format!(
-                "{}: label {label} is not a class of the {} experiment",
-                path.display(),
-                experiment.name()
-            ))
-        })?;
-        let offset = match config.normalisation {
-            Normalisation::None => [0.0; 4],
-            Normalisation::RecordingMedian => channel_medians(rec),
+
+    /// Builds the labelled windows of `recordings` under `experiment`.
+    pub fn build_windows(
+        &self,
+        recordings: &[(PathBuf, Recording)],
+        experiment: Experiment,
+    ) -> Result<WindowSet, TactileError> {
+        let config = &self.config;
+        let mut set = WindowSet {
+            experiment,
+            x: Vec::new(),
+            n_features: config.n_features(),
+            y: Vec::new(),
+            label: Vec::new(),
+            slides: Vec::new(),
+            sources: recordings.iter().map(|(p, _)| p.clone()).collect(),
         };
-        let corrected = |r: &crackbot_recording::Row| {
-            [
-                r.d1 - offset[0],
-                r.d2 - offset[1],
-                r.d3 - offset[2],
-                r.p - offset[3],
-            ]
-        };
-        // The whole recording, offset-corrected, and its directions: what context spans see.
-        let (all_samples, all_directions): (Vec<[f64; 4]>, Vec<u8>) = if config.context.is_some() {
-            rec.rows.iter().map(|r| (corrected(r), r.direction)).unzip()
-        } else {
-            (Vec::new(), Vec::new())
-        };
-        for range in rec.slides() {
-            if range.len() < config.min_slide_len.max(1) {
-                continue;
-            }
-            let rows = &rec.rows[range.clone()];
-            let samples: Vec<[f64; 4]> = rows.iter().map(corrected).collect();
-            let segment = match &config.segmentation {
-                Segmentation::None => Segment {
-                    ranges: std::iter::once(0..samples.len()).collect(),
-                    trial_len: samples.len(),
-                },
-                Segmentation::Method(m) => {
-                    let p: Vec<f64> = rows.iter().map(|r| r.p).collect();
-                    m.segment(&p).map_err(|e| {
-                        TactileError::Invalid(format!(
-                            "{}: slide {}: segmentation failed: {e}",
-                            path.display(),
-                            rows[0].slide
-                        ))
-                    })?
-                }
-            };
-            let m = extract_segment_features(&samples, &segment, &config.spec, config.window)
-                .map_err(|e| {
-                    TactileError::Invalid(format!(
-                        "{}: slide {}: {e}",
-                        path.display(),
-                        rows[0].slide
-                    ))
+        for (index, (path, rec)) in recordings.iter().enumerate() {
+            let label = recording_label(path, rec)?;
+            let class = experiment
+                .class_of(label)
+                .ok_or_else(|| TactileError::UnknownLabel {
+                    path: path.clone(),
+                    label,
+                    experiment,
                 })?;
-            let start = set.y.len();
-            let n = m.n_rows();
-            match &config.context {
-                None => set.x.extend_from_slice(&m.data),
-                Some(c) => {
-                    let baseline = slide_baseline(&samples, c.baseline_len);
-                    for (k, &end) in m.window_ends.iter().enumerate() {
-                        if c.keep_window {
-                            set.x.extend_from_slice(m.row(k).unwrap_or(&[]));
+            let offset = match config.normalisation {
+                Normalisation::None => [0.0; 4],
+                Normalisation::RecordingMedian => channel_medians(rec),
+            };
+            let corrected = |r: &crackbot_recording::Row| -> [f64; 4] {
+                let c = r.channels();
+                std::array::from_fn(|i| c[i] - offset[i])
+            };
+            // The whole recording, offset-corrected, and its directions: what context spans see.
+            let (all_samples, all_directions): (Vec<[f64; 4]>, Vec<u8>) =
+                if config.context.is_some() {
+                    rec.rows.iter().map(|r| (corrected(r), r.direction)).unzip()
+                } else {
+                    (Vec::new(), Vec::new())
+                };
+            for range in rec.slides() {
+                if range.len() < config.min_slide_len.max(1) {
+                    continue;
+                }
+                let rows = &rec.rows[range.clone()];
+                let samples: Vec<[f64; 4]> = rows.iter().map(corrected).collect();
+                let segment = match &self.segmenter {
+                    None => Segment {
+                        ranges: std::iter::once(0..samples.len()).collect(),
+                        trial_len: samples.len(),
+                    },
+                    Some(segmenter) => {
+                        let p: Vec<f64> = rows.iter().map(|r| r.p).collect();
+                        segmenter
+                            .segment(&p)
+                            .map_err(|source| TactileError::Segmentation {
+                                path: path.clone(),
+                                slide: rows[0].slide,
+                                source,
+                            })?
+                    }
+                };
+                let m = self
+                    .extractor
+                    .extract_segment(&samples, &segment)
+                    .map_err(|source| TactileError::Features {
+                        path: path.clone(),
+                        slide: rows[0].slide,
+                        source,
+                    })?;
+                let start = set.y.len();
+                let n = m.n_rows();
+                match &config.context {
+                    None => set.x.extend_from_slice(&m.data),
+                    Some(c) => {
+                        let baseline = slide_baseline(&samples, c.baseline_len);
+                        for (k, &end) in m.window_ends.iter().enumerate() {
+                            if c.keep_window {
+                                set.x.extend_from_slice(m.row(k).unwrap_or(&[]));
+                            }
+                            let place = WindowPlace {
+                                samples: &all_samples,
+                                directions: &all_directions,
+                                slide_start: range.start,
+                                end: range.start + end,
+                            };
+                            context_row(
+                                c,
+                                place,
+                                config.spec.set.channels(),
+                                config.window.len,
+                                &baseline,
+                                &mut set.x,
+                            );
                         }
-                        let place = WindowPlace {
-                            samples: &all_samples,
-                            directions: &all_directions,
-                            slide_start: range.start,
-                            end: range.start + end,
-                        };
-                        context_row(
-                            c,
-                            place,
-                            config.spec.set.channels(),
-                            config.window.len,
-                            &baseline,
-                            &mut set.x,
-                        );
                     }
                 }
+                set.y.extend(std::iter::repeat_n(class, n));
+                set.label.extend(std::iter::repeat_n(label, n));
+                set.slides.push(SlideRef {
+                    recording: index,
+                    slide: rows[0].slide,
+                    class,
+                    label,
+                    windows: start..start + n,
+                });
             }
-            set.y.extend(std::iter::repeat_n(class, n));
-            set.label.extend(std::iter::repeat_n(label, n));
-            set.slides.push(SlideRef {
-                recording: index,
-                slide: rows[0].slide,
-                class,
-                label,
-                windows: start..start + n,
-            });
         }
+        if set.y.is_empty() {
+            return Err(TactileError::NoWindows);
+        }
+        Ok(set)
     }
-    if set.y.is_empty() {
-        return Err(TactileError::Invalid(
-            "no feature window: every slide was too short or segmented away".into(),
-        ));
-    }
-    Ok(set)
 }
 
 #[cfg(test)]
@@ -369,6 +354,7 @@ mod tests {
 
     #[test]
     fn experiments_are_recognised_from_labels() {
+        // `Experiment` lives in crackbot-recording; this path keeps working.
         assert_eq!(
             Experiment::detect(&[0.0, 1.0, 2.0, 3.0]).unwrap(),
             Experiment::Recognition
@@ -403,6 +389,46 @@ mod tests {
             })
             .collect();
         Recording { rows, extra: None }
+    }
+
+    #[test]
+    fn errors_keep_their_source_and_name_the_slide() {
+        let mut rec = synthetic(1.0);
+        rec.rows[250].d2 = f64::NAN;
+        let recs = vec![(PathBuf::from("bad.csv"), rec)];
+        let config = PipelineConfig {
+            segmentation: Segmentation::None,
+            ..PipelineConfig::default()
+        };
+        let err = build_windows(&recs, Experiment::Recognition, &config).unwrap_err();
+        assert!(
+            matches!(
+                &err,
+                TactileError::Features {
+                    slide: 2,
+                    source: crackbot_dsp::DspError::NonFinite { .. },
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        let text = err.to_string();
+        assert!(
+            text.starts_with("bad.csv: slide 2: sample 50, channel D2"),
+            "{text}"
+        );
+        assert!(std::error::Error::source(&err).is_some());
+        let wavy = vec![(PathBuf::from("wavy.csv"), synthetic(3.0))];
+        let err = build_windows(&wavy, Experiment::Width, &config).unwrap_err();
+        assert!(matches!(err, TactileError::UnknownLabel { .. }), "{err:?}");
+        let mixed = detect_experiment(&[(PathBuf::from("x"), synthetic(4.0))]).unwrap_err();
+        assert!(
+            matches!(
+                mixed,
+                TactileError::Experiment(ExperimentError::Unknown { .. })
+            ),
+            "{mixed:?}"
+        );
     }
 
     #[test]

@@ -37,10 +37,6 @@ impl ClassifierKind {
     }
 }
 
-fn forest_error(e: crackbot_forest::ForestError) -> TactileError {
-    TactileError::Invalid(e.to_string())
-}
-
 /// Tree settings of the random forests beyond the number of trees; the default is
 /// scikit-learn's (`max_features = sqrt` for classification, unlimited depth, leaves of 1).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
@@ -69,47 +65,41 @@ impl ForestTuning {
     }
 }
 
-/// Trains `kind` on every window of `train`.
+/// Reports the training of a random forest: `(trees done, trees in all)` after each tree, one call at a
+/// time, in order (see [`RandomForest::fit_with_progress`]). KNN and QDA report nothing.
+pub type TrainProgress<'p> = &'p mut (dyn FnMut(usize, usize) + Send);
+
+/// Trains `kind` on every window of `train`, reporting no progress.
 pub fn train_classifier(
     train: &WindowSet,
     kind: ClassifierKind,
     seed: u64,
-    quiet: bool,
 ) -> Result<Box<dyn Classifier + Send + Sync>, TactileError> {
-    train_classifier_tuned(train, kind, ForestTuning::default(), seed, quiet)
+    train_classifier_tuned(train, kind, ForestTuning::default(), seed, &mut |_, _| {})
 }
 
-/// [`train_classifier`] with forest settings (ignored by KNN and QDA).
+/// [`train_classifier`] with forest settings (ignored by KNN and QDA), reporting a forest's progress
+/// to `progress`.
 pub fn train_classifier_tuned(
     train: &WindowSet,
     kind: ClassifierKind,
     tuning: ForestTuning,
     seed: u64,
-    quiet: bool,
+    progress: TrainProgress<'_>,
 ) -> Result<Box<dyn Classifier + Send + Sync>, TactileError> {
     let data = Dataset::with_classes(
         train.x.clone(),
         train.n_features,
         train.y.clone(),
         train.experiment.n_classes(),
-    )
-    .map_err(forest_error)?;
+    )?;
     Ok(match kind {
         ClassifierKind::Forest { n_trees } => {
-            let params = tuning.apply(
-                ForestParams::classifier()
-                    .n_trees(n_trees)
-                    .seed(seed)
-                    .quiet(quiet),
-            );
-            Box::new(RandomForest::fit(&data, &params).map_err(forest_error)?)
+            let params = tuning.apply(ForestParams::classifier().n_trees(n_trees).seed(seed));
+            Box::new(RandomForest::fit_with_progress(&data, &params, progress)?)
         }
-        ClassifierKind::Knn => {
-            Box::new(Knn::fit(&data, KnnParams::default()).map_err(forest_error)?)
-        }
-        ClassifierKind::Qda => {
-            Box::new(Qda::fit(&data, QdaParams::default()).map_err(forest_error)?)
-        }
+        ClassifierKind::Knn => Box::new(Knn::fit(&data, KnnParams::default())?),
+        ClassifierKind::Qda => Box::new(Qda::fit(&data, QdaParams::default())?),
     })
 }
 
@@ -151,13 +141,16 @@ pub fn test_classifier_with_slide_voters(
     let mut all = vec![own];
     for (i, (voter, set)) in voters.iter().enumerate() {
         if set.slides.len() != test.slides.len() || set.experiment != test.experiment {
-            return Err(TactileError::Invalid(format!(
-                "slide voter {i}: {} slides of the {} experiment, the test set has {} of the {}",
-                set.slides.len(),
-                set.experiment.name(),
-                test.slides.len(),
-                test.experiment.name()
-            )));
+            return Err(TactileError::SlideVoter {
+                voter: i,
+                detail: format!(
+                    "{} slides of the {} experiment, the test set has {} of the {}",
+                    set.slides.len(),
+                    set.experiment.name(),
+                    test.slides.len(),
+                    test.experiment.name()
+                ),
+            });
         }
         if let Some((j, (a, b))) = set
             .slides
@@ -166,10 +159,13 @@ pub fn test_classifier_with_slide_voters(
             .enumerate()
             .find(|(_, (a, b))| a.windows != b.windows || a.class != b.class)
         {
-            return Err(TactileError::Invalid(format!(
-                "slide voter {i}: slide {j} (recording {}, slide {}) has windows {:?}, the test set {:?} (recording {}, slide {})",
-                a.recording, a.slide, a.windows, b.windows, b.recording, b.slide
-            )));
+            return Err(TactileError::SlideVoter {
+                voter: i,
+                detail: format!(
+                    "slide {j} (recording {}, slide {}) has windows {:?}, the test set {:?} (recording {}, slide {})",
+                    a.recording, a.slide, a.windows, b.windows, b.recording, b.slide
+                ),
+            });
         }
         all.push(window_probabilities(*voter, set)?);
     }
@@ -184,13 +180,12 @@ fn window_probabilities(
 ) -> Result<Vec<f32>, TactileError> {
     let k = set.experiment.n_classes();
     if model.n_classes() != k || model.n_features() != set.n_features {
-        return Err(TactileError::Invalid(format!(
-            "the model has {} classes and {} features, the test set {} and {}",
-            model.n_classes(),
-            model.n_features(),
-            k,
-            set.n_features
-        )));
+        return Err(TactileError::ModelMismatch {
+            model_classes: model.n_classes(),
+            model_features: model.n_features(),
+            set_classes: k,
+            set_features: set.n_features,
+        });
     }
     let mut proba = vec![0f32; set.n_rows() * k];
     proba
@@ -244,41 +239,40 @@ pub struct WidthOutcome {
     pub slide_mae_mm: f64,
 }
 
-/// Trains a width regressor on `train` (labels in mm) and measures it on `test`.
+/// Trains a width regressor on `train` (labels in mm) and measures it on `test`, reporting no
+/// progress.
 pub fn width_regression(
     train: &WindowSet,
     test: &WindowSet,
     n_trees: usize,
     seed: u64,
-    quiet: bool,
 ) -> Result<WidthOutcome, TactileError> {
-    width_regression_tuned(train, test, n_trees, ForestTuning::default(), seed, quiet)
+    width_regression_tuned(
+        train,
+        test,
+        n_trees,
+        ForestTuning::default(),
+        seed,
+        &mut |_, _| {},
+    )
 }
 
 /// [`width_regression`] with forest settings (a `max_features` fraction replaces the regressor's
-/// default of every feature).
+/// default of every feature), reporting the regressor's progress to `progress`.
 pub fn width_regression_tuned(
     train: &WindowSet,
     test: &WindowSet,
     n_trees: usize,
     tuning: ForestTuning,
     seed: u64,
-    quiet: bool,
+    progress: TrainProgress<'_>,
 ) -> Result<WidthOutcome, TactileError> {
     let y: Vec<f32> = train.label.iter().map(|&l| l as f32).collect();
-    let data =
-        RegressionDataset::new(train.x.clone(), train.n_features, y).map_err(forest_error)?;
-    let params = tuning.apply(
-        ForestParams::regressor()
-            .n_trees(n_trees)
-            .seed(seed)
-            .quiet(quiet),
-    );
-    let model = RandomForestRegressor::fit(&data, &params).map_err(forest_error)?;
+    let data = RegressionDataset::new(train.x.clone(), train.n_features, y)?;
+    let params = tuning.apply(ForestParams::regressor().n_trees(n_trees).seed(seed));
+    let model = RandomForestRegressor::fit_with_progress(&data, &params, progress)?;
     let mut estimates = vec![0f32; test.n_rows()];
-    model
-        .predict_batch(&test.x, test.n_features, &mut estimates)
-        .map_err(forest_error)?;
+    model.predict_batch(&test.x, test.n_features, &mut estimates)?;
     let window_est: Vec<f64> = estimates.iter().map(|&e| f64::from(e)).collect();
     let window_mae_mm = mean_absolute_error(&test.label, &window_est);
     let mut slide_truth = Vec::new();

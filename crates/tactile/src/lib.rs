@@ -1,26 +1,34 @@
 //! The tactile pipeline end to end, on the authors' recordings or the project's own: recordings →
 //! segmented slides → windowed features → classifiers, the evaluation protocols of the paper
 //! (and stricter ones), metrics, statistics, tables and plots.
+//!
+//! * [`dataset`]: recordings → labelled feature windows ([`dataset::PipelineConfig`], checked once into a
+//!   [`dataset::Pipeline`]);
+//! * [`eval`]: training and testing classifiers, slide verdicts, width regression;
+//! * [`evaluation`]: the whole `crackbot tactile eval` flow as one call returning a `Serialize` report;
+//! * [`metrics`], [`context`].
+//!
+//! Cargo features (default off), for research only:
+//!
+//! * `research`: the paper's grid ([`paper`], with its Kruskal–Wallis statistics in [`stats`], `statrs`) and
+//!   the random forest's accuracy/run-time sweep ([`tradeoff`]);
+//! * `plots`: PNG figures of those results ([`plots`], `plotters`); implies `research`.
+//!
+//! Nothing here draws progress bars: long calls take a progress callback and the binary draws.
 
 pub mod context;
 pub mod dataset;
+mod error;
 pub mod eval;
+pub mod evaluation;
 pub mod metrics;
+#[cfg(feature = "research")]
 pub mod paper;
+#[cfg(feature = "plots")]
 pub mod plots;
+#[cfg(feature = "research")]
 pub mod stats;
+#[cfg(feature = "research")]
 pub mod tradeoff;
 
-/// Errors of the tactile pipeline.
-#[derive(Debug, thiserror::Error)]
-pub enum TactileError {
-    /// An argument or a data set is unusable; the message says why.
-    #[error("{0}")]
-    Invalid(String),
-}
-
-impl From<crackbot_forest::ForestError> for TactileError {
-    fn from(e: crackbot_forest::ForestError) -> Self {
-        TactileError::Invalid(e.to_string())
-    }
-}
+pub use error::TactileError;

@@ -28,11 +28,10 @@ impl ConfusionMatrix {
         predicted: &[u32],
     ) -> Result<Self, TactileError> {
         if truth.len() != predicted.len() {
-            return Err(TactileError::Invalid(format!(
-                "{} true labels but {} predictions",
-                truth.len(),
-                predicted.len()
-            )));
+            return Err(TactileError::LengthMismatch {
+                truth: truth.len(),
+                predicted: predicted.len(),
+            });
         }
         let mut m = Self::new(n_classes);
         for (&t, &p) in truth.iter().zip(predicted) {
@@ -45,10 +44,11 @@ impl ConfusionMatrix {
     pub fn add(&mut self, truth: u32, predicted: u32) -> Result<(), TactileError> {
         let (t, p) = (truth as usize, predicted as usize);
         if t >= self.n_classes || p >= self.n_classes {
-            return Err(TactileError::Invalid(format!(
-                "label {truth} or prediction {predicted} outside {} classes",
-                self.n_classes
-            )));
+            return Err(TactileError::ClassOutOfRange {
+                truth,
+                predicted,
+                n_classes: self.n_classes,
+            });
         }
         self.counts[t * self.n_classes + p] += 1;
         Ok(())
@@ -57,9 +57,10 @@ impl ConfusionMatrix {
     /// Adds every count of `other` (same number of classes).
     pub fn merge(&mut self, other: &ConfusionMatrix) -> Result<(), TactileError> {
         if other.n_classes != self.n_classes {
-            return Err(TactileError::Invalid(
-                "confusion matrices of different sizes".into(),
-            ));
+            return Err(TactileError::ConfusionSize {
+                expected: self.n_classes,
+                found: other.n_classes,
+            });
         }
         for (a, b) in self.counts.iter_mut().zip(&other.counts) {
             *a += b;

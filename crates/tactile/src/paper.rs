@@ -5,14 +5,16 @@
 //!
 //! Every test repetition is one the model never saw: the leaky 70/30 split of overlapping windows
 //! is not offered.
+//!
+//! [`paper_study`] is the whole `crackbot tactile paper` run: every folder's grid, Markdown and JSON.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crackbot_dsp::{Feature, FeatureSet, FeatureSpec};
-use crackbot_recording::Recording;
+use crackbot_recording::{collect_recordings, Recording};
 use serde::Serialize;
 
-use crate::dataset::{build_windows, Experiment, PipelineConfig, WindowSet};
+use crate::dataset::{detect_experiment, Experiment, PipelineConfig, WindowSet};
 use crate::eval::{test_classifier, train_classifier, ClassifierKind};
 use crate::metrics::ConfusionMatrix;
 use crate::stats::{kruskal_wallis, mean_std, KruskalWallis};
@@ -83,12 +85,9 @@ pub type Repetitions = Vec<(u32, Vec<(PathBuf, Recording)>)>;
 pub fn by_repetition(recordings: Vec<(PathBuf, Recording)>) -> Result<Repetitions, TactileError> {
     let mut groups: Repetitions = Vec::new();
     for (path, rec) in recordings {
-        let r = rec.repetition().ok_or_else(|| {
-            TactileError::Invalid(format!(
-                "{}: the repetition (column 9) is not constant",
-                path.display()
-            ))
-        })?;
+        let r = rec
+            .repetition()
+            .ok_or_else(|| TactileError::MixedRepetitions { path: path.clone() })?;
         match groups.iter_mut().find(|(k, _)| *k == r) {
             Some((_, v)) => v.push((path, rec)),
             None => groups.push((r, vec![(path, rec)])),
@@ -96,10 +95,9 @@ pub fn by_repetition(recordings: Vec<(PathBuf, Recording)>) -> Result<Repetition
     }
     groups.sort_by_key(|(k, _)| *k);
     if groups.len() < 2 {
-        return Err(TactileError::Invalid(format!(
-            "the intersession protocol needs recordings of at least two repetitions, found {:?}",
-            groups.iter().map(|(k, _)| k).collect::<Vec<_>>()
-        )));
+        return Err(TactileError::TooFewRepetitions {
+            found: groups.iter().map(|(k, _)| *k).collect(),
+        });
     }
     Ok(groups)
 }
@@ -121,15 +119,16 @@ pub fn run_grid(
                 spec: FeatureSpec::new(feature, set),
                 ..base.clone()
             };
+            let pipeline = config.check()?;
             let sets: Vec<(u32, WindowSet)> = repetitions
                 .iter()
-                .map(|(r, recs)| build_windows(recs, experiment, &config).map(|w| (*r, w)))
+                .map(|(r, recs)| pipeline.build_windows(recs, experiment).map(|w| (*r, w)))
                 .collect::<Result<_, _>>()?;
             for &kind in classifiers {
                 let mut pairs = Vec::new();
                 let mut confusion = ConfusionMatrix::new(experiment.n_classes());
                 for (train_rep, train) in &sets {
-                    let model = train_classifier(train, kind, seed, true)?;
+                    let model = train_classifier(train, kind, seed)?;
                     for (test_rep, test) in sets.iter().filter(|(r, _)| r != train_rep) {
                         let o = test_classifier(model.as_ref(), test)?;
                         confusion.merge(&o.windows)?;
@@ -278,4 +277,116 @@ impl PaperTables {
         }
         md
     }
+}
+
+/// What [`paper_study`] runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PaperConfig {
+    /// The classifiers of the grid.
+    pub classifiers: Vec<ClassifierKind>,
+    /// Trees of the random forests (the command line builds [`ClassifierKind::Forest`] with it); at
+    /// least 1.
+    pub n_trees: usize,
+    /// Segmentation, windows and normalisation; the feature spec is replaced cell by cell.
+    pub base: PipelineConfig,
+    /// Seed of the forests.
+    pub seed: u64,
+}
+
+/// Progress of [`paper_study`].
+#[derive(Debug, Clone, Copy)]
+#[non_exhaustive]
+pub enum PaperEvent<'a> {
+    /// The grid of one folder starts.
+    Folder {
+        /// The folder (or file) of recordings.
+        folder: &'a Path,
+        /// Its experiment.
+        experiment: Experiment,
+        /// Cells of its grid.
+        cells: usize,
+    },
+    /// One cell of the grid is done.
+    Cell {
+        /// The experiment of the folder.
+        experiment: Experiment,
+        /// The cell.
+        cell: &'a CellResult,
+    },
+    /// The grid of one folder is done (its figures and tables follow).
+    FolderDone {
+        /// The folder.
+        folder: &'a Path,
+    },
+}
+
+/// What [`paper_study`] wrote.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PaperReport {
+    /// The tables of every folder, as Markdown with the figures' links.
+    pub markdown: String,
+    /// The tables of every folder (the JSON file holds this list).
+    pub tables: Vec<PaperTables>,
+    /// `paper-tables.md`.
+    pub markdown_path: PathBuf,
+    /// `paper-tables.json`.
+    pub json_path: PathBuf,
+}
+
+/// The paper's tables for every folder of `data` (one experiment per folder): reads the recordings,
+/// detects the experiment, groups by repetition and runs the grid ([`run_grid`]), then writes
+/// `paper-tables.md` and `paper-tables.json` into `out` (created). `figures(out, tables)` draws the
+/// folder's figures into `out` and returns their Markdown (or nothing); `progress` follows the grid.
+pub fn paper_study(
+    config: &PaperConfig,
+    data: &[PathBuf],
+    out: &Path,
+    mut progress: impl FnMut(PaperEvent<'_>),
+    mut figures: impl FnMut(&Path, &PaperTables) -> Result<String, TactileError>,
+) -> Result<PaperReport, TactileError> {
+    if config.n_trees == 0 {
+        return Err(TactileError::TooSmall {
+            argument: "--trees",
+            min: 1,
+        });
+    }
+    std::fs::create_dir_all(out).map_err(TactileError::creating(out))?;
+    let mut markdown =
+        String::from("# The paper's tables, reproduced by `crackbot tactile paper`\n\n");
+    let mut all = Vec::new();
+    for folder in data {
+        let recordings = collect_recordings(std::slice::from_ref(folder))?;
+        let experiment = detect_experiment(&recordings)?;
+        let repetitions = by_repetition(recordings)?;
+        progress(PaperEvent::Folder {
+            folder,
+            experiment,
+            cells: Feature::ALL.len() * FeatureSet::ALL.len() * config.classifiers.len(),
+        });
+        let tables = run_grid(
+            experiment,
+            &repetitions,
+            &config.classifiers,
+            &config.base,
+            config.seed,
+            |cell| progress(PaperEvent::Cell { experiment, cell }),
+        )?;
+        progress(PaperEvent::FolderDone { folder });
+        markdown.push_str(&format!("Data: {}\n\n", folder.display()));
+        markdown.push_str(&tables.to_markdown());
+        markdown.push('\n');
+        markdown.push_str(&figures(out, &tables)?);
+        all.push(tables);
+    }
+    let markdown_path = out.join("paper-tables.md");
+    let json_path = out.join("paper-tables.json");
+    std::fs::write(&markdown_path, &markdown).map_err(TactileError::writing(&markdown_path))?;
+    std::fs::write(&json_path, serde_json::to_string_pretty(&all)?)
+        .map_err(TactileError::writing(&json_path))?;
+    Ok(PaperReport {
+        markdown,
+        tables: all,
+        markdown_path,
+        json_path,
+    })
 }

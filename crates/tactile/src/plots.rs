@@ -17,7 +17,64 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use crate::metrics::ConfusionMatrix;
 use crate::paper::{paper_reference, CellResult, PaperTables};
 use crate::tradeoff::{depth_name, Tradeoff};
-use crate::TactileError;
+
+/// Why a figure could not be drawn. Every variant about a file names it.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlotError {
+    /// No usable font for the text ([`load_font`]).
+    #[error("{reason}")]
+    Font {
+        /// Which files were tried and how to get one.
+        reason: String,
+    },
+    /// The target file does not end in `.png`.
+    #[error("{}: plots are written as PNG, the file name must end in .png", path.display())]
+    NotPng {
+        /// The target.
+        path: PathBuf,
+    },
+    /// The target's folder does not exist.
+    #[error("{}: cannot write the plot, the folder {} does not exist", path.display(), dir.display())]
+    MissingFolder {
+        /// The target.
+        path: PathBuf,
+        /// Its folder.
+        dir: PathBuf,
+    },
+    /// Drawing or writing the PNG failed.
+    #[error("{}: could not write the plot: {reason}", path.display())]
+    Draw {
+        /// The target.
+        path: PathBuf,
+        /// What the drawing library said.
+        reason: String,
+    },
+    /// The class names do not match the confusion matrix.
+    #[error("{}: {names} class names for a confusion matrix of {classes} classes", path.display())]
+    ClassNames {
+        /// The target.
+        path: PathBuf,
+        /// Class names given.
+        names: usize,
+        /// Classes of the matrix.
+        classes: usize,
+    },
+    /// The tables hold no result of the classifier asked for.
+    #[error("{}: no result of classifier {classifier} to plot", path.display())]
+    NoResults {
+        /// The target.
+        path: PathBuf,
+        /// The classifier.
+        classifier: String,
+    },
+    /// The trade-off holds no forest.
+    #[error("{}: no forest measured, nothing to plot", path.display())]
+    NothingToPlot {
+        /// The target.
+        path: PathBuf,
+    },
+}
 
 /// Size of [`confusion_png`] images, pixels (width, height).
 pub const CONFUSION_SIZE: (u32, u32) = (760, 700);
@@ -39,7 +96,7 @@ static LOADED_FONT: OnceLock<Result<PathBuf, String>> = OnceLock::new();
 
 /// Loads the font that every plot draws its text with (once per process) and returns its path;
 /// the error says which files were tried and how to get one.
-pub fn load_font() -> Result<PathBuf, TactileError> {
+pub fn load_font() -> Result<PathBuf, PlotError> {
     LOADED_FONT
         .get_or_init(|| {
             let mut candidates: Vec<PathBuf> = Vec::new();
@@ -73,7 +130,7 @@ pub fn load_font() -> Result<PathBuf, TactileError> {
             ))
         })
         .clone()
-        .map_err(TactileError::Invalid)
+        .map_err(|reason| PlotError::Font { reason })
 }
 
 type DrawResult = Result<(), Box<dyn Error>>;
@@ -85,23 +142,21 @@ fn render(
     path: &Path,
     size: (u32, u32),
     draw: impl FnOnce(&Area<'_>) -> DrawResult,
-) -> Result<(), TactileError> {
+) -> Result<(), PlotError> {
     let is_png = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
     if !is_png {
-        return Err(TactileError::Invalid(format!(
-            "{}: plots are written as PNG, the file name must end in .png",
-            path.display()
-        )));
+        return Err(PlotError::NotPng {
+            path: path.to_path_buf(),
+        });
     }
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         if !dir.is_dir() {
-            return Err(TactileError::Invalid(format!(
-                "{}: cannot write the plot, the folder {} does not exist",
-                path.display(),
-                dir.display()
-            )));
+            return Err(PlotError::MissingFolder {
+                path: path.to_path_buf(),
+                dir: dir.to_path_buf(),
+            });
         }
     }
     load_font()?;
@@ -112,8 +167,9 @@ fn render(
         root.present()?;
         Ok(())
     })();
-    result.map_err(|e| {
-        TactileError::Invalid(format!("{}: could not write the plot: {e}", path.display()))
+    result.map_err(|e| PlotError::Draw {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
     })
 }
 
@@ -140,14 +196,14 @@ pub fn confusion_png<S: AsRef<str>>(
     matrix: &ConfusionMatrix,
     class_names: &[S],
     title: &str,
-) -> Result<(), TactileError> {
+) -> Result<(), PlotError> {
     let n = matrix.n_classes();
     if n == 0 || class_names.len() != n {
-        return Err(TactileError::Invalid(format!(
-            "{}: {} class names for a confusion matrix of {n} classes",
-            path.display(),
-            class_names.len()
-        )));
+        return Err(PlotError::ClassNames {
+            path: path.to_path_buf(),
+            names: class_names.len(),
+            classes: n,
+        });
     }
     let rows = matrix.rows();
     render(path, CONFUSION_SIZE, |root| {
@@ -296,17 +352,17 @@ pub fn accuracy_boxplot_png(
     path: &Path,
     tables: &PaperTables,
     classifier: &str,
-) -> Result<(), TactileError> {
+) -> Result<(), PlotError> {
     let cells: Vec<&CellResult> = tables
         .cells
         .iter()
         .filter(|c| c.classifier == classifier)
         .collect();
     if cells.is_empty() {
-        return Err(TactileError::Invalid(format!(
-            "{}: no result of classifier {classifier} to plot",
-            path.display()
-        )));
+        return Err(PlotError::NoResults {
+            path: path.to_path_buf(),
+            classifier: classifier.to_string(),
+        });
     }
     let sets = first_seen(cells.iter().map(|c| c.set.as_str()));
     let features = first_seen(cells.iter().map(|c| c.feature.as_str()));
@@ -452,13 +508,12 @@ pub fn accuracy_boxplot_png(
 /// The random forest's accuracy against its median single-window latency, one line per depth
 /// limit, each point labelled with its number of trees: window accuracy on the left, slide
 /// accuracy on the right. Writes [`TRADEOFF_SIZE`].
-pub fn tradeoff_png(path: &Path, tradeoff: &Tradeoff) -> Result<(), TactileError> {
+pub fn tradeoff_png(path: &Path, tradeoff: &Tradeoff) -> Result<(), PlotError> {
     let rows = &tradeoff.rows;
     if rows.is_empty() {
-        return Err(TactileError::Invalid(format!(
-            "{}: no forest measured, nothing to plot",
-            path.display()
-        )));
+        return Err(PlotError::NothingToPlot {
+            path: path.to_path_buf(),
+        });
     }
     let us: Vec<f64> = rows.iter().map(|r| 1e6 * r.latency_seconds).collect();
     let x_lo = us.iter().copied().fold(f64::INFINITY, f64::min).max(1e-3) / 1.5;
@@ -580,7 +635,7 @@ fn slug(parts: &[&str]) -> String {
 /// The figures of one experiment of the paper's grid, written into `dir` (which must exist):
 /// the confusion matrix (summed over the pairs) of the random forest on MAV D1D2+P and of the
 /// best cell of every classifier, and one accuracy box plot per classifier.
-pub fn paper_plots(dir: &Path, tables: &PaperTables) -> Result<Vec<PlotFile>, TactileError> {
+pub fn paper_plots(dir: &Path, tables: &PaperTables) -> Result<Vec<PlotFile>, PlotError> {
     let exp = tables.experiment.name();
     let mut chosen: Vec<&CellResult> = Vec::new();
     if let Some(c) = tables

@@ -35,17 +35,17 @@ pub struct KruskalWallis {
 /// Needs at least two non-empty groups of finite values, not all equal.
 pub fn kruskal_wallis(groups: &[&[f64]]) -> Result<KruskalWallis, TactileError> {
     if groups.len() < 2 || groups.iter().any(|g| g.is_empty()) {
-        return Err(TactileError::Invalid(
-            "Kruskal–Wallis needs at least two non-empty groups".into(),
-        ));
+        return Err(TactileError::Statistics {
+            reason: "Kruskal–Wallis needs at least two non-empty groups".into(),
+        });
     }
     let mut all: Vec<(f64, usize)> = Vec::new();
     for (g, values) in groups.iter().enumerate() {
         for &v in values.iter() {
             if !v.is_finite() {
-                return Err(TactileError::Invalid(format!(
-                    "Kruskal–Wallis: non-finite value {v} in group {g}"
-                )));
+                return Err(TactileError::Statistics {
+                    reason: format!("Kruskal–Wallis: non-finite value {v} in group {g}"),
+                });
             }
             all.push((v, g));
         }
@@ -77,13 +77,15 @@ pub fn kruskal_wallis(groups: &[&[f64]]) -> Result<KruskalWallis, TactileError> 
         - 3.0 * (n + 1.0);
     let correction = 1.0 - tie_term / (n * n * n - n);
     if correction <= 0.0 {
-        return Err(TactileError::Invalid(
-            "Kruskal–Wallis: all values are equal".into(),
-        ));
+        return Err(TactileError::Statistics {
+            reason: "Kruskal–Wallis: all values are equal".into(),
+        });
     }
     let h = h0 / correction;
     let dof = groups.len() - 1;
-    let chi2 = ChiSquared::new(dof as f64).map_err(|e| TactileError::Invalid(e.to_string()))?;
+    let chi2 = ChiSquared::new(dof as f64).map_err(|e| TactileError::Statistics {
+        reason: e.to_string(),
+    })?;
     Ok(KruskalWallis {
         h,
         p: chi2.sf(h),

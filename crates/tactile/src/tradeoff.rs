@@ -8,14 +8,18 @@
 //! each batch is timed as a whole and divided by its length, and the median over the batches is
 //! reported. Consecutive windows overlap, like the stream the robot sees, so their paths through
 //! the trees are similar; a shuffled order would be slower on large forests.
+//!
+//! [`tradeoff_study`] is the whole `crackbot tactile tradeoff` run: recordings to Markdown and JSON.
 
 use std::hint::black_box;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crackbot_forest::{Classifier, Dataset, ForestParams, RandomForest};
+use crackbot_recording::collect_recordings;
 use serde::Serialize;
 
-use crate::dataset::{Experiment, WindowSet};
+use crate::dataset::{choose_experiment, Experiment, PipelineConfig, WindowSet};
 use crate::eval::test_classifier;
 use crate::TactileError;
 
@@ -99,9 +103,9 @@ pub fn median_latency(
 ) -> Result<f64, TactileError> {
     let n = test.n_rows();
     if n == 0 || batch == 0 {
-        return Err(TactileError::Invalid(
-            "latency needs at least one test window and a batch of at least one".into(),
-        ));
+        return Err(TactileError::InvalidSetting {
+            reason: "latency needs at least one test window and a batch of at least one",
+        });
     }
     let time_batch = |start: usize, end: usize| {
         let t = Instant::now();
@@ -134,23 +138,22 @@ pub fn run_tradeoff(
     mut progress: impl FnMut(&TradeoffRow),
 ) -> Result<Tradeoff, TactileError> {
     if config.n_trees.is_empty() || config.max_depths.is_empty() {
-        return Err(TactileError::Invalid(
-            "the grid needs at least one tree count and one depth limit".into(),
-        ));
+        return Err(TactileError::InvalidSetting {
+            reason: "the grid needs at least one tree count and one depth limit",
+        });
     }
     if config.n_trees.contains(&0) || config.max_depths.contains(&Some(0)) {
-        return Err(TactileError::Invalid(
-            "tree counts and depth limits must be at least 1".into(),
-        ));
+        return Err(TactileError::InvalidSetting {
+            reason: "tree counts and depth limits must be at least 1",
+        });
     }
     if train.experiment != test.experiment || train.n_features != test.n_features {
-        return Err(TactileError::Invalid(format!(
-            "training windows ({} experiment, {} features) and test windows ({} experiment, {} features) differ",
-            train.experiment.name(),
-            train.n_features,
-            test.experiment.name(),
-            test.n_features
-        )));
+        return Err(TactileError::WindowSetMismatch {
+            train_experiment: train.experiment,
+            train_features: train.n_features,
+            test_experiment: test.experiment,
+            test_features: test.n_features,
+        });
     }
     let data = Dataset::with_classes(
         train.x.clone(),
@@ -164,8 +167,7 @@ pub fn run_tradeoff(
             let params = ForestParams::classifier()
                 .n_trees(n_trees)
                 .max_depth(max_depth)
-                .seed(config.seed)
-                .quiet(true);
+                .seed(config.seed);
             let started = Instant::now();
             let forest = RandomForest::fit(&data, &params)?;
             let train_seconds = started.elapsed().as_secs_f64();
@@ -238,4 +240,109 @@ impl Tradeoff {
         }
         md
     }
+}
+
+/// What [`tradeoff_study`] runs: the recordings, the window pipeline and the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TradeoffStudy {
+    /// Training recordings (files or folders).
+    pub train: Vec<PathBuf>,
+    /// Test recordings (files or folders).
+    pub test: Vec<PathBuf>,
+    /// The experiment; `None` detects it from the labels of all recordings.
+    pub experiment: Option<Experiment>,
+    /// The window pipeline.
+    pub pipeline: PipelineConfig,
+    /// The grid and the measurement settings.
+    pub grid: TradeoffConfig,
+}
+
+/// What [`tradeoff_study`] measured and wrote.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TradeoffReport {
+    /// The measured grid (the JSON file holds it).
+    pub tradeoff: Tradeoff,
+    /// The Markdown page (table, data, link to the figure).
+    pub markdown: String,
+    /// `tradeoff.md`.
+    pub markdown_path: PathBuf,
+    /// `tradeoff.json`.
+    pub json_path: PathBuf,
+    /// `tradeoff.png`, drawn by the caller's `figure`.
+    pub png_path: PathBuf,
+}
+
+/// The whole `crackbot tactile tradeoff` run: reads the recordings, builds their windows, runs the
+/// grid ([`run_tradeoff`], `progress` after each forest), creates `out`, lets `figure(png_path,
+/// tradeoff)` draw `out/tradeoff.png`, and writes `tradeoff.md` (which links the figure) and
+/// `tradeoff.json`.
+pub fn tradeoff_study(
+    study: &TradeoffStudy,
+    out: &Path,
+    progress: impl FnMut(&TradeoffRow),
+    figure: impl FnOnce(&Path, &Tradeoff) -> Result<(), TactileError>,
+) -> Result<TradeoffReport, TactileError> {
+    let grid = &study.grid;
+    if grid.n_trees.is_empty() || grid.n_trees.contains(&0) {
+        return Err(TactileError::ListTooSmall {
+            argument: "--trees",
+            what: "tree count",
+            min: 1,
+        });
+    }
+    if grid.latency_batch == 0 {
+        return Err(TactileError::TooSmall {
+            argument: "--batch",
+            min: 1,
+        });
+    }
+    let train = collect_recordings(&study.train)?;
+    let test = collect_recordings(&study.test)?;
+    let experiment = choose_experiment(study.experiment, &train, &test)?;
+    let pipeline = study.pipeline.check()?;
+    let train_set = pipeline.build_windows(&train, experiment)?;
+    let test_set = pipeline.build_windows(&test, experiment)?;
+    let tradeoff = run_tradeoff(&train_set, &test_set, grid, progress)?;
+    std::fs::create_dir_all(out).map_err(TactileError::creating(out))?;
+    let png_path = out.join("tradeoff.png");
+    figure(&png_path, &tradeoff)?;
+    let files = |paths: &[PathBuf]| {
+        paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let spec = &study.pipeline.spec;
+    let markdown = format!(
+        "# Random forest: accuracy against run time (`crackbot tactile tradeoff`)\n\n\
+         {} on {} {}, segmentation {}; trained on {} ({} recordings), tested on {} ({} recordings); seed {}.\n\n\
+         {}\n![accuracy against latency](tradeoff.png)\n",
+        experiment.name(),
+        spec.features
+            .iter()
+            .map(|f| f.name())
+            .collect::<Vec<_>>()
+            .join("+"),
+        spec.set.name(),
+        study.pipeline.segmentation.name(),
+        files(&study.train),
+        train.len(),
+        files(&study.test),
+        test.len(),
+        grid.seed,
+        tradeoff.to_markdown()
+    );
+    let markdown_path = out.join("tradeoff.md");
+    let json_path = out.join("tradeoff.json");
+    std::fs::write(&markdown_path, &markdown).map_err(TactileError::writing(&markdown_path))?;
+    std::fs::write(&json_path, serde_json::to_string_pretty(&tradeoff)?)
+        .map_err(TactileError::writing(&json_path))?;
+    Ok(TradeoffReport {
+        tradeoff,
+        markdown,
+        markdown_path,
+        json_path,
+        png_path,
+    })
 }

@@ -8,11 +8,7 @@ use crackbot_tactile::eval::ClassifierKind;
 use crackbot_tactile::paper::{by_repetition, run_grid};
 
 fn data(experiment: &str) -> PathBuf {
-    PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/tactile"
-    ))
-    .join(experiment)
+    crackbot_datasets::require(crackbot_datasets::TACTILE).join(experiment)
 }
 
 #[test]

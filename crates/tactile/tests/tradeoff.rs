@@ -7,11 +7,7 @@ use crackbot_tactile::dataset::{build_windows, Experiment, PipelineConfig, Windo
 use crackbot_tactile::tradeoff::{median_latency, run_tradeoff, TradeoffConfig};
 
 fn data(file: &str) -> PathBuf {
-    PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/tactile/type"
-    ))
-    .join(file)
+    crackbot_datasets::require(crackbot_datasets::TACTILE_TYPE).join(file)
 }
 
 /// The first four slides of each of the four surfaces' recordings of one repetition.

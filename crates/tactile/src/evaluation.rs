@@ -1,0 +1,295 @@
+//! The `crackbot tactile eval` flow as one call: train on some recordings, test on others, and return
+//! a [`Serialize`] report ([`EvalReport`]) that any front end prints (the CLI's `--json` output is this
+//! report, key for key).
+//!
+//! The flow: the experiment (given, or detected from the labels of all recordings), the labelled windows
+//! of both sets ([`PipelineConfig`], checked once), the classifier trained on the training windows and
+//! timed, with context features a second forest on the paper's own window features that joins the slide
+//! verdicts ([`SlideVote`]), window- and slide-level metrics on the test windows and, for the width
+//! experiment, the crack width by regression. Progress of every forest goes to a callback
+//! ([`EvalStage`]); nothing is drawn here.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use crackbot_dsp::{FeatureSpec, WindowConfig};
+use crackbot_recording::{collect_recordings, Recording};
+use serde::Serialize;
+
+use crate::context::ContextConfig;
+use crate::dataset::{choose_experiment, Experiment, PipelineConfig};
+use crate::eval::{
+    test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
+    width_regression_tuned, ClassifierKind, ForestTuning,
+};
+use crate::TactileError;
+
+/// Who decides a slide's verdict when the windows carry context features.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub enum SlideVote {
+    /// The context forest and a forest on the paper's window features: their slide means are summed
+    /// ([`test_classifier_with_slide_voters`]).
+    #[default]
+    Both,
+    /// The context forest alone.
+    Context,
+}
+
+/// What [`evaluate`] does.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvalConfig {
+    /// The experiment; `None` detects it from the labels of all recordings.
+    pub experiment: Option<Experiment>,
+    /// Segmentation, windows, features, normalisation and context of the windows.
+    pub pipeline: PipelineConfig,
+    /// The classifier.
+    pub classifier: ClassifierKind,
+    /// Trees of the width regressor (and, by the command line's convention, of the classifier when it
+    /// is a forest); at least 1.
+    pub n_trees: usize,
+    /// Tree settings of the random forests beyond the number of trees.
+    pub tuning: ForestTuning,
+    /// Seed of the forests.
+    pub seed: u64,
+    /// Slide verdicts with context features (ignored without).
+    pub slide_vote: SlideVote,
+}
+
+impl Default for EvalConfig {
+    /// The paper's pipeline and random forest (100 trees), seed 1, experiment detected.
+    fn default() -> Self {
+        EvalConfig {
+            experiment: None,
+            pipeline: PipelineConfig::default(),
+            classifier: ClassifierKind::Forest { n_trees: 100 },
+            n_trees: 100,
+            tuning: ForestTuning::default(),
+            seed: 1,
+            slide_vote: SlideVote::Both,
+        }
+    }
+}
+
+/// Which model of the flow a progress report is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum EvalStage {
+    /// The classifier on the configured windows.
+    Classifier,
+    /// The forest on the paper's window features that joins the slide verdicts (with context).
+    SlideVoter,
+    /// The width regressor (width experiment).
+    WidthRegressor,
+}
+
+/// The outcome of [`evaluate`]; its JSON form is `crackbot tactile eval --json`. Fields are in
+/// alphabetical order, as that output has always been.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EvalReport {
+    /// Class names, in class order.
+    pub classes: Vec<String>,
+    /// `RF`, `KNN` or `QDA`.
+    pub classifier: String,
+    /// The context features, when used.
+    pub context: Option<ContextConfig>,
+    /// `recognition` or `width`.
+    pub experiment: String,
+    /// Feature name(s) (`RAW`, `MAV`, `RMS`; joined with `+` when several).
+    pub feature: String,
+    /// The forests' tree settings.
+    pub forest_tuning: ForestTuning,
+    /// Values per window.
+    pub n_features: usize,
+    /// `None` or `RecordingMedian`.
+    pub normalisation: String,
+    /// `none`, `paper` or `robust`.
+    pub segmentation: String,
+    /// Channel set (`P`, `D1D2D3`, `D1D2D3+P`, `D1D2+P`).
+    pub set: String,
+    /// Slide-level accuracy.
+    pub slide_accuracy: f64,
+    /// Slide-level confusion matrix, rows = true classes.
+    pub slide_confusion: Vec<Vec<u64>>,
+    /// Slide-level weighted precision.
+    pub slide_precision: f64,
+    /// Slide-level weighted recall.
+    pub slide_recall: f64,
+    /// Who decided the slide verdicts: `paper`, `context` or `context+paper`.
+    pub slide_vote: String,
+    /// Width regression: mean absolute error per slide (median of its windows), mm.
+    pub slide_width_mae_mm: Option<f64>,
+    /// Test recordings.
+    pub test_recordings: usize,
+    /// Test slides with at least one window.
+    pub test_slides: u64,
+    /// Test windows.
+    pub test_windows: usize,
+    /// Training recordings.
+    pub train_recordings: usize,
+    /// Training time of the classifier (and the slide voter, windows included), seconds.
+    pub train_seconds: f64,
+    /// Training windows.
+    pub train_windows: usize,
+    /// Width regression: mean absolute error per window, mm.
+    pub width_mae_mm: Option<f64>,
+    /// Window length and step.
+    pub window: WindowConfig,
+    /// Window-level accuracy.
+    pub window_accuracy: f64,
+    /// Window-level confusion matrix, rows = true classes.
+    pub window_confusion: Vec<Vec<u64>>,
+    /// Window-level weighted precision.
+    pub window_precision: f64,
+    /// Window-level weighted recall.
+    pub window_recall: f64,
+}
+
+/// The names of the features of `spec`, joined with `+`.
+fn feature_name(spec: &FeatureSpec) -> String {
+    spec.features
+        .iter()
+        .map(|f| f.name())
+        .collect::<Vec<_>>()
+        .join("+")
+}
+
+fn check(config: &EvalConfig) -> Result<(), TactileError> {
+    if config.n_trees == 0 {
+        return Err(TactileError::TooSmall {
+            argument: "--trees",
+            min: 1,
+        });
+    }
+    Ok(())
+}
+
+/// Reads the recordings named by `train` and `test` (files or folders, see [`collect_recordings`]) and
+/// runs [`evaluate_recordings`].
+pub fn evaluate(
+    config: &EvalConfig,
+    train: &[PathBuf],
+    test: &[PathBuf],
+    progress: impl FnMut(EvalStage, usize, usize) + Send,
+) -> Result<EvalReport, TactileError> {
+    check(config)?;
+    let train = collect_recordings(train)?;
+    let test = collect_recordings(test)?;
+    evaluate_recordings(config, &train, &test, progress)
+}
+
+/// Trains on `train`, tests on `test` (see the [module docs](self)). `progress(stage, done, total)` is
+/// called after each tree of each forest.
+pub fn evaluate_recordings(
+    config: &EvalConfig,
+    train: &[(PathBuf, Recording)],
+    test: &[(PathBuf, Recording)],
+    mut progress: impl FnMut(EvalStage, usize, usize) + Send,
+) -> Result<EvalReport, TactileError> {
+    check(config)?;
+    let experiment = choose_experiment(config.experiment, train, test)?;
+    let pipeline = config.pipeline.check()?;
+    let train_set = pipeline.build_windows(train, experiment)?;
+    let test_set = pipeline.build_windows(test, experiment)?;
+    let (kind, tuning, seed) = (config.classifier, config.tuning, config.seed);
+    let started = Instant::now();
+    let model = train_classifier_tuned(&train_set, kind, tuning, seed, &mut |done, total| {
+        progress(EvalStage::Classifier, done, total)
+    })?;
+    // With context, a forest on the paper's own window features (same segmentation and windows,
+    // so the same slides) joins the slide verdicts.
+    let voter = if config.pipeline.context.is_some() && config.slide_vote == SlideVote::Both {
+        let plain = PipelineConfig {
+            context: None,
+            ..config.pipeline.clone()
+        }
+        .check()?;
+        let vote_train = plain.build_windows(train, experiment)?;
+        let vote_test = plain.build_windows(test, experiment)?;
+        let vote_model =
+            train_classifier_tuned(&vote_train, kind, tuning, seed, &mut |done, total| {
+                progress(EvalStage::SlideVoter, done, total)
+            })?;
+        Some((vote_model, vote_test))
+    } else {
+        None
+    };
+    let train_seconds = started.elapsed().as_secs_f64();
+    let outcome = match &voter {
+        Some((vote_model, vote_test)) => test_classifier_with_slide_voters(
+            model.as_ref(),
+            &test_set,
+            &[(vote_model.as_ref(), vote_test)],
+        )?,
+        None => test_classifier(model.as_ref(), &test_set)?,
+    };
+    let width = match experiment {
+        Experiment::Width => Some(width_regression_tuned(
+            &train_set,
+            &test_set,
+            config.n_trees,
+            tuning,
+            seed,
+            &mut |done, total| progress(EvalStage::WidthRegressor, done, total),
+        )?),
+        Experiment::Recognition => None,
+    };
+    let p = &config.pipeline;
+    let (w, s) = (&outcome.windows, &outcome.slides);
+    Ok(EvalReport {
+        classes: experiment
+            .class_names()
+            .iter()
+            .map(|c| c.to_string())
+            .collect(),
+        classifier: kind.name().to_string(),
+        context: p.context.clone(),
+        experiment: experiment.name().to_string(),
+        feature: feature_name(&p.spec),
+        forest_tuning: tuning,
+        n_features: train_set.n_features,
+        normalisation: format!("{:?}", p.normalisation),
+        segmentation: p.segmentation.name().to_string(),
+        set: p.spec.set.name().to_string(),
+        slide_accuracy: s.accuracy(),
+        slide_confusion: s.rows(),
+        slide_precision: s.weighted_precision(),
+        slide_recall: s.weighted_recall(),
+        slide_vote: if voter.is_some() {
+            "context+paper"
+        } else if p.context.is_some() {
+            "context"
+        } else {
+            "paper"
+        }
+        .to_string(),
+        slide_width_mae_mm: width.as_ref().map(|x| x.slide_mae_mm),
+        test_recordings: test.len(),
+        test_slides: s.total(),
+        test_windows: test_set.n_rows(),
+        train_recordings: train.len(),
+        train_seconds,
+        train_windows: train_set.n_rows(),
+        width_mae_mm: width.as_ref().map(|x| x.window_mae_mm),
+        window: p.window,
+        window_accuracy: w.accuracy(),
+        window_confusion: w.rows(),
+        window_precision: w.weighted_precision(),
+        window_recall: w.weighted_recall(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zero_trees_are_refused_before_anything_is_read() {
+        let config = EvalConfig {
+            n_trees: 0,
+            ..EvalConfig::default()
+        };
+        let missing = [PathBuf::from("/nonexistent/recordings")];
+        let err = evaluate(&config, &missing, &missing, |_, _, _| {}).unwrap_err();
+        assert_eq!(err.to_string(), "--trees must be at least 1");
+    }
+}
