@@ -91,7 +91,7 @@ pub fn samples_of(recording: &Recording) -> Vec<Sample> {
                 seq,
                 device_time_us,
                 host_time: Duration::from_micros(device_time_us),
-                raw: [row.d1, row.d2, row.d3, row.p].map(to_count),
+                raw: row.channels().map(to_count),
                 flags,
                 missing_before: 0,
             }

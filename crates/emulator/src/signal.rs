@@ -110,7 +110,7 @@ impl SignalSource for RecordingSource {
     fn sample(&mut self, _t: f64) -> [f64; 4] {
         let row = self.rows[self.next % self.rows.len()];
         self.next = (self.next + 1) % self.rows.len();
-        [row.d1, row.d2, row.d3, row.p]
+        row.channels()
     }
 }
 
