@@ -360,7 +360,7 @@ const COLOURS: [RGBColor; 4] = [
 ];
 
 fn work_precision_png(path: &Path, rows: &[WorkPrecisionRow]) -> Result<()> {
-    crackbot_tactile::plots::load_font()?;
+    crackbot_plots::load_font()?;
     let ok: Vec<&WorkPrecisionRow> = rows
         .iter()
         .filter(|r| r.rms_error_counts.is_some_and(|e| e.is_finite()))
@@ -448,7 +448,7 @@ fn label_name(label: f64, experiment: Experiment) -> String {
 }
 
 fn compare(a: CompareArgs) -> Result<()> {
-    crackbot_tactile::plots::load_font()?;
+    crackbot_plots::load_font()?;
     let real = load_all(&a.real)?;
     let sim = load_all(&a.sim)?;
     let mut labels: Vec<f64> = real.iter().filter_map(|r| r.label()).collect();

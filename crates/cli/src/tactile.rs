@@ -530,9 +530,10 @@ fn classifier_of(arg: ClassifierArg, trees: usize) -> crackbot_tactile::eval::Cl
 }
 
 fn paper(args: PaperArgs) -> Result<()> {
+    use crackbot_plots::tactile::{paper_plots, plots_markdown};
     use crackbot_tactile::dataset::PipelineConfig;
     use crackbot_tactile::paper::{paper_study, PaperConfig, PaperEvent};
-    use crackbot_tactile::plots::{paper_plots, plots_markdown};
+    use crackbot_tactile::TactileError;
 
     let config = PaperConfig {
         classifiers: args
@@ -548,7 +549,7 @@ fn paper(args: PaperArgs) -> Result<()> {
         seed: args.seed,
     };
     // Fail before the long grid, not after it, when the plots cannot draw text.
-    crackbot_tactile::plots::load_font()?;
+    crackbot_plots::load_font()?;
     let mut bar: Option<ProgressBar> = None;
     let report = paper_study(
         &config,
@@ -595,7 +596,7 @@ fn paper(args: PaperArgs) -> Result<()> {
             _ => {}
         },
         |out, tables| {
-            let plots = paper_plots(out, tables)?;
+            let plots = paper_plots(out, tables).map_err(TactileError::figure)?;
             Ok(plots_markdown(&plots, out))
         },
     )?;
@@ -647,7 +648,7 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
         .iter()
         .map(|d| parse_depth(d))
         .collect::<Result<_>>()?;
-    crackbot_tactile::plots::load_font()?;
+    crackbot_plots::load_font()?;
     let study = TradeoffStudy {
         train: args.train.clone(),
         test: args.test.clone(),
@@ -675,7 +676,10 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
                 100.0 * r.slide_accuracy
             );
         },
-        |png, result| Ok(crackbot_tactile::plots::tradeoff_png(png, result)?),
+        |png, result| {
+            crackbot_plots::tactile::tradeoff_png(png, result)
+                .map_err(crackbot_tactile::TactileError::figure)
+        },
     )?;
     println!("{}", report.markdown);
     println!(

@@ -475,7 +475,7 @@ pub fn detector_tradeoff(args: DetectorTradeoffArgs) -> Result<()> {
     } else {
         args.models.clone()
     };
-    crackbot_tactile::plots::load_font()?;
+    crackbot_plots::load_font()?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let mut rows = Vec::new();

@@ -193,10 +193,16 @@ pub enum TactileError {
     /// A result could not be turned into JSON.
     #[error(transparent)]
     Json(#[from] serde_json::Error),
-    /// A figure could not be drawn (feature `plots`).
-    #[cfg(feature = "plots")]
+    /// A figure could not be drawn (by the closure the caller passed in).
     #[error(transparent)]
-    Plot(#[from] crate::plots::PlotError),
+    Figure(Box<dyn std::error::Error + Send + Sync>),
+}
+
+impl TactileError {
+    /// A [`Figure`](TactileError::Figure) error from whatever the figure-drawing closure failed with.
+    pub fn figure(error: impl std::error::Error + Send + Sync + 'static) -> Self {
+        TactileError::Figure(Box::new(error))
+    }
 }
 
 #[cfg(feature = "research")]

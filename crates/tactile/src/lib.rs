@@ -1,6 +1,6 @@
 //! The tactile pipeline end to end, on the authors' recordings or the project's own: recordings →
 //! segmented slides → windowed features → classifiers, the evaluation protocols of the paper
-//! (and stricter ones), metrics, statistics, tables and plots.
+//! (and stricter ones), metrics, statistics and tables (their figures: `crackbot-plots`).
 //!
 //! * [`dataset`]: recordings → labelled feature windows ([`dataset::PipelineConfig`], checked once into a
 //!   [`dataset::Pipeline`]);
@@ -11,8 +11,8 @@
 //! Cargo features (default off), for research only:
 //!
 //! * `research`: the paper's grid ([`paper`], with its Kruskal–Wallis statistics in [`stats`], `statrs`) and
-//!   the random forest's accuracy/run-time sweep ([`tradeoff`]);
-//! * `plots`: PNG figures of those results ([`plots`], `plotters`); implies `research`.
+//!   the random forest's accuracy/run-time sweep ([`tradeoff`]). Their figures are drawn by
+//!   `crackbot-plots`, passed in as closures.
 //!
 //! Nothing here draws progress bars: long calls take a progress callback and the binary draws.
 
@@ -24,8 +24,6 @@ pub mod evaluation;
 pub mod metrics;
 #[cfg(feature = "research")]
 pub mod paper;
-#[cfg(feature = "plots")]
-pub mod plots;
 #[cfg(feature = "research")]
 pub mod stats;
 #[cfg(feature = "research")]

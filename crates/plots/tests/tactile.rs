@@ -2,13 +2,13 @@
 
 use std::path::{Path, PathBuf};
 
-use crackbot_tactile::dataset::Experiment;
-use crackbot_tactile::metrics::ConfusionMatrix;
-use crackbot_tactile::paper::{CellResult, PairResult, PaperTables};
-use crackbot_tactile::plots::{
+use crackbot_plots::tactile::{
     accuracy_boxplot_png, confusion_png, paper_plots, plots_markdown, tradeoff_png, BOXPLOT_SIZE,
     CONFUSION_SIZE, TRADEOFF_SIZE,
 };
+use crackbot_tactile::dataset::Experiment;
+use crackbot_tactile::metrics::ConfusionMatrix;
+use crackbot_tactile::paper::{CellResult, PairResult, PaperTables};
 use crackbot_tactile::tradeoff::{Tradeoff, TradeoffConfig, TradeoffRow};
 
 /// A fresh, empty folder under Cargo's temporary folder for integration tests.
