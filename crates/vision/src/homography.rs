@@ -5,7 +5,10 @@
 //!   (the convention of [`crate::Detector`]).
 //! * Surface points are `(x, y)` in millimetres in the work-surface frame.
 //! * [`Homography`] holds the 3×3 matrix `H` with `(x, y, 1)ᵀ ~ H (u, v, 1)ᵀ` (pixel → surface)
-//!   and its inverse; it is stored scaled so that `H[2][2] = 1` when that is possible.
+//!   and its inverse; it is stored scaled so that `H[2][2] = 1` when that is possible. It, its
+//!   application to points ([`Horizon::Finite`](crackbot_imaging::Horizon::Finite): negative
+//!   `w` allowed, `|w|` near zero is at infinity), [`PointPair`] and [`ReprojectionStats`] are
+//!   defined in `crackbot_imaging::homography` and re-exported here.
 //! * Fitting is the normalised DLT (Hartley): each side is translated so its centroid is at the
 //!   origin and scaled so the mean distance from it is √2, the 2n×9 system is solved by SVD, and
 //!   the result is denormalised. [`fit_ransac`] adds robustness to gross outliers.
@@ -17,6 +20,8 @@
 
 use std::path::Path;
 
+use crackbot_imaging::homography::apply_finite;
+pub use crackbot_imaging::homography::{Homography, PointPair, ReprojectionStats};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -29,172 +34,12 @@ const GEOMETRY_EPS: f64 = 1e-9;
 /// The second-smallest singular value of the normalised DLT system, relative to the largest,
 /// below which the solution is not unique (ill-conditioned / degenerate configuration).
 const CONDITION_EPS: f64 = 1e-7;
-/// Homogeneous `w` (in normalised coordinates) below which a point is "at infinity".
-const INFINITY_EPS: f64 = 1e-9;
-
-/// One correspondence: a pixel and the surface point it shows.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct PointPair {
-    /// `(u, v)` in pixels.
-    pub pixel: [f64; 2],
-    /// `(x, y)` in millimetres on the surface.
-    pub surface: [f64; 2],
-}
-
-impl PointPair {
-    /// A pair from pixel `(u, v)` and surface `(x, y)`.
-    pub fn new(pixel: [f64; 2], surface: [f64; 2]) -> Self {
-        Self { pixel, surface }
-    }
-}
-
-/// A plane homography from pixels to surface millimetres, with its inverse.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Homography {
-    forward: Matrix3<f64>,
-    inverse: Matrix3<f64>,
-}
+// Homogeneous `w` (in normalised coordinates) below which a point is "at infinity": the same
+// tolerance as `Homography` applies.
+use crackbot_imaging::homography::INFINITY_EPS;
 
 fn invalid(message: impl Into<String>) -> VisionError {
     VisionError::Invalid(message.into())
-}
-
-fn apply(m: &Matrix3<f64>, p: [f64; 2]) -> Option<[f64; 2]> {
-    let r = m * Vector3::new(p[0], p[1], 1.0);
-    let scale = m.row(2).abs().sum() * (1.0 + p[0].abs() + p[1].abs());
-    let finite_point = r.z.abs() > INFINITY_EPS * scale;
-    if !finite_point {
-        return None;
-    }
-    let out = [r.x / r.z, r.y / r.z];
-    (out[0].is_finite() && out[1].is_finite()).then_some(out)
-}
-
-impl Homography {
-    /// A homography from its row-major pixel → surface matrix. Errors when the matrix is not finite
-    /// or not invertible.
-    pub fn from_matrix(matrix: [[f64; 3]; 3]) -> Result<Self, VisionError> {
-        if matrix.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(invalid(format!(
-                "homography matrix has non-finite entries: {matrix:?}"
-            )));
-        }
-        let m = Matrix3::from_fn(|r, c| matrix[r][c]);
-        Self::from_nalgebra(m)
-    }
-
-    fn from_nalgebra(m: Matrix3<f64>) -> Result<Self, VisionError> {
-        let sv = m.singular_values();
-        let (max, min) = (sv.max(), sv.min());
-        let well_conditioned = max > 0.0 && min / max > 1e-12;
-        if !well_conditioned {
-            return Err(invalid(format!(
-                "homography matrix is singular or nearly so (singular values {:?})",
-                sv.as_slice()
-            )));
-        }
-        let m = if m[(2, 2)].abs() > 1e-12 * max {
-            m / m[(2, 2)]
-        } else {
-            m / m.norm()
-        };
-        let inverse = m
-            .try_inverse()
-            .ok_or_else(|| invalid("homography matrix is not invertible"))?;
-        if inverse.iter().any(|v| !v.is_finite()) {
-            return Err(invalid("homography matrix is not invertible"));
-        }
-        Ok(Self {
-            forward: m,
-            inverse,
-        })
-    }
-
-    /// The row-major pixel → surface matrix.
-    pub fn matrix(&self) -> [[f64; 3]; 3] {
-        let m = &self.forward;
-        [
-            [m[(0, 0)], m[(0, 1)], m[(0, 2)]],
-            [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
-            [m[(2, 0)], m[(2, 1)], m[(2, 2)]],
-        ]
-    }
-
-    /// The pixel → surface matrix.
-    pub fn forward(&self) -> &Matrix3<f64> {
-        &self.forward
-    }
-
-    /// The surface → pixel matrix.
-    pub fn inverse(&self) -> &Matrix3<f64> {
-        &self.inverse
-    }
-
-    /// Surface `(x, y)` mm of pixel `(u, v)`; an error if the pixel is on the vanishing line (maps to
-    /// infinity) or not finite.
-    pub fn pixel_to_surface(&self, pixel: [f64; 2]) -> Result<[f64; 2], VisionError> {
-        apply(&self.forward, pixel)
-            .ok_or_else(|| invalid(format!("pixel {pixel:?} maps to infinity on the surface")))
-    }
-
-    /// Pixel `(u, v)` of surface point `(x, y)` mm; an error if it maps to infinity or is not finite.
-    pub fn surface_to_pixel(&self, surface: [f64; 2]) -> Result<[f64; 2], VisionError> {
-        apply(&self.inverse, surface).ok_or_else(|| {
-            invalid(format!(
-                "surface point {surface:?} maps to infinity in the image"
-            ))
-        })
-    }
-
-    /// Reprojection errors of `pairs` under this homography. A pair whose point maps to infinity
-    /// gets an infinite error.
-    pub fn reprojection_errors(&self, pairs: &[PointPair]) -> ReprojectionStats {
-        let dist = |a: Option<[f64; 2]>, b: [f64; 2]| match a {
-            Some(a) => (a[0] - b[0]).hypot(a[1] - b[1]),
-            None => f64::INFINITY,
-        };
-        let per_pair_mm: Vec<f64> = pairs
-            .iter()
-            .map(|p| dist(apply(&self.forward, p.pixel), p.surface))
-            .collect();
-        let per_pair_px: Vec<f64> = pairs
-            .iter()
-            .map(|p| dist(apply(&self.inverse, p.surface), p.pixel))
-            .collect();
-        let rms = |v: &[f64]| {
-            if v.is_empty() {
-                0.0
-            } else {
-                (v.iter().map(|e| e * e).sum::<f64>() / v.len() as f64).sqrt()
-            }
-        };
-        let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
-        ReprojectionStats {
-            rms_mm: rms(&per_pair_mm),
-            max_mm: max(&per_pair_mm),
-            rms_px: rms(&per_pair_px),
-            max_px: max(&per_pair_px),
-            per_pair_mm,
-            per_pair_px,
-        }
-    }
-}
-
-/// Reprojection errors of point pairs under a homography.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ReprojectionStats {
-    /// Root mean square surface-side error, mm.
-    pub rms_mm: f64,
-    /// Largest surface-side error, mm.
-    pub max_mm: f64,
-    /// Root mean square image-side error, px.
-    pub rms_px: f64,
-    /// Largest image-side error, px.
-    pub max_px: f64,
-    /// Surface-side error of each pair, mm.
-    pub per_pair_mm: Vec<f64>,
-    /// Image-side error of each pair, px.
-    pub per_pair_px: Vec<f64>,
 }
 
 /// Hartley normalisation: `T` with centroid → origin and mean distance → √2. `None` when all
@@ -390,7 +235,7 @@ fn fit_unchecked(pixels: &[[f64; 2]], surface: &[[f64; 2]]) -> Result<Homography
     let ts_inv = ts
         .try_inverse()
         .ok_or_else(|| invalid("surface normalisation is singular"))?;
-    Homography::from_nalgebra(ts_inv * hn * tp)
+    Ok(Homography::from_nalgebra(ts_inv * hn * tp)?)
 }
 
 /// A RANSAC fit: the homography refitted on the inliers, and which pairs are inliers.
@@ -426,7 +271,7 @@ fn inliers_of(h: &Homography, pairs: &[PointPair], threshold_mm: f64) -> (Vec<bo
     let mut total = 0.0;
     let mask = pairs
         .iter()
-        .map(|p| match apply(&h.forward, p.pixel) {
+        .map(|p| match apply_finite(h.forward(), p.pixel) {
             Some(s) => {
                 let e = (s[0] - p.surface[0]).hypot(s[1] - p.surface[1]);
                 let inlier = e <= threshold_mm;
@@ -583,7 +428,7 @@ impl HomographyCalibration {
 
     /// The homography of the calibration (validated).
     pub fn homography(&self) -> Result<Homography, VisionError> {
-        Homography::from_matrix(self.matrix)
+        Ok(Homography::from_matrix(self.matrix)?)
     }
 
     /// Checks units, finiteness, invertibility, that the pairs are usable, and that the matrix and
