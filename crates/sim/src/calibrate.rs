@@ -19,65 +19,16 @@
 use crackbot_recording::Recording;
 use serde::Serialize;
 
-use crate::experiment::{Experiment, ExperimentConfig, PlateMount, Samples};
+use crate::experiment::ExperimentConfig;
 use crate::finger::{FingerModel, Integrator};
 use crate::optics::OpticsParams;
+pub use crate::plates::{calibrated_mounts, calibrated_samples, calibrated_sensor};
+use crate::plates::{Experiment, PlateMount, Samples};
 use crate::run::{ProximityGeometry, Sample, SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crate::{SensorParams, SimError};
 
 /// Quantile levels compared between real and simulated channels.
 pub const QUANTILES: [f64; 10] = [0.05, 0.15, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.85, 0.95];
-
-/// The sensor as calibrated against repetition 1 of the authors' recognition recordings
-/// (`crackbot sim calibrate --real ../shared/data/tactile/type --repetition 1`).
-pub fn calibrated_sensor() -> SensorParams {
-    // The calibrated values are the defaults (see `OpticsParams::default`).
-    SensorParams::default()
-}
-
-/// The plates' geometry chosen by the same calibration from [`GEOMETRY_GRID`] (the paper gives
-/// only the crack widths and the wave).
-pub fn calibrated_samples() -> Samples {
-    Samples {
-        crack_depth_mm: 8.0,
-        bump_radius_mm: 6.0,
-        bump_height_mm: 1.0,
-        // `fit_roughness` on the flat plate, repetition 1.
-        roughness_rms_mm: 0.0087,
-        ..Samples::default()
-    }
-}
-
-/// How the paper's plates sit under the sensor, fitted on repetition 1 of the authors'
-/// recordings (`crackbot sim calibrate`), in the order of
-/// [`ExperimentConfig::surfaces`](crate::experiment::ExperimentConfig::surfaces).
-pub fn calibrated_mounts(experiment: Experiment) -> Vec<PlateMount> {
-    let table: &[([f64; 3], f64)] = match experiment {
-        // Flat, crack, bump, wavy.
-        Experiment::Recognition => &[
-            ([-1.06, -4.99, -5.88], 0.9896),
-            ([-0.14, 0.01, 1.18], 0.9958),
-            ([8.30, 3.51, 1.49], 1.0051),
-            ([2.82, 1.56, 2.47], 0.9939),
-        ],
-        // 0, 1, 2, 5, 8, 10 mm (another session: the cables sat differently).
-        Experiment::Width => &[
-            ([8.94, 7.01, 6.12], 1.0051),
-            ([8.88, 8.01, 6.16], 0.9927),
-            ([8.87, 2.01, 0.19], 1.0112),
-            ([8.86, 8.01, 7.18], 1.0112),
-            ([8.03, 8.14, 8.89], 1.0020),
-            ([6.31, 7.49, 10.97], 0.9649),
-        ],
-    };
-    table
-        .iter()
-        .map(|&(offset_counts, reflectivity)| PlateMount {
-            offset_counts,
-            reflectivity,
-        })
-        .collect()
-}
 
 /// Fits each plate's mount of `config`'s experiment to the `real` recordings (any number per
 /// plate, recognised by their label): the deformation channels' median offsets and the

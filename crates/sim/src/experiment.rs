@@ -15,88 +15,14 @@ use std::path::{Path, PathBuf};
 use crackbot_recording::{write_recording, Recording, Row};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::finger::Integrator;
+use crate::plates::{calibrated_mounts, calibrated_samples, calibrated_sensor};
+pub use crate::plates::{Experiment, PlateMount, Samples};
 use crate::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crate::surface::{Feature, Surface};
 use crate::{SensorParams, SimError};
-
-/// Which of the paper's experiments.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Experiment {
-    /// Surface recognition: flat, crack, bump, wavy pattern.
-    Recognition,
-    /// Crack width: 0, 1, 2, 5, 8, 10 mm.
-    Width,
-}
-
-/// The geometry of the paper's samples, as simulated.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Samples {
-    /// Depth of the cracks, mm.
-    pub crack_depth_mm: f64,
-    /// Angle of the cracks' walls from the plate, degrees.
-    pub crack_wall_angle_deg: f64,
-    /// Width of the crack of the recognition experiment, mm.
-    pub recognition_crack_width_mm: f64,
-    /// Widths of the width experiment, mm.
-    pub widths_mm: Vec<f64>,
-    /// Base radius of the bump, mm.
-    pub bump_radius_mm: f64,
-    /// Height of the bump, mm.
-    pub bump_height_mm: f64,
-    /// Amplitude of the wavy pattern, mm (the paper: 1 mm).
-    pub wave_amplitude_mm: f64,
-    /// Period of the wavy pattern, mm (the paper: 5 mm).
-    pub wave_period_mm: f64,
-    /// Roughness of the printed plates: standard deviation of the height texture, mm.
-    pub roughness_rms_mm: f64,
-    /// Roughness: length of its features, mm.
-    pub roughness_correlation_mm: f64,
-}
-
-impl Default for Samples {
-    fn default() -> Self {
-        Samples {
-            crack_depth_mm: 5.0,
-            crack_wall_angle_deg: 85.0,
-            recognition_crack_width_mm: 5.0,
-            widths_mm: vec![0.0, 1.0, 2.0, 5.0, 8.0, 10.0],
-            bump_radius_mm: 4.0,
-            bump_height_mm: 2.0,
-            wave_amplitude_mm: 1.0,
-            wave_period_mm: 5.0,
-            roughness_rms_mm: 0.0,
-            roughness_correlation_mm: 0.5,
-        }
-    }
-}
-
-/// How one plate sits under the sensor in the real set-up, as far as the signals show it: its
-/// colour (the proximity fibre's reflectivity) and the shift of the deformation channels' resting
-/// levels that its mounting and the session's cable routing cause (the paper found that the
-/// fibre cables' position shifts the data). Fitted per plate by [`crate::calibrate`], not
-/// modelled.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PlateMount {
-    /// Offset of D1, D2, D3, counts.
-    pub offset_counts: [f64; 3],
-    /// Reflectivity of the plate relative to the calibration plate.
-    pub reflectivity: f64,
-}
-
-impl Default for PlateMount {
-    fn default() -> Self {
-        PlateMount {
-            offset_counts: [0.0; 3],
-            reflectivity: 1.0,
-        }
-    }
-}
 
 /// Settings of a simulated experiment.
 #[derive(Debug, Clone, PartialEq)]
@@ -140,9 +66,9 @@ impl ExperimentConfig {
             speed_mm_s: 3.89,
             start_range_mm: (5.0, 10.0),
             position_rate_hz: 80.0,
-            samples: crate::calibrate::calibrated_samples(),
-            sensor: crate::calibrate::calibrated_sensor(),
-            mounts: crate::calibrate::calibrated_mounts(experiment),
+            samples: calibrated_samples(),
+            sensor: calibrated_sensor(),
+            mounts: calibrated_mounts(experiment),
             integrator: Integrator::default(),
             seed,
         }

@@ -8,6 +8,7 @@
 //!   L-stable SDIRK, backward Euler, and adaptive explicit Dormand–Prince).
 //! * [`optics`]: deformation and proximity → light → transducer voltage → 10-bit ADC counts, with
 //!   saturation, noise, drift, per-recording offset/gain changes and surface reflectivity.
+//! * [`plates`]: the paper's plates (geometry, mounts) and the values calibrated for them.
 //! * [`experiment`]: the paper's two experiments (surface recognition, crack width) written as
 //!   recordings in the authors' nine-column format, deterministic from a seed.
 //! * [`scene`]: TOML scenes (plate, features, camera, manipulator, sensor) with validation and a
@@ -21,6 +22,7 @@ pub mod camera;
 pub mod experiment;
 pub mod finger;
 pub mod optics;
+pub mod plates;
 pub mod render;
 pub mod run;
 pub mod scene;
