@@ -41,6 +41,16 @@ pub enum VisionError {
         /// What is wrong.
         message: String,
     },
+    /// A line of a point-pairs file (`u,v,x_mm,y_mm`) is not four numbers.
+    #[error("{path} line {line}: {message}")]
+    PointPairs {
+        /// The file.
+        path: PathBuf,
+        /// The line, counted from 1.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
     /// The ONNX model or runtime could not be used.
     #[error("{0}")]
     Runtime(String),

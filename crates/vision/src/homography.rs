@@ -512,3 +512,67 @@ impl HomographyCalibration {
         std::fs::write(path, text).map_err(VisionError::io(path))
     }
 }
+
+/// Reads point pairs from a CSV file: `u,v,x_mm,y_mm` per line (pixel column and row, surface x
+/// and y in mm). Blank lines and lines starting with `#` are skipped, and so is a first line
+/// that is not four numbers (a header). Any other line that is not four numbers is an error
+/// naming the file and the line.
+pub fn read_pairs(path: impl AsRef<Path>) -> Result<Vec<PointPair>, VisionError> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(VisionError::io(path))?;
+    parse_pairs(&text, path)
+}
+
+/// Parses the text of a point-pairs file (see [`read_pairs`]); `path` is only used in error
+/// messages.
+pub fn parse_pairs(text: &str, path: &Path) -> Result<Vec<PointPair>, VisionError> {
+    let mut pairs = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let nums: Result<Vec<f64>, _> = line
+            .split(',')
+            .map(str::trim)
+            .map(str::parse::<f64>)
+            .collect();
+        match nums {
+            Ok(n) if n.len() == 4 => pairs.push(PointPair::new([n[0], n[1]], [n[2], n[3]])),
+            Err(_) if i == 0 => continue, // header
+            _ => {
+                return Err(VisionError::PointPairs {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    message: format!("expected 4 numbers u,v,x_mm,y_mm, got {line:?}"),
+                })
+            }
+        }
+    }
+    Ok(pairs)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn pairs_files_skip_a_header_and_name_bad_lines() {
+        let p = Path::new("pairs.csv");
+        let pairs = parse_pairs("u,v,x_mm,y_mm\n\n# comment\n1, 2, 3, 4\n5,6,7,8\n", p).unwrap();
+        assert_eq!(
+            pairs,
+            vec![
+                PointPair::new([1.0, 2.0], [3.0, 4.0]),
+                PointPair::new([5.0, 6.0], [7.0, 8.0])
+            ]
+        );
+        let err = parse_pairs("1,2,3,4\n1,2,3\n", p).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "pairs.csv line 2: expected 4 numbers u,v,x_mm,y_mm, got \"1,2,3\""
+        );
+        assert!(read_pairs("no/such/pairs.csv").is_err());
+    }
+}
