@@ -568,3 +568,57 @@ pub fn real_noise(real: &[Recording]) -> [f64; 4] {
         mad * std::f64::consts::PI.sqrt() / 2.0
     })
 }
+
+/// What `crackbot sim calibrate` finds: the fit of the optics and geometry, and the plate
+/// mounts of each experiment fitted with it (`("recognition", …)`, then `("width", …)` when
+/// width recordings were given).
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrationSummary {
+    /// The fit.
+    pub report: CalibrationReport,
+    /// Per experiment, its plates' mounts in the order of `ExperimentConfig::surfaces`.
+    pub mounts: Vec<(String, Vec<PlateMount>)>,
+}
+
+/// Where a calibration starts: the paper's recognition experiment (seed 7) with first-guess
+/// optics, the default plate geometry and neutral mounts.
+pub fn starting_config() -> ExperimentConfig {
+    let mut config = ExperimentConfig::paper(Experiment::Recognition, 7);
+    config.sensor.optics = OpticsParams::first_guess();
+    config.samples = Samples::default();
+    config.mounts.clear();
+    config
+}
+
+/// Number of steps [`calibrate`] reports progress over (the geometries of [`GEOMETRY_GRID`]).
+pub fn calibration_steps() -> usize {
+    let (d, r, h) = GEOMETRY_GRID;
+    d.len() * r.len() * h.len()
+}
+
+/// Calibrates the simulated sensor on real recordings: [`calibrate`] from [`starting_config`] on
+/// the `recognition` recordings (at most `evaluations` per Nelder–Mead run, `progress` as
+/// [`calibrate`] calls it), then the plate mounts of the recognition experiment and, given
+/// `width` recordings, of the width experiment, with the fitted optics and geometry.
+pub fn calibrate_to_real(
+    recognition: &[Recording],
+    width: Option<&[Recording]>,
+    evaluations: usize,
+    progress: impl FnMut(usize, usize),
+) -> Result<CalibrationSummary, SimError> {
+    let config = starting_config();
+    let report = calibrate(&config, recognition, evaluations, progress)?;
+    let mut calibrated = config;
+    calibrated.sensor.optics = report.optics.clone();
+    calibrated.samples = report.samples.clone();
+    let mut mounts = vec![(
+        "recognition".to_string(),
+        fit_mounts(&calibrated, recognition)?,
+    )];
+    if let Some(width_real) = width {
+        let mut width_config = calibrated.clone();
+        width_config.experiment = Experiment::Width;
+        mounts.push(("width".to_string(), fit_mounts(&width_config, width_real)?));
+    }
+    Ok(CalibrationSummary { report, mounts })
+}

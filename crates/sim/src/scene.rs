@@ -126,6 +126,45 @@ impl Default for ManipulatorSpec {
     }
 }
 
+/// A summary of a scene ([`Scene::summary`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SceneSummary {
+    /// The scene's name (may be empty).
+    pub name: String,
+    /// The plate's size, mm.
+    pub plate_size_mm: [f64; 2],
+    /// The plate's material.
+    pub material: String,
+    /// Every feature, in scene order.
+    pub features: Vec<FeatureSummary>,
+    /// The camera, if any.
+    pub camera: Option<CameraSummary>,
+}
+
+/// One feature of a [`SceneSummary`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FeatureSummary {
+    /// Index in the scene's `features`.
+    pub index: usize,
+    /// Its kind (`crack`, `bump`, …).
+    pub kind: &'static str,
+    /// Lower corner of its footprint on the plate, mm.
+    pub min_mm: Point,
+    /// Upper corner of its footprint, mm.
+    pub max_mm: Point,
+}
+
+/// The camera of a [`SceneSummary`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CameraSummary {
+    /// Image size, pixels.
+    pub resolution: [u32; 2],
+    /// Optical centre, mm.
+    pub position_mm: [f64; 3],
+    /// Point looked at on the plate, mm.
+    pub look_at_mm: [f64; 2],
+}
+
 /// A whole scene, as read from a TOML file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -186,6 +225,42 @@ impl Scene {
                 manipulator: ManipulatorSpec::default(),
                 sensor: SensorParams::default(),
             },
+        }
+    }
+
+    /// The scene file at `path`, or the [built-in default](Scene::builtin_default) when `None`.
+    pub fn load_or_default(path: Option<&Path>) -> Result<Scene, SimError> {
+        match path {
+            Some(p) => Scene::load(p),
+            None => Ok(Scene::builtin_default()),
+        }
+    }
+
+    /// What `crackbot sim scene` shows: the plate, every feature's footprint and the camera.
+    pub fn summary(&self) -> SceneSummary {
+        SceneSummary {
+            name: self.name.clone(),
+            plate_size_mm: self.plate.size_mm,
+            material: self.plate.material.name.clone(),
+            features: self
+                .features
+                .iter()
+                .enumerate()
+                .map(|(index, f)| {
+                    let (min_mm, max_mm) = f.footprint();
+                    FeatureSummary {
+                        index,
+                        kind: f.kind(),
+                        min_mm,
+                        max_mm,
+                    }
+                })
+                .collect(),
+            camera: self.camera.as_ref().map(|c| CameraSummary {
+                resolution: c.resolution,
+                position_mm: c.position_mm,
+                look_at_mm: c.look_at_mm,
+            }),
         }
     }
 

@@ -31,9 +31,11 @@
 //!
 //! The parts: `assets` (the real crack strips), `texture` (procedural
 //! texture, noise, shading), `geometry`, `draw` (the renderer's steps), `frame` (frames and
-//! ground-truth boxes) and `export` (PNG, JSON and COCO files).
+//! ground-truth boxes), `export` (PNG, JSON and COCO files) and `dataset` (a run of frames
+//! written as a COCO dataset).
 
 mod assets;
+mod dataset;
 mod draw;
 mod export;
 mod frame;
@@ -41,6 +43,7 @@ mod geometry;
 mod texture;
 
 pub use assets::{CrackAssets, CrackStrip, CRACKS_DIR_ENV, CRACK_DATASETS};
+pub use dataset::{render_dataset, RenderSummary};
 pub use draw::{render, RenderOptions, SCREW_GREY};
 pub use export::{coco_dataset, coco_file, frame_json, write_coco_dataset, write_frame};
 pub use frame::{BoxKind, Frame, GroundTruthBox};
