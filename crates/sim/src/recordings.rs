@@ -182,7 +182,10 @@ mod tests {
     fn empty_folders_and_missing_repetitions_are_named() {
         let dir = tempfile::tempdir().unwrap();
         let err = load_recordings(dir.path()).unwrap_err();
-        assert!(err.to_string().contains("no .mat or .csv"), "{err}");
+        assert!(
+            err.to_string().contains(&dir.path().display().to_string()),
+            "{err}"
+        );
         let err = load_recordings(&dir.path().join("missing")).unwrap_err();
         assert!(
             err.to_string().starts_with("reading recordings in"),
