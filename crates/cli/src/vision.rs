@@ -395,7 +395,7 @@ fn parse_point(s: &str) -> std::result::Result<[f64; 2], String> {
 
 /// `crackbot homography`.
 pub fn homography(cmd: HomographyCommand) -> Result<()> {
-    use crackbot_vision::homography::{fit_dlt, fit_ransac};
+    use crackbot_vision::homography::{fit_calibration, RansacSettings};
     match cmd {
         HomographyCommand::Fit {
             pairs,
@@ -404,30 +404,22 @@ pub fn homography(cmd: HomographyCommand) -> Result<()> {
             iterations,
             seed,
         } => {
-            let all = read_pairs(&pairs)?;
-            let (h, kept) = match ransac_mm {
-                Some(t) => {
-                    let fit = fit_ransac(&all, t, iterations, seed)
-                        .with_context(|| format!("fitting {}", pairs.display()))?;
-                    let kept: Vec<_> = all
-                        .iter()
-                        .zip(&fit.inliers)
-                        .filter(|(_, &i)| i)
-                        .map(|(p, _)| *p)
-                        .collect();
-                    println!(
-                        "RANSAC ({t} mm): {} of {} pairs are inliers",
-                        kept.len(),
-                        all.len()
-                    );
-                    (fit.homography, kept)
-                }
-                None => (
-                    fit_dlt(&all).with_context(|| format!("fitting {}", pairs.display()))?,
-                    all,
-                ),
-            };
-            let cal = HomographyCalibration::new(&h, kept);
+            let settings = ransac_mm.map(|threshold_mm| RansacSettings {
+                threshold_mm,
+                iterations,
+                seed,
+            });
+            let fit = fit_calibration(read_pairs(&pairs)?, settings)
+                .with_context(|| format!("fitting {}", pairs.display()))?;
+            if let Some(r) = fit.ransac {
+                println!(
+                    "RANSAC ({} mm): {} of {} pairs are inliers",
+                    r.threshold_mm,
+                    fit.calibration.pairs.len(),
+                    fit.pairs_given
+                );
+            }
+            let cal = fit.calibration;
             cal.save(&out)?;
             println!(
                 "{}: {} pairs, reprojection error RMS {:.3} mm (max {:.3}), {:.3} px (max {:.3})",

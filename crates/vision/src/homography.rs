@@ -513,6 +513,56 @@ impl HomographyCalibration {
     }
 }
 
+/// RANSAC settings for [`fit_calibration`] (see [`fit_ransac`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RansacSettings {
+    /// Surface-side inlier threshold, mm.
+    pub threshold_mm: f64,
+    /// Random minimal samples drawn.
+    pub iterations: usize,
+    /// Seed of the sampling.
+    pub seed: u64,
+}
+
+/// A calibration fitted to point pairs ([`fit_calibration`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationFit {
+    /// The calibration, holding the pairs it kept (all of them without RANSAC, the inliers
+    /// with it).
+    pub calibration: HomographyCalibration,
+    /// Pairs given.
+    pub pairs_given: usize,
+    /// The RANSAC settings used, if any.
+    pub ransac: Option<RansacSettings>,
+}
+
+/// Fits a calibration to `pairs`: [`fit_dlt`] on all of them, or with `ransac`, [`fit_ransac`]
+/// keeping only its inliers.
+pub fn fit_calibration(
+    pairs: Vec<PointPair>,
+    ransac: Option<RansacSettings>,
+) -> Result<CalibrationFit, VisionError> {
+    let pairs_given = pairs.len();
+    let calibration = match ransac {
+        Some(r) => {
+            let fit = fit_ransac(&pairs, r.threshold_mm, r.iterations, r.seed)?;
+            let kept: Vec<PointPair> = pairs
+                .iter()
+                .zip(&fit.inliers)
+                .filter(|(_, &inlier)| inlier)
+                .map(|(p, _)| *p)
+                .collect();
+            HomographyCalibration::new(&fit.homography, kept)
+        }
+        None => HomographyCalibration::new(&fit_dlt(&pairs)?, pairs),
+    };
+    Ok(CalibrationFit {
+        calibration,
+        pairs_given,
+        ransac,
+    })
+}
+
 /// Reads point pairs from a CSV file: `u,v,x_mm,y_mm` per line (pixel column and row, surface x
 /// and y in mm). Blank lines and lines starting with `#` are skipped, and so is a first line
 /// that is not four numbers (a header). Any other line that is not four numbers is an error
