@@ -625,4 +625,27 @@ mod tests {
         );
         assert!(read_pairs("no/such/pairs.csv").is_err());
     }
+
+    #[test]
+    fn a_calibration_fit_keeps_all_pairs_or_the_ransac_inliers() {
+        let mut pairs: Vec<PointPair> = (0..5)
+            .flat_map(|i| (0..4).map(move |j| (f64::from(i) * 50.0, f64::from(j) * 30.0)))
+            .map(|(x, y)| {
+                let w = 1.0 + 0.001 * x + 0.0005 * y;
+                PointPair::new([(2.0 * x + 10.0) / w, (2.0 * y + 5.0) / w], [x, y])
+            })
+            .collect();
+        let all = fit_calibration(pairs.clone(), None).unwrap();
+        assert_eq!((all.calibration.pairs.len(), all.pairs_given), (20, 20));
+        assert!(all.ransac.is_none());
+        pairs.push(PointPair::new([5.0, 5.0], [180.0, 70.0]));
+        let settings = RansacSettings {
+            threshold_mm: 0.5,
+            iterations: 500,
+            seed: 1,
+        };
+        let fit = fit_calibration(pairs, Some(settings)).unwrap();
+        assert_eq!((fit.calibration.pairs.len(), fit.pairs_given), (20, 21));
+        assert!(fit.calibration.max_mm < 1e-6, "{}", fit.calibration.max_mm);
+    }
 }
