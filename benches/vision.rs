@@ -20,12 +20,11 @@ use crackbot_vision::preprocess::{letterbox, postprocess, PostprocessParams};
 use crackbot_vision::Detector;
 use criterion::{criterion_group, criterion_main, Criterion};
 
-const CRACKS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/cracks");
 const MODELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/models/detector");
 
 /// The first validation image of `dataset`.
 fn val_image(dataset: &str) -> image::RgbImage {
-    let dir = Path::new(CRACKS).join(dataset);
+    let dir = crackbot_datasets::require(crackbot_datasets::CRACKS).join(dataset);
     let coco: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("val.json")).expect("val.json"))
             .expect("JSON");

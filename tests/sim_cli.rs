@@ -7,7 +7,10 @@ use std::path::Path;
 use crackbot_recording::read_recording;
 use crackbot_tests::{crackbot, text};
 
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/tactile");
+/// The authors' recordings (`../shared/data/tactile`, or `$CRACKBOT_DATA_DIR/tactile`).
+fn data() -> std::path::PathBuf {
+    crackbot_datasets::require(crackbot_datasets::TACTILE)
+}
 
 fn utf8(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
@@ -99,7 +102,7 @@ fn tactile_eval_reads_simulated_recordings_and_tests_on_real_ones() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let sim = tmp.path().join("type");
     dataset(&sim, "recognition", "1", "2");
-    let real = Path::new(DATA).join("type/crack_crack_complete_2.mat");
+    let real = data().join("type/crack_crack_complete_2.mat");
     let o = crackbot(&[
         "tactile",
         "eval",
@@ -154,7 +157,7 @@ fn compare_and_work_precision_write_their_figures() {
         "sim",
         "compare",
         "--real",
-        &format!("{DATA}/type"),
+        &format!("{}/type", data().display()),
         "--sim",
         utf8(&sim),
         "--out",

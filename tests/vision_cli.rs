@@ -1,12 +1,15 @@
 //! `crackbot detect`, `eval-detector` and `homography` end to end: the real binary, the real model
 //! through ONNX Runtime, real photos (`../shared/data/cracks`), and bad input.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crackbot_tests::{crackbot, text};
 use serde_json::Value;
 
-const CRACKS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/cracks");
+/// The real crack photos (`../shared/data/cracks`, or `$CRACKBOT_DATA_DIR/cracks`).
+fn cracks() -> PathBuf {
+    crackbot_datasets::require(crackbot_datasets::CRACKS)
+}
 const REFERENCE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/models/detector/reference");
 
 fn ok_json(args: &[&str]) -> Value {
@@ -142,7 +145,7 @@ fn eval_detector_agrees_with_the_python_evaluation_of_the_model() {
     )
     .expect("JSON");
     for dataset in ["uav75", "quaywall"] {
-        let coco = format!("{CRACKS}/{dataset}/val.json");
+        let coco = format!("{}/{dataset}/val.json", cracks().display());
         let rust = ok_json(&["eval-detector", "--coco", &coco, "--json"]);
         let py = &python["pycocotools_val"][format!("320/{dataset}")];
         // Same model, contract and metric; the photos are JPEG, and PIL and the image crate's
@@ -164,7 +167,7 @@ fn eval_detector_agrees_with_the_python_evaluation_of_the_model() {
     let classical = ok_json(&[
         "eval-detector",
         "--coco",
-        &format!("{CRACKS}/crackforest/val.json"),
+        &format!("{}/crackforest/val.json", cracks().display()),
         "--detector",
         "classical",
         "--json",

@@ -5,8 +5,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
-use crackbot_recording::{collect_recordings, Recording};
-use crackbot_sim::experiment::{generate, Experiment, ExperimentConfig};
+use crackbot_sim::calibrate::{calibrate_to_real, calibration_steps};
+use crackbot_sim::experiment::{generate_dataset, Experiment, ExperimentConfig};
+use crackbot_sim::recordings::{
+    compare_slides, load_recordings, recordings_of_repetition, Comparison,
+};
 use crackbot_sim::work_precision::{default_methods, work_precision, WorkPrecisionRow};
 use indicatif::{ProgressBar, ProgressStyle};
 use plotters::prelude::*;
@@ -217,59 +220,33 @@ fn dataset(a: DatasetArgs) -> Result<()> {
     };
     let total = config.surfaces().len() * a.recordings as usize;
     let pb = bar(total, "simulating");
-    let start = std::time::Instant::now();
-    let written = generate(&config, &a.out, ext, |done, _| pb.set_position(done as u64))
+    let report = generate_dataset(&config, &a.out, ext, |done, _| pb.set_position(done as u64))
         .with_context(|| format!("simulating into {}", a.out.display()))?;
     pb.finish_and_clear();
-    let rows: usize = written.iter().map(|w| w.rows).sum();
-    let secs = start.elapsed().as_secs_f64();
     println!(
         "wrote {} recordings ({} rows, {:.0} simulated s) to {} in {:.1} s ({:.0}× real time)",
-        written.len(),
-        rows,
-        rows as f64 / 400.0,
-        a.out.display(),
-        secs,
-        rows as f64 / 400.0 / secs.max(1e-9)
+        report.recordings,
+        report.rows,
+        report.simulated_s,
+        report.out.display(),
+        report.wall_s,
+        report.real_time_factor
     );
     Ok(())
 }
 
-fn load_all(dir: &Path) -> Result<Vec<Recording>> {
-    let recs = collect_recordings(&[dir.to_path_buf()])
-        .with_context(|| format!("reading recordings in {}", dir.display()))?;
-    if recs.is_empty() {
-        bail!("{}: no .mat or .csv recordings", dir.display());
-    }
-    Ok(recs.into_iter().map(|(_, r)| r).collect())
-}
-
 fn calibrate(a: CalibrateArgs) -> Result<()> {
-    let of_repetition = |dir: &Path| -> Result<Vec<Recording>> {
-        let recs: Vec<Recording> = load_all(dir)?
-            .into_iter()
-            .filter(|r| r.repetition() == Some(a.repetition))
-            .collect();
-        if recs.is_empty() {
-            bail!(
-                "{}: no recording of repetition {}",
-                dir.display(),
-                a.repetition
-            );
-        }
-        Ok(recs)
+    let real = recordings_of_repetition(&a.real, a.repetition)?;
+    let width_real = match &a.real_width {
+        Some(dir) => Some(recordings_of_repetition(dir, a.repetition)?),
+        None => None,
     };
-    let real = of_repetition(&a.real)?;
-    let mut config = ExperimentConfig::paper(Experiment::Recognition, 7);
-    config.sensor.optics = crackbot_sim::OpticsParams::first_guess();
-    config.samples = crackbot_sim::experiment::Samples::default();
-    config.mounts.clear();
-    let (d, r, h) = crackbot_sim::calibrate::GEOMETRY_GRID;
-    let pb = bar(d.len() * r.len() * h.len(), "fitting geometry and optics");
-    let report = crackbot_sim::calibrate::calibrate(&config, &real, a.evaluations, |k, _| {
+    let pb = bar(calibration_steps(), "fitting geometry and optics");
+    let summary = calibrate_to_real(&real, width_real.as_deref(), a.evaluations, |k, _| {
         pb.set_position(k as u64)
     })?;
     pb.finish_and_clear();
+    let report = &summary.report;
     println!("quantile distance (RMS counts)   D1      D2      D3      P");
     println!(
         "before (uncalibrated)        {:7.2} {:7.2} {:7.2} {:7.2}",
@@ -285,23 +262,7 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
     );
     println!("fitted optics (TOML, [sensor.optics]):");
     println!("{}", toml::to_string(&report.optics)?);
-    let mut calibrated = config.clone();
-    calibrated.sensor.optics = report.optics.clone();
-    calibrated.samples = report.samples.clone();
-    let mut mounts = vec![(
-        "recognition",
-        crackbot_sim::calibrate::fit_mounts(&calibrated, &real)?,
-    )];
-    if let Some(dir) = &a.real_width {
-        let width_real = of_repetition(dir)?;
-        let mut width = calibrated.clone();
-        width.experiment = Experiment::Width;
-        mounts.push((
-            "width",
-            crackbot_sim::calibrate::fit_mounts(&width, &width_real)?,
-        ));
-    }
-    for (name, m) in &mounts {
+    for (name, m) in &summary.mounts {
         println!("plate mounts, {name} (D1, D2, D3 offsets in counts; reflectivity):");
         for x in m {
             println!(
@@ -311,7 +272,7 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
         }
     }
     if let Some(path) = a.json {
-        let doc = serde_json::json!({ "report": report, "mounts": mounts });
+        let doc = serde_json::to_value(&summary)?;
         std::fs::write(&path, serde_json::to_string_pretty(&doc)?)
             .with_context(|| format!("writing {}", path.display()))?;
     }
@@ -438,60 +399,40 @@ fn work_precision_png(path: &Path, rows: &[WorkPrecisionRow]) -> Result<()> {
     draw().map_err(|e| anyhow::anyhow!("{}: could not draw: {e}", path.display()))
 }
 
-fn label_name(label: f64, experiment: Experiment) -> String {
-    match experiment {
-        Experiment::Recognition => ["flat", "crack", "bump", "wavy"]
-            .get(label as usize)
-            .map_or(format!("label {label}"), |s| s.to_string()),
-        Experiment::Width => format!("{label} mm"),
-    }
-}
-
 fn compare(a: CompareArgs) -> Result<()> {
     crackbot_plots::load_font()?;
-    let real = load_all(&a.real)?;
-    let sim = load_all(&a.sim)?;
-    let mut labels: Vec<f64> = real.iter().filter_map(|r| r.label()).collect();
-    labels.sort_by(f64::total_cmp);
-    labels.dedup();
-    let experiment = if labels.iter().any(|l| *l > 3.0) {
-        Experiment::Width
-    } else {
-        Experiment::Recognition
-    };
-    let pick = |recs: &[Recording], label: f64| -> Option<Vec<[f64; 4]>> {
-        let rec = recs
-            .iter()
-            .filter(|r| r.label() == Some(label))
-            .min_by_key(|r| r.repetition().unwrap_or(u32::MAX))?;
-        let rows: Vec<[f64; 4]> = rec
-            .rows
-            .iter()
-            .filter(|row| row.slide == a.slide)
-            .map(|row| [row.d1, row.d2, row.d3, row.p])
-            .collect();
-        (!rows.is_empty()).then_some(rows)
-    };
+    let real = load_recordings(&a.real)?;
+    let sim = load_recordings(&a.sim)?;
+    let comparison = compare_slides(&real, &sim, a.slide);
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let n = labels.len();
-    let root = BitMapBackend::new(&a.out, (1600, 260 * n as u32 + 60)).into_drawing_area();
+    compare_png(&a.out, &comparison)?;
+    println!("wrote {}", a.out.display());
+    Ok(())
+}
+
+/// Draws the comparison: one row per class, one column per channel, real in blue and simulated
+/// in red.
+fn compare_png(path: &Path, comparison: &Comparison) -> Result<()> {
+    let rate = f64::from(crackbot_protocol::SAMPLE_RATE_HZ);
+    let n = comparison.classes.len();
+    let root = BitMapBackend::new(path, (1600, 260 * n as u32 + 60)).into_drawing_area();
     let draw = || -> std::result::Result<(), Box<dyn std::error::Error>> {
         root.fill(&WHITE)?;
         let (title, body) = root.split_vertically(50);
         title.draw(&Text::new(
             format!(
                 "slide {} of the first recording per class: real (blue) vs simulated (red)",
-                a.slide
+                comparison.slide
             ),
             (20, 14),
             (FONT, 22),
         ))?;
         let cells = body.split_evenly((n, 4));
-        for (i, &label) in labels.iter().enumerate() {
-            let r = pick(&real, label);
-            let s = pick(&sim, label);
+        for (i, class) in comparison.classes.iter().enumerate() {
+            let r = &class.real;
+            let s = &class.simulated;
             for ch in 0..4 {
                 let cell = &cells[i * 4 + ch];
                 let vals = r
@@ -510,27 +451,23 @@ fn compare(a: CompareArgs) -> Result<()> {
                     .max(s.as_ref().map_or(0, |v| v.len()));
                 let mut chart = ChartBuilder::on(cell)
                     .caption(
-                        format!(
-                            "{} — {}",
-                            label_name(label, experiment),
-                            ["D1", "D2", "D3", "P"][ch]
-                        ),
+                        format!("{} — {}", class.name, ["D1", "D2", "D3", "P"][ch]),
                         (FONT, 15),
                     )
                     .margin(6)
                     .x_label_area_size(22)
                     .y_label_area_size(42)
-                    .build_cartesian_2d(0f64..len as f64 / 400.0, lo - 5.0..hi + 5.0)?;
+                    .build_cartesian_2d(0f64..len as f64 / rate, lo - 5.0..hi + 5.0)?;
                 chart
                     .configure_mesh()
                     .label_style((FONT, 11))
                     .x_labels(5)
                     .y_labels(5)
                     .draw()?;
-                for (series, colour) in [(&r, COLOURS[0]), (&s, COLOURS[1])] {
+                for (series, colour) in [(r, COLOURS[0]), (s, COLOURS[1])] {
                     if let Some(v) = series {
                         chart.draw_series(LineSeries::new(
-                            v.iter().enumerate().map(|(k, x)| (k as f64 / 400.0, x[ch])),
+                            v.iter().enumerate().map(|(k, x)| (k as f64 / rate, x[ch])),
                             colour.stroke_width(1),
                         ))?;
                     }
@@ -540,44 +477,30 @@ fn compare(a: CompareArgs) -> Result<()> {
         root.present()?;
         Ok(())
     };
-    draw().map_err(|e| anyhow::anyhow!("{}: could not draw: {e}", a.out.display()))?;
-    println!("wrote {}", a.out.display());
-    Ok(())
-}
-
-fn load_scene(path: Option<&Path>) -> Result<crackbot_sim::Scene> {
-    Ok(match path {
-        Some(p) => crackbot_sim::Scene::load(p)?,
-        None => crackbot_sim::Scene::builtin_default(),
-    })
+    draw().map_err(|e| anyhow::anyhow!("{}: could not draw: {e}", path.display()))
 }
 
 fn scene_cmd(a: SceneArgs) -> Result<()> {
-    let scene = load_scene(a.scene.as_deref())?;
-    let name = if scene.name.is_empty() {
+    let summary = crackbot_sim::Scene::load_or_default(a.scene.as_deref())?.summary();
+    let name = if summary.name.is_empty() {
         "(unnamed)"
     } else {
-        &scene.name
+        &summary.name
     };
     println!(
         "scene {name}: plate {} × {} mm ({}), {} features",
-        scene.plate.size_mm[0],
-        scene.plate.size_mm[1],
-        scene.plate.material.name,
-        scene.features.len()
+        summary.plate_size_mm[0],
+        summary.plate_size_mm[1],
+        summary.material,
+        summary.features.len()
     );
-    for (k, f) in scene.features.iter().enumerate() {
-        let (lo, hi) = f.footprint();
+    for f in &summary.features {
         println!(
-            "  features[{k}] {:<6} x {:.1}..{:.1} mm, y {:.1}..{:.1} mm",
-            f.kind(),
-            lo[0],
-            hi[0],
-            lo[1],
-            hi[1]
+            "  features[{}] {:<6} x {:.1}..{:.1} mm, y {:.1}..{:.1} mm",
+            f.index, f.kind, f.min_mm[0], f.max_mm[0], f.min_mm[1], f.max_mm[1]
         );
     }
-    match &scene.camera {
+    match &summary.camera {
         Some(c) => println!(
             "camera {}×{} px at ({}, {}, {}) mm looking at ({}, {}) mm",
             c.resolution[0],
@@ -595,8 +518,8 @@ fn scene_cmd(a: SceneArgs) -> Result<()> {
 }
 
 fn render_cmd(a: RenderArgs) -> Result<()> {
-    use crackbot_sim::render::{render, write_coco_dataset, CrackAssets, RenderOptions};
-    let scene = load_scene(a.scene.as_deref())?;
+    use crackbot_sim::render::{render_dataset, CrackAssets, RenderOptions};
+    let scene = crackbot_sim::Scene::load_or_default(a.scene.as_deref())?;
     if scene.camera.is_none() {
         bail!("the scene has no camera: nothing to render (add a [camera] table)");
     }
@@ -612,23 +535,23 @@ fn render_cmd(a: RenderArgs) -> Result<()> {
         ..RenderOptions::default()
     };
     let pb = bar(a.frames as usize, "rendering");
-    let start = std::time::Instant::now();
-    let mut frames = Vec::with_capacity(a.frames as usize);
-    for k in 0..a.frames {
-        frames.push(render(&scene, &assets, &options, a.seed + u64::from(k))?);
-        pb.set_position(u64::from(k) + 1);
-    }
+    let summary = render_dataset(
+        &scene,
+        &assets,
+        &options,
+        a.frames,
+        a.seed,
+        &a.out,
+        |done, _| pb.set_position(done as u64),
+    )?;
     pb.finish_and_clear();
-    let per_frame = start.elapsed().as_secs_f64() / f64::from(a.frames);
-    let coco = write_coco_dataset(&frames, &a.out)?;
-    let boxes: usize = frames.iter().map(|f| f.boxes.len()).sum();
     println!(
         "rendered {} frames ({:.0} ms each), {} ground-truth boxes; wrote {} (images in {})",
-        frames.len(),
-        per_frame * 1e3,
-        boxes,
-        coco.display(),
-        a.out.join("images").display()
+        summary.frames,
+        summary.ms_per_frame,
+        summary.boxes,
+        summary.coco.display(),
+        summary.images.display()
     );
     Ok(())
 }

@@ -19,65 +19,16 @@
 use crackbot_recording::Recording;
 use serde::Serialize;
 
-use crate::experiment::{Experiment, ExperimentConfig, PlateMount, Samples};
+use crate::experiment::ExperimentConfig;
 use crate::finger::{FingerModel, Integrator};
 use crate::optics::OpticsParams;
+pub use crate::plates::{calibrated_mounts, calibrated_samples, calibrated_sensor};
+use crate::plates::{Experiment, PlateMount, Samples};
 use crate::run::{ProximityGeometry, Sample, SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crate::{SensorParams, SimError};
 
 /// Quantile levels compared between real and simulated channels.
 pub const QUANTILES: [f64; 10] = [0.05, 0.15, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.85, 0.95];
-
-/// The sensor as calibrated against repetition 1 of the authors' recognition recordings
-/// (`crackbot sim calibrate --real ../shared/data/tactile/type --repetition 1`).
-pub fn calibrated_sensor() -> SensorParams {
-    // The calibrated values are the defaults (see `OpticsParams::default`).
-    SensorParams::default()
-}
-
-/// The plates' geometry chosen by the same calibration from [`GEOMETRY_GRID`] (the paper gives
-/// only the crack widths and the wave).
-pub fn calibrated_samples() -> Samples {
-    Samples {
-        crack_depth_mm: 8.0,
-        bump_radius_mm: 6.0,
-        bump_height_mm: 1.0,
-        // `fit_roughness` on the flat plate, repetition 1.
-        roughness_rms_mm: 0.0087,
-        ..Samples::default()
-    }
-}
-
-/// How the paper's plates sit under the sensor, fitted on repetition 1 of the authors'
-/// recordings (`crackbot sim calibrate`), in the order of
-/// [`ExperimentConfig::surfaces`](crate::experiment::ExperimentConfig::surfaces).
-pub fn calibrated_mounts(experiment: Experiment) -> Vec<PlateMount> {
-    let table: &[([f64; 3], f64)] = match experiment {
-        // Flat, crack, bump, wavy.
-        Experiment::Recognition => &[
-            ([-1.06, -4.99, -5.88], 0.9896),
-            ([-0.14, 0.01, 1.18], 0.9958),
-            ([8.30, 3.51, 1.49], 1.0051),
-            ([2.82, 1.56, 2.47], 0.9939),
-        ],
-        // 0, 1, 2, 5, 8, 10 mm (another session: the cables sat differently).
-        Experiment::Width => &[
-            ([8.94, 7.01, 6.12], 1.0051),
-            ([8.88, 8.01, 6.16], 0.9927),
-            ([8.87, 2.01, 0.19], 1.0112),
-            ([8.86, 8.01, 7.18], 1.0112),
-            ([8.03, 8.14, 8.89], 1.0020),
-            ([6.31, 7.49, 10.97], 0.9649),
-        ],
-    };
-    table
-        .iter()
-        .map(|&(offset_counts, reflectivity)| PlateMount {
-            offset_counts,
-            reflectivity,
-        })
-        .collect()
-}
 
 /// Fits each plate's mount of `config`'s experiment to the `real` recordings (any number per
 /// plate, recognised by their label): the deformation channels' median offsets and the
@@ -616,4 +567,58 @@ pub fn real_noise(real: &[Recording]) -> [f64; 4] {
         // For Gaussian noise E|Δ| = 2σ/√π.
         mad * std::f64::consts::PI.sqrt() / 2.0
     })
+}
+
+/// What `crackbot sim calibrate` finds: the fit of the optics and geometry, and the plate
+/// mounts of each experiment fitted with it (`("recognition", …)`, then `("width", …)` when
+/// width recordings were given).
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrationSummary {
+    /// The fit.
+    pub report: CalibrationReport,
+    /// Per experiment, its plates' mounts in the order of `ExperimentConfig::surfaces`.
+    pub mounts: Vec<(String, Vec<PlateMount>)>,
+}
+
+/// Where a calibration starts: the paper's recognition experiment (seed 7) with first-guess
+/// optics, the default plate geometry and neutral mounts.
+pub fn starting_config() -> ExperimentConfig {
+    let mut config = ExperimentConfig::paper(Experiment::Recognition, 7);
+    config.sensor.optics = OpticsParams::first_guess();
+    config.samples = Samples::default();
+    config.mounts.clear();
+    config
+}
+
+/// Number of steps [`calibrate`] reports progress over (the geometries of [`GEOMETRY_GRID`]).
+pub fn calibration_steps() -> usize {
+    let (d, r, h) = GEOMETRY_GRID;
+    d.len() * r.len() * h.len()
+}
+
+/// Calibrates the simulated sensor on real recordings: [`calibrate`] from [`starting_config`] on
+/// the `recognition` recordings (at most `evaluations` per Nelder–Mead run, `progress` as
+/// [`calibrate`] calls it), then the plate mounts of the recognition experiment and, given
+/// `width` recordings, of the width experiment, with the fitted optics and geometry.
+pub fn calibrate_to_real(
+    recognition: &[Recording],
+    width: Option<&[Recording]>,
+    evaluations: usize,
+    progress: impl FnMut(usize, usize),
+) -> Result<CalibrationSummary, SimError> {
+    let config = starting_config();
+    let report = calibrate(&config, recognition, evaluations, progress)?;
+    let mut calibrated = config;
+    calibrated.sensor.optics = report.optics.clone();
+    calibrated.samples = report.samples.clone();
+    let mut mounts = vec![(
+        "recognition".to_string(),
+        fit_mounts(&calibrated, recognition)?,
+    )];
+    if let Some(width_real) = width {
+        let mut width_config = calibrated.clone();
+        width_config.experiment = Experiment::Width;
+        mounts.push(("width".to_string(), fit_mounts(&width_config, width_real)?));
+    }
+    Ok(CalibrationSummary { report, mounts })
 }

@@ -12,10 +12,50 @@
 //!   `f × x`, plate −y straight down. A positive roll turns the camera's x and y axes by that
 //!   angle about the optical axis (from x towards y), so the scene appears turned the other way.
 
+pub use crackbot_imaging::homography::apply_in_front as apply_homography;
 use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
 
-use crate::scene::CameraSpec;
 use crate::SimError;
+
+/// A pinhole camera above the plate.
+///
+/// The camera frame is the usual one (x right, y down in the image, z forward). Its pose is
+/// given as the position of the optical centre in the plate's frame (mm, z up, plate top at 0)
+/// and the point it looks at on the plate, plus a roll about the optical axis. With `look_at`
+/// straight below `position_mm` and `roll_deg = 0`, image x runs along plate +x and image y
+/// along plate −y (the plate is seen from above as drawn on paper).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// Image size in pixels `[width, height]`.
+    pub resolution: [u32; 2],
+    /// Focal lengths in pixels `[fx, fy]`.
+    pub focal_px: [f64; 2],
+    /// Principal point in pixels `[cx, cy]` (default: image centre).
+    #[serde(default)]
+    pub principal_px: Option<[f64; 2]>,
+    /// Optical centre in the plate's frame, mm `[x, y, z]`.
+    pub position_mm: [f64; 3],
+    /// Point on the plate (z = 0) the optical axis passes through, mm `[x, y]`.
+    pub look_at_mm: [f64; 2],
+    /// Rotation about the optical axis, degrees.
+    #[serde(default)]
+    pub roll_deg: f64,
+    /// Standard deviation of the sensor's noise, in 8-bit grey levels.
+    #[serde(default = "default_image_noise")]
+    pub noise_sigma: f64,
+    /// Relative spread of the lighting between frames (0: identical lighting).
+    #[serde(default = "default_lighting_variation")]
+    pub lighting_variation: f64,
+}
+
+fn default_image_noise() -> f64 {
+    2.0
+}
+fn default_lighting_variation() -> f64 {
+    0.15
+}
 
 /// A calibrated pinhole camera looking at the plate.
 #[derive(Debug, Clone, PartialEq)]
@@ -207,15 +247,6 @@ impl Camera {
             && uv[0] < f64::from(self.width)
             && uv[1] < f64::from(self.height)
     }
-}
-
-/// Applies the homography `h` to the point `p` (`None` at or beyond the horizon, w ≤ 0).
-pub fn apply_homography(h: &Matrix3<f64>, p: [f64; 2]) -> Option<[f64; 2]> {
-    let q = h * Vector3::new(p[0], p[1], 1.0);
-    if q.z.is_nan() || q.z <= 1e-12 {
-        return None;
-    }
-    Some([q.x / q.z, q.y / q.z])
 }
 
 #[cfg(test)]

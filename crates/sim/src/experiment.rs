@@ -15,88 +15,14 @@ use std::path::{Path, PathBuf};
 use crackbot_recording::{write_recording, Recording, Row};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::finger::Integrator;
+use crate::plates::{calibrated_mounts, calibrated_samples, calibrated_sensor};
+pub use crate::plates::{Experiment, PlateMount, Samples};
 use crate::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crate::surface::{Feature, Surface};
 use crate::{SensorParams, SimError};
-
-/// Which of the paper's experiments.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Experiment {
-    /// Surface recognition: flat, crack, bump, wavy pattern.
-    Recognition,
-    /// Crack width: 0, 1, 2, 5, 8, 10 mm.
-    Width,
-}
-
-/// The geometry of the paper's samples, as simulated.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Samples {
-    /// Depth of the cracks, mm.
-    pub crack_depth_mm: f64,
-    /// Angle of the cracks' walls from the plate, degrees.
-    pub crack_wall_angle_deg: f64,
-    /// Width of the crack of the recognition experiment, mm.
-    pub recognition_crack_width_mm: f64,
-    /// Widths of the width experiment, mm.
-    pub widths_mm: Vec<f64>,
-    /// Base radius of the bump, mm.
-    pub bump_radius_mm: f64,
-    /// Height of the bump, mm.
-    pub bump_height_mm: f64,
-    /// Amplitude of the wavy pattern, mm (the paper: 1 mm).
-    pub wave_amplitude_mm: f64,
-    /// Period of the wavy pattern, mm (the paper: 5 mm).
-    pub wave_period_mm: f64,
-    /// Roughness of the printed plates: standard deviation of the height texture, mm.
-    pub roughness_rms_mm: f64,
-    /// Roughness: length of its features, mm.
-    pub roughness_correlation_mm: f64,
-}
-
-impl Default for Samples {
-    fn default() -> Self {
-        Samples {
-            crack_depth_mm: 5.0,
-            crack_wall_angle_deg: 85.0,
-            recognition_crack_width_mm: 5.0,
-            widths_mm: vec![0.0, 1.0, 2.0, 5.0, 8.0, 10.0],
-            bump_radius_mm: 4.0,
-            bump_height_mm: 2.0,
-            wave_amplitude_mm: 1.0,
-            wave_period_mm: 5.0,
-            roughness_rms_mm: 0.0,
-            roughness_correlation_mm: 0.5,
-        }
-    }
-}
-
-/// How one plate sits under the sensor in the real set-up, as far as the signals show it: its
-/// colour (the proximity fibre's reflectivity) and the shift of the deformation channels' resting
-/// levels that its mounting and the session's cable routing cause (the paper found that the
-/// fibre cables' position shifts the data). Fitted per plate by [`crate::calibrate`], not
-/// modelled.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PlateMount {
-    /// Offset of D1, D2, D3, counts.
-    pub offset_counts: [f64; 3],
-    /// Reflectivity of the plate relative to the calibration plate.
-    pub reflectivity: f64,
-}
-
-impl Default for PlateMount {
-    fn default() -> Self {
-        PlateMount {
-            offset_counts: [0.0; 3],
-            reflectivity: 1.0,
-        }
-    }
-}
 
 /// Settings of a simulated experiment.
 #[derive(Debug, Clone, PartialEq)]
@@ -140,9 +66,9 @@ impl ExperimentConfig {
             speed_mm_s: 3.89,
             start_range_mm: (5.0, 10.0),
             position_rate_hz: 80.0,
-            samples: crate::calibrate::calibrated_samples(),
-            sensor: crate::calibrate::calibrated_sensor(),
-            mounts: crate::calibrate::calibrated_mounts(experiment),
+            samples: calibrated_samples(),
+            sensor: calibrated_sensor(),
+            mounts: calibrated_mounts(experiment),
             integrator: Integrator::default(),
             seed,
         }
@@ -409,4 +335,46 @@ pub fn generate(
         }
     }
     Ok(written)
+}
+
+/// What [`generate_dataset`] wrote and how fast.
+#[derive(Debug, Clone, Serialize)]
+pub struct DatasetReport {
+    /// The output folder.
+    pub out: PathBuf,
+    /// The files written.
+    pub files: Vec<Written>,
+    /// Recordings written.
+    pub recordings: usize,
+    /// Rows written, over all recordings.
+    pub rows: usize,
+    /// Simulated time, s (rows at the sensor's sampling rate).
+    pub simulated_s: f64,
+    /// Wall-clock time of the simulation, s.
+    pub wall_s: f64,
+    /// Simulated seconds per wall-clock second.
+    pub real_time_factor: f64,
+}
+
+/// [`generate`], timed: every recording of the experiment into `out`, with the totals.
+pub fn generate_dataset(
+    config: &ExperimentConfig,
+    out: &Path,
+    ext: &str,
+    progress: impl FnMut(usize, usize),
+) -> Result<DatasetReport, SimError> {
+    let start = std::time::Instant::now();
+    let files = generate(config, out, ext, progress)?;
+    let wall_s = start.elapsed().as_secs_f64();
+    let rows: usize = files.iter().map(|w| w.rows).sum();
+    let simulated_s = rows as f64 / SAMPLE_RATE_HZ;
+    Ok(DatasetReport {
+        out: out.to_path_buf(),
+        recordings: files.len(),
+        files,
+        rows,
+        simulated_s,
+        wall_s,
+        real_time_factor: rows as f64 / SAMPLE_RATE_HZ / wall_s.max(1e-9),
+    })
 }

@@ -8,19 +8,23 @@
 //!   L-stable SDIRK, backward Euler, and adaptive explicit Dormand–Prince).
 //! * [`optics`]: deformation and proximity → light → transducer voltage → 10-bit ADC counts, with
 //!   saturation, noise, drift, per-recording offset/gain changes and surface reflectivity.
+//! * [`plates`]: the paper's plates (geometry, mounts) and the values calibrated for them.
 //! * [`experiment`]: the paper's two experiments (surface recognition, crack width) written as
 //!   recordings in the authors' nine-column format, deterministic from a seed.
 //! * [`scene`]: TOML scenes (plate, features, camera, manipulator, sensor) with validation and a
 //!   built-in default; [`render`]: camera images of a scene with ground-truth boxes and the exact
 //!   pixel↔mm homography.
-//! * [`calibrate`]: fitting the optical parameters to the authors' real recordings and comparing
-//!   simulated with real slides.
+//! * [`calibrate`]: fitting the optical parameters to the authors' real recordings;
+//!   [`recordings`]: reading folders of real or simulated recordings and choosing the slides that
+//!   compare them.
 
 pub mod calibrate;
 pub mod camera;
 pub mod experiment;
 pub mod finger;
 pub mod optics;
+pub mod plates;
+pub mod recordings;
 pub mod render;
 pub mod run;
 pub mod scene;
@@ -48,6 +52,7 @@ pub struct SensorParams {
 
 /// Errors of the simulator.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SimError {
     /// A scene or parameter is invalid; the message names the field and the value.
     #[error("invalid scene: {0}")]
@@ -81,6 +86,24 @@ pub enum SimError {
     /// Writing a recording failed.
     #[error(transparent)]
     Recording(#[from] crackbot_recording::RecordingError),
+    /// Reading a folder of recordings failed.
+    #[error("reading recordings in {dir}")]
+    ReadRecordings {
+        /// The folder.
+        dir: String,
+        /// Why.
+        #[source]
+        source: crackbot_recording::RecordingError,
+    },
+    /// A folder of recordings does not hold what is needed (no recording, none of the asked
+    /// repetition).
+    #[error("{path}: {message}")]
+    Data {
+        /// The folder.
+        path: String,
+        /// What is missing.
+        message: String,
+    },
     /// Reading or decoding an image failed.
     #[error("image {path}: {message}")]
     Image {

@@ -10,8 +10,8 @@ use crate::optics::{proximity_intensity, Electronics, OpticsParams, Scene1d, CHA
 use crate::surface::{Point, Profile, Surface};
 use crate::{SensorParams, SimError};
 
-/// The sensor's sampling rate, Hz.
-pub const SAMPLE_RATE_HZ: f64 = 400.0;
+/// The sensor's sampling rate, Hz: the wire protocol's `crackbot_protocol::SAMPLE_RATE_HZ`.
+pub const SAMPLE_RATE_HZ: f64 = crackbot_protocol::SAMPLE_RATE_HZ as f64;
 
 /// Extra length of the tabulated profile before and after the stroke, mm (room for the
 /// proximity fibre's look-ahead and the tip's radius).

@@ -6,6 +6,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
+pub use crate::camera::CameraSpec;
 use crate::surface::{Feature, Point, Surface};
 use crate::{SensorParams, SimError};
 
@@ -76,45 +77,6 @@ impl Default for PlateSpec {
     }
 }
 
-/// A pinhole camera above the plate.
-///
-/// The camera frame is the usual one (x right, y down in the image, z forward). Its pose is
-/// given as the position of the optical centre in the plate's frame (mm, z up, plate top at 0)
-/// and the point it looks at on the plate, plus a roll about the optical axis. With `look_at`
-/// straight below `position_mm` and `roll_deg = 0`, image x runs along plate +x and image y
-/// along plate −y (the plate is seen from above as drawn on paper).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CameraSpec {
-    /// Image size in pixels `[width, height]`.
-    pub resolution: [u32; 2],
-    /// Focal lengths in pixels `[fx, fy]`.
-    pub focal_px: [f64; 2],
-    /// Principal point in pixels `[cx, cy]` (default: image centre).
-    #[serde(default)]
-    pub principal_px: Option<[f64; 2]>,
-    /// Optical centre in the plate's frame, mm `[x, y, z]`.
-    pub position_mm: [f64; 3],
-    /// Point on the plate (z = 0) the optical axis passes through, mm `[x, y]`.
-    pub look_at_mm: [f64; 2],
-    /// Rotation about the optical axis, degrees.
-    #[serde(default)]
-    pub roll_deg: f64,
-    /// Standard deviation of the sensor's noise, in 8-bit grey levels.
-    #[serde(default = "default_image_noise")]
-    pub noise_sigma: f64,
-    /// Relative spread of the lighting between frames (0: identical lighting).
-    #[serde(default = "default_lighting_variation")]
-    pub lighting_variation: f64,
-}
-
-fn default_image_noise() -> f64 {
-    2.0
-}
-fn default_lighting_variation() -> f64 {
-    0.15
-}
-
 /// The manipulator that carries the finger.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -162,6 +124,45 @@ impl Default for ManipulatorSpec {
             travel_speed_mm_s: default_travel_speed(),
         }
     }
+}
+
+/// A summary of a scene ([`Scene::summary`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SceneSummary {
+    /// The scene's name (may be empty).
+    pub name: String,
+    /// The plate's size, mm.
+    pub plate_size_mm: [f64; 2],
+    /// The plate's material.
+    pub material: String,
+    /// Every feature, in scene order.
+    pub features: Vec<FeatureSummary>,
+    /// The camera, if any.
+    pub camera: Option<CameraSummary>,
+}
+
+/// One feature of a [`SceneSummary`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FeatureSummary {
+    /// Index in the scene's `features`.
+    pub index: usize,
+    /// Its kind (`crack`, `bump`, …).
+    pub kind: &'static str,
+    /// Lower corner of its footprint on the plate, mm.
+    pub min_mm: Point,
+    /// Upper corner of its footprint, mm.
+    pub max_mm: Point,
+}
+
+/// The camera of a [`SceneSummary`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CameraSummary {
+    /// Image size, pixels.
+    pub resolution: [u32; 2],
+    /// Optical centre, mm.
+    pub position_mm: [f64; 3],
+    /// Point looked at on the plate, mm.
+    pub look_at_mm: [f64; 2],
 }
 
 /// A whole scene, as read from a TOML file.
@@ -224,6 +225,42 @@ impl Scene {
                 manipulator: ManipulatorSpec::default(),
                 sensor: SensorParams::default(),
             },
+        }
+    }
+
+    /// The scene file at `path`, or the [built-in default](Scene::builtin_default) when `None`.
+    pub fn load_or_default(path: Option<&Path>) -> Result<Scene, SimError> {
+        match path {
+            Some(p) => Scene::load(p),
+            None => Ok(Scene::builtin_default()),
+        }
+    }
+
+    /// What `crackbot sim scene` shows: the plate, every feature's footprint and the camera.
+    pub fn summary(&self) -> SceneSummary {
+        SceneSummary {
+            name: self.name.clone(),
+            plate_size_mm: self.plate.size_mm,
+            material: self.plate.material.name.clone(),
+            features: self
+                .features
+                .iter()
+                .enumerate()
+                .map(|(index, f)| {
+                    let (min_mm, max_mm) = f.footprint();
+                    FeatureSummary {
+                        index,
+                        kind: f.kind(),
+                        min_mm,
+                        max_mm,
+                    }
+                })
+                .collect(),
+            camera: self.camera.as_ref().map(|c| CameraSummary {
+                resolution: c.resolution,
+                position_mm: c.position_mm,
+                look_at_mm: c.look_at_mm,
+            }),
         }
     }
 

@@ -9,8 +9,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::calibrate::calibrated_sensor;
 use crate::finger::Integrator;
+use crate::plates::calibrated_sensor;
 use crate::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crate::surface::{Feature, Surface};
 use crate::SimError;

@@ -14,10 +14,7 @@ use crackbot_sim::render::{
 use crackbot_sim::{Feature, Scene, SimError};
 
 fn data_dir() -> PathBuf {
-    PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/cracks"
-    ))
+    crackbot_datasets::require(crackbot_datasets::CRACKS)
 }
 
 fn assets() -> &'static CrackAssets {

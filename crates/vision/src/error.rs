@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 /// Everything that can go wrong in `crackbot-vision`.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum VisionError {
     /// A file could not be read or written.
     #[error("{path}: {source}")]
@@ -40,6 +41,16 @@ pub enum VisionError {
         /// What is wrong.
         message: String,
     },
+    /// A line of a point-pairs file (`u,v,x_mm,y_mm`) is not four numbers.
+    #[error("{path} line {line}: {message}")]
+    PointPairs {
+        /// The file.
+        path: PathBuf,
+        /// The line, counted from 1.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
     /// The ONNX model or runtime could not be used.
     #[error("{0}")]
     Runtime(String),
@@ -51,6 +62,20 @@ impl VisionError {
         move |source| VisionError::Io {
             path: path.to_path_buf(),
             source,
+        }
+    }
+}
+
+impl From<crackbot_imaging::ImagingError> for VisionError {
+    /// The shared COCO and homography code's errors, as the variants this crate always used
+    /// for them (same messages).
+    fn from(e: crackbot_imaging::ImagingError) -> Self {
+        use crackbot_imaging::ImagingError as E;
+        match e {
+            E::Io { path, source } => VisionError::Io { path, source },
+            E::Coco { path, message } => VisionError::Coco { path, message },
+            E::Homography(message) => VisionError::Invalid(message),
+            other => VisionError::Invalid(other.to_string()),
         }
     }
 }

@@ -5,7 +5,10 @@
 //!   (the convention of [`crate::Detector`]).
 //! * Surface points are `(x, y)` in millimetres in the work-surface frame.
 //! * [`Homography`] holds the 3×3 matrix `H` with `(x, y, 1)ᵀ ~ H (u, v, 1)ᵀ` (pixel → surface)
-//!   and its inverse; it is stored scaled so that `H[2][2] = 1` when that is possible.
+//!   and its inverse; it is stored scaled so that `H[2][2] = 1` when that is possible. It, its
+//!   application to points ([`Horizon::Finite`](crackbot_imaging::Horizon::Finite): negative
+//!   `w` allowed, `|w|` near zero is at infinity), [`PointPair`] and [`ReprojectionStats`] are
+//!   defined in `crackbot_imaging::homography` and re-exported here.
 //! * Fitting is the normalised DLT (Hartley): each side is translated so its centroid is at the
 //!   origin and scaled so the mean distance from it is √2, the 2n×9 system is solved by SVD, and
 //!   the result is denormalised. [`fit_ransac`] adds robustness to gross outliers.
@@ -17,6 +20,8 @@
 
 use std::path::Path;
 
+use crackbot_imaging::homography::apply_finite;
+pub use crackbot_imaging::homography::{Homography, PointPair, ReprojectionStats};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -29,172 +34,12 @@ const GEOMETRY_EPS: f64 = 1e-9;
 /// The second-smallest singular value of the normalised DLT system, relative to the largest,
 /// below which the solution is not unique (ill-conditioned / degenerate configuration).
 const CONDITION_EPS: f64 = 1e-7;
-/// Homogeneous `w` (in normalised coordinates) below which a point is "at infinity".
-const INFINITY_EPS: f64 = 1e-9;
-
-/// One correspondence: a pixel and the surface point it shows.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct PointPair {
-    /// `(u, v)` in pixels.
-    pub pixel: [f64; 2],
-    /// `(x, y)` in millimetres on the surface.
-    pub surface: [f64; 2],
-}
-
-impl PointPair {
-    /// A pair from pixel `(u, v)` and surface `(x, y)`.
-    pub fn new(pixel: [f64; 2], surface: [f64; 2]) -> Self {
-        Self { pixel, surface }
-    }
-}
-
-/// A plane homography from pixels to surface millimetres, with its inverse.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Homography {
-    forward: Matrix3<f64>,
-    inverse: Matrix3<f64>,
-}
+// Homogeneous `w` (in normalised coordinates) below which a point is "at infinity": the same
+// tolerance as `Homography` applies.
+use crackbot_imaging::homography::INFINITY_EPS;
 
 fn invalid(message: impl Into<String>) -> VisionError {
     VisionError::Invalid(message.into())
-}
-
-fn apply(m: &Matrix3<f64>, p: [f64; 2]) -> Option<[f64; 2]> {
-    let r = m * Vector3::new(p[0], p[1], 1.0);
-    let scale = m.row(2).abs().sum() * (1.0 + p[0].abs() + p[1].abs());
-    let finite_point = r.z.abs() > INFINITY_EPS * scale;
-    if !finite_point {
-        return None;
-    }
-    let out = [r.x / r.z, r.y / r.z];
-    (out[0].is_finite() && out[1].is_finite()).then_some(out)
-}
-
-impl Homography {
-    /// A homography from its row-major pixel → surface matrix. Errors when the matrix is not finite
-    /// or not invertible.
-    pub fn from_matrix(matrix: [[f64; 3]; 3]) -> Result<Self, VisionError> {
-        if matrix.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(invalid(format!(
-                "homography matrix has non-finite entries: {matrix:?}"
-            )));
-        }
-        let m = Matrix3::from_fn(|r, c| matrix[r][c]);
-        Self::from_nalgebra(m)
-    }
-
-    fn from_nalgebra(m: Matrix3<f64>) -> Result<Self, VisionError> {
-        let sv = m.singular_values();
-        let (max, min) = (sv.max(), sv.min());
-        let well_conditioned = max > 0.0 && min / max > 1e-12;
-        if !well_conditioned {
-            return Err(invalid(format!(
-                "homography matrix is singular or nearly so (singular values {:?})",
-                sv.as_slice()
-            )));
-        }
-        let m = if m[(2, 2)].abs() > 1e-12 * max {
-            m / m[(2, 2)]
-        } else {
-            m / m.norm()
-        };
-        let inverse = m
-            .try_inverse()
-            .ok_or_else(|| invalid("homography matrix is not invertible"))?;
-        if inverse.iter().any(|v| !v.is_finite()) {
-            return Err(invalid("homography matrix is not invertible"));
-        }
-        Ok(Self {
-            forward: m,
-            inverse,
-        })
-    }
-
-    /// The row-major pixel → surface matrix.
-    pub fn matrix(&self) -> [[f64; 3]; 3] {
-        let m = &self.forward;
-        [
-            [m[(0, 0)], m[(0, 1)], m[(0, 2)]],
-            [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
-            [m[(2, 0)], m[(2, 1)], m[(2, 2)]],
-        ]
-    }
-
-    /// The pixel → surface matrix.
-    pub fn forward(&self) -> &Matrix3<f64> {
-        &self.forward
-    }
-
-    /// The surface → pixel matrix.
-    pub fn inverse(&self) -> &Matrix3<f64> {
-        &self.inverse
-    }
-
-    /// Surface `(x, y)` mm of pixel `(u, v)`; an error if the pixel is on the vanishing line (maps to
-    /// infinity) or not finite.
-    pub fn pixel_to_surface(&self, pixel: [f64; 2]) -> Result<[f64; 2], VisionError> {
-        apply(&self.forward, pixel)
-            .ok_or_else(|| invalid(format!("pixel {pixel:?} maps to infinity on the surface")))
-    }
-
-    /// Pixel `(u, v)` of surface point `(x, y)` mm; an error if it maps to infinity or is not finite.
-    pub fn surface_to_pixel(&self, surface: [f64; 2]) -> Result<[f64; 2], VisionError> {
-        apply(&self.inverse, surface).ok_or_else(|| {
-            invalid(format!(
-                "surface point {surface:?} maps to infinity in the image"
-            ))
-        })
-    }
-
-    /// Reprojection errors of `pairs` under this homography. A pair whose point maps to infinity
-    /// gets an infinite error.
-    pub fn reprojection_errors(&self, pairs: &[PointPair]) -> ReprojectionStats {
-        let dist = |a: Option<[f64; 2]>, b: [f64; 2]| match a {
-            Some(a) => (a[0] - b[0]).hypot(a[1] - b[1]),
-            None => f64::INFINITY,
-        };
-        let per_pair_mm: Vec<f64> = pairs
-            .iter()
-            .map(|p| dist(apply(&self.forward, p.pixel), p.surface))
-            .collect();
-        let per_pair_px: Vec<f64> = pairs
-            .iter()
-            .map(|p| dist(apply(&self.inverse, p.surface), p.pixel))
-            .collect();
-        let rms = |v: &[f64]| {
-            if v.is_empty() {
-                0.0
-            } else {
-                (v.iter().map(|e| e * e).sum::<f64>() / v.len() as f64).sqrt()
-            }
-        };
-        let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
-        ReprojectionStats {
-            rms_mm: rms(&per_pair_mm),
-            max_mm: max(&per_pair_mm),
-            rms_px: rms(&per_pair_px),
-            max_px: max(&per_pair_px),
-            per_pair_mm,
-            per_pair_px,
-        }
-    }
-}
-
-/// Reprojection errors of point pairs under a homography.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ReprojectionStats {
-    /// Root mean square surface-side error, mm.
-    pub rms_mm: f64,
-    /// Largest surface-side error, mm.
-    pub max_mm: f64,
-    /// Root mean square image-side error, px.
-    pub rms_px: f64,
-    /// Largest image-side error, px.
-    pub max_px: f64,
-    /// Surface-side error of each pair, mm.
-    pub per_pair_mm: Vec<f64>,
-    /// Image-side error of each pair, px.
-    pub per_pair_px: Vec<f64>,
 }
 
 /// Hartley normalisation: `T` with centroid → origin and mean distance → √2. `None` when all
@@ -390,7 +235,7 @@ fn fit_unchecked(pixels: &[[f64; 2]], surface: &[[f64; 2]]) -> Result<Homography
     let ts_inv = ts
         .try_inverse()
         .ok_or_else(|| invalid("surface normalisation is singular"))?;
-    Homography::from_nalgebra(ts_inv * hn * tp)
+    Ok(Homography::from_nalgebra(ts_inv * hn * tp)?)
 }
 
 /// A RANSAC fit: the homography refitted on the inliers, and which pairs are inliers.
@@ -426,7 +271,7 @@ fn inliers_of(h: &Homography, pairs: &[PointPair], threshold_mm: f64) -> (Vec<bo
     let mut total = 0.0;
     let mask = pairs
         .iter()
-        .map(|p| match apply(&h.forward, p.pixel) {
+        .map(|p| match apply_finite(h.forward(), p.pixel) {
             Some(s) => {
                 let e = (s[0] - p.surface[0]).hypot(s[1] - p.surface[1]);
                 let inlier = e <= threshold_mm;
@@ -583,7 +428,7 @@ impl HomographyCalibration {
 
     /// The homography of the calibration (validated).
     pub fn homography(&self) -> Result<Homography, VisionError> {
-        Homography::from_matrix(self.matrix)
+        Ok(Homography::from_matrix(self.matrix)?)
     }
 
     /// Checks units, finiteness, invertibility, that the pairs are usable, and that the matrix and
@@ -665,5 +510,142 @@ impl HomographyCalibration {
             message: format!("cannot encode: {e}"),
         })?;
         std::fs::write(path, text).map_err(VisionError::io(path))
+    }
+}
+
+/// RANSAC settings for [`fit_calibration`] (see [`fit_ransac`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RansacSettings {
+    /// Surface-side inlier threshold, mm.
+    pub threshold_mm: f64,
+    /// Random minimal samples drawn.
+    pub iterations: usize,
+    /// Seed of the sampling.
+    pub seed: u64,
+}
+
+/// A calibration fitted to point pairs ([`fit_calibration`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationFit {
+    /// The calibration, holding the pairs it kept (all of them without RANSAC, the inliers
+    /// with it).
+    pub calibration: HomographyCalibration,
+    /// Pairs given.
+    pub pairs_given: usize,
+    /// The RANSAC settings used, if any.
+    pub ransac: Option<RansacSettings>,
+}
+
+/// Fits a calibration to `pairs`: [`fit_dlt`] on all of them, or with `ransac`, [`fit_ransac`]
+/// keeping only its inliers.
+pub fn fit_calibration(
+    pairs: Vec<PointPair>,
+    ransac: Option<RansacSettings>,
+) -> Result<CalibrationFit, VisionError> {
+    let pairs_given = pairs.len();
+    let calibration = match ransac {
+        Some(r) => {
+            let fit = fit_ransac(&pairs, r.threshold_mm, r.iterations, r.seed)?;
+            let kept: Vec<PointPair> = pairs
+                .iter()
+                .zip(&fit.inliers)
+                .filter(|(_, &inlier)| inlier)
+                .map(|(p, _)| *p)
+                .collect();
+            HomographyCalibration::new(&fit.homography, kept)
+        }
+        None => HomographyCalibration::new(&fit_dlt(&pairs)?, pairs),
+    };
+    Ok(CalibrationFit {
+        calibration,
+        pairs_given,
+        ransac,
+    })
+}
+
+/// Reads point pairs from a CSV file: `u,v,x_mm,y_mm` per line (pixel column and row, surface x
+/// and y in mm). Blank lines and lines starting with `#` are skipped, and so is a first line
+/// that is not four numbers (a header). Any other line that is not four numbers is an error
+/// naming the file and the line.
+pub fn read_pairs(path: impl AsRef<Path>) -> Result<Vec<PointPair>, VisionError> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(VisionError::io(path))?;
+    parse_pairs(&text, path)
+}
+
+/// Parses the text of a point-pairs file (see [`read_pairs`]); `path` is only used in error
+/// messages.
+pub fn parse_pairs(text: &str, path: &Path) -> Result<Vec<PointPair>, VisionError> {
+    let mut pairs = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let nums: Result<Vec<f64>, _> = line
+            .split(',')
+            .map(str::trim)
+            .map(str::parse::<f64>)
+            .collect();
+        match nums {
+            Ok(n) if n.len() == 4 => pairs.push(PointPair::new([n[0], n[1]], [n[2], n[3]])),
+            Err(_) if i == 0 => continue, // header
+            _ => {
+                return Err(VisionError::PointPairs {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    message: format!("expected 4 numbers u,v,x_mm,y_mm, got {line:?}"),
+                })
+            }
+        }
+    }
+    Ok(pairs)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn pairs_files_skip_a_header_and_name_bad_lines() {
+        let p = Path::new("pairs.csv");
+        let pairs = parse_pairs("u,v,x_mm,y_mm\n\n# comment\n1, 2, 3, 4\n5,6,7,8\n", p).unwrap();
+        assert_eq!(
+            pairs,
+            vec![
+                PointPair::new([1.0, 2.0], [3.0, 4.0]),
+                PointPair::new([5.0, 6.0], [7.0, 8.0])
+            ]
+        );
+        let err = parse_pairs("1,2,3,4\n1,2,3\n", p).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "pairs.csv line 2: expected 4 numbers u,v,x_mm,y_mm, got \"1,2,3\""
+        );
+        assert!(read_pairs("no/such/pairs.csv").is_err());
+    }
+
+    #[test]
+    fn a_calibration_fit_keeps_all_pairs_or_the_ransac_inliers() {
+        let mut pairs: Vec<PointPair> = (0..5)
+            .flat_map(|i| (0..4).map(move |j| (f64::from(i) * 50.0, f64::from(j) * 30.0)))
+            .map(|(x, y)| {
+                let w = 1.0 + 0.001 * x + 0.0005 * y;
+                PointPair::new([(2.0 * x + 10.0) / w, (2.0 * y + 5.0) / w], [x, y])
+            })
+            .collect();
+        let all = fit_calibration(pairs.clone(), None).unwrap();
+        assert_eq!((all.calibration.pairs.len(), all.pairs_given), (20, 20));
+        assert!(all.ransac.is_none());
+        pairs.push(PointPair::new([5.0, 5.0], [180.0, 70.0]));
+        let settings = RansacSettings {
+            threshold_mm: 0.5,
+            iterations: 500,
+            seed: 1,
+        };
+        let fit = fit_calibration(pairs, Some(settings)).unwrap();
+        assert_eq!((fit.calibration.pairs.len(), fit.pairs_given), (20, 21));
+        assert!(fit.calibration.max_mm < 1e-6, "{}", fit.calibration.max_mm);
     }
 }

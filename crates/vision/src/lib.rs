@@ -9,18 +9,26 @@
 //! * [`coco`]: COCO files and the COCO detection metrics (mAP@[.5:.95], mAP@0.5, AR@100), as
 //!   pycocotools computes them.
 //! * [`fusion`]: combining detections over several frames of one view.
-//! * [`homography`]: pixel ↔ surface millimetres from point pairs (normalised DLT, RANSAC), and its
-//!   calibration file.
+//! * [`homography`]: pixel ↔ surface millimetres from point pairs (normalised DLT, RANSAC), its
+//!   calibration file, and the point-pairs CSV reader.
+//! * [`detect`]: the `crackbot detect` flow (threshold, surface mm, fusion, annotated images) and
+//!   its report; [`benchmark`]: a detector over a COCO ground truth (metrics, median ms) and the
+//!   `crackbot eval-detector` report; [`tradeoff`]: accuracy against run time over input sizes;
+//!   [`model`]: where the trained model is.
 
+pub mod benchmark;
 pub mod boxes;
 pub mod classical;
 pub mod coco;
+pub mod detect;
 mod error;
 pub mod fusion;
 pub mod homography;
+pub mod model;
 #[cfg(feature = "onnx")]
 pub mod onnx;
 pub mod preprocess;
+pub mod tradeoff;
 
 pub use boxes::{BoundingBox, Detection};
 pub use error::VisionError;

@@ -10,10 +10,7 @@ use crackbot_vision::classical::ClassicalDetector;
 use crackbot_vision::coco::{detect_dataset, evaluate, CocoDataset, CocoMetrics};
 
 fn run(name: &str) -> CocoMetrics {
-    let root = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/cracks"
-    ));
+    let root: PathBuf = crackbot_datasets::require(crackbot_datasets::CRACKS);
     let gt = CocoDataset::load(root.join(name).join("val.json")).unwrap();
     let mut det = ClassicalDetector::default();
     let mut calls = 0;

@@ -8,11 +8,7 @@ use std::path::PathBuf;
 use crackbot_vision::coco::{evaluate, load_results, CocoDataset, CocoMetrics};
 
 fn data(rel: &str) -> PathBuf {
-    PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/cracks"
-    ))
-    .join(rel)
+    crackbot_datasets::require(crackbot_datasets::CRACKS).join(rel)
 }
 
 fn fixture(name: &str) -> PathBuf {

@@ -1,5 +1,5 @@
-//! COCO detection files and the COCO detection metrics, computed exactly as pycocotools'
-//! `COCOeval` (iouType `bbox`) does.
+//! The COCO detection metrics, computed exactly as pycocotools' `COCOeval` (iouType `bbox`)
+//! does.
 //!
 //! Conventions:
 //! * Boxes are COCO's `[x, y, width, height]` in pixels (origin at the top-left corner of the
@@ -20,252 +20,13 @@
 //!   ground-truth annotation's id and treats id 0 as "no match", so a detection matched to a
 //!   ground-truth annotation with id 0 counts as a false positive.
 
-use std::collections::{HashMap, HashSet};
-use std::path::{Path, PathBuf};
+use std::collections::HashMap;
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Detector, VisionError};
-
-/// One image of a COCO file (extra fields are ignored).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CocoImage {
-    /// Image id, unique in the file.
-    pub id: u64,
-    /// Path of the image, relative to the dataset's image root.
-    pub file_name: String,
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-}
-
-/// One ground-truth box of a COCO file (extra fields are ignored).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CocoAnnotation {
-    /// Annotation id, unique in the file.
-    pub id: u64,
-    /// The image it belongs to.
-    pub image_id: u64,
-    /// Its category.
-    pub category_id: u64,
-    /// `[x, y, width, height]` in pixels.
-    pub bbox: [f64; 4],
-    /// Area used for the small/medium/large ranges (for boxes, usually `width * height`).
-    pub area: f64,
-    /// Non-zero for a crowd region (matched by intersection over the detection's area, never a
-    /// false negative).
-    #[serde(default)]
-    pub iscrowd: u8,
-}
-
-/// One category of a COCO file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CocoCategory {
-    /// Category id.
-    pub id: u64,
-    /// Name (e.g. `"crack"`).
-    pub name: String,
-    /// Parent category name, if any.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub supercategory: Option<String>,
-}
-
-/// A validated COCO detection ground-truth file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CocoDataset {
-    /// The images.
-    pub images: Vec<CocoImage>,
-    /// The ground-truth boxes.
-    #[serde(default)]
-    pub annotations: Vec<CocoAnnotation>,
-    /// The categories.
-    pub categories: Vec<CocoCategory>,
-}
-
-fn coco_err(path: &Path, message: impl Into<String>) -> VisionError {
-    VisionError::Coco {
-        path: path.to_path_buf(),
-        message: message.into(),
-    }
-}
-
-impl CocoDataset {
-    /// Reads and validates a COCO ground-truth file.
-    pub fn load(path: impl AsRef<Path>) -> Result<Self, VisionError> {
-        let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(VisionError::io(path))?;
-        Self::from_json_str(&text, path)
-    }
-
-    /// Parses and validates a COCO ground-truth document; `path` is only used in error messages
-    /// (may be empty).
-    pub fn from_json_str(text: &str, path: &Path) -> Result<Self, VisionError> {
-        let dataset: CocoDataset = serde_json::from_str(text)
-            .map_err(|e| coco_err(path, format!("not a COCO detection file: {e}")))?;
-        dataset.validate(path)?;
-        Ok(dataset)
-    }
-
-    /// Checks ids are unique, every annotation refers to a known image and category, and every
-    /// box is finite with a non-negative size. `path` is only used in error messages.
-    pub fn validate(&self, path: &Path) -> Result<(), VisionError> {
-        let mut image_ids = HashSet::new();
-        for image in &self.images {
-            if !image_ids.insert(image.id) {
-                return Err(coco_err(path, format!("duplicate image id {}", image.id)));
-            }
-        }
-        let mut category_ids = HashSet::new();
-        for category in &self.categories {
-            if !category_ids.insert(category.id) {
-                return Err(coco_err(
-                    path,
-                    format!("duplicate category id {}", category.id),
-                ));
-            }
-        }
-        let mut annotation_ids = HashSet::new();
-        for ann in &self.annotations {
-            if !annotation_ids.insert(ann.id) {
-                return Err(coco_err(
-                    path,
-                    format!("duplicate annotation id {}", ann.id),
-                ));
-            }
-            if !image_ids.contains(&ann.image_id) {
-                return Err(coco_err(
-                    path,
-                    format!(
-                        "annotation {} refers to unknown image id {}",
-                        ann.id, ann.image_id
-                    ),
-                ));
-            }
-            if !category_ids.contains(&ann.category_id) {
-                return Err(coco_err(
-                    path,
-                    format!(
-                        "annotation {} refers to unknown category id {}",
-                        ann.id, ann.category_id
-                    ),
-                ));
-            }
-            check_bbox(&ann.bbox)
-                .map_err(|m| coco_err(path, format!("annotation {}: {m}", ann.id)))?;
-            if !ann.area.is_finite() || ann.area < 0.0 {
-                return Err(coco_err(
-                    path,
-                    format!("annotation {}: invalid area {}", ann.id, ann.area),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// The image with this id.
-    pub fn image(&self, id: u64) -> Option<&CocoImage> {
-        self.images.iter().find(|i| i.id == id)
-    }
-
-    /// The ground truth as perfect detections (score 1): evaluating them gives AP 1.
-    pub fn ground_truth_as_results(&self) -> Vec<CocoResult> {
-        self.annotations
-            .iter()
-            .map(|a| CocoResult {
-                image_id: a.image_id,
-                category_id: a.category_id,
-                bbox: a.bbox,
-                score: 1.0,
-            })
-            .collect()
-    }
-}
-
-fn check_bbox(bbox: &[f64; 4]) -> Result<(), String> {
-    if bbox.iter().any(|v| !v.is_finite()) {
-        return Err(format!("non-finite bbox {bbox:?}"));
-    }
-    if bbox[2] < 0.0 || bbox[3] < 0.0 {
-        return Err(format!("negative bbox size {bbox:?}"));
-    }
-    Ok(())
-}
-
-/// One detection in the COCO results format.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct CocoResult {
-    /// The ground-truth image it was found in.
-    pub image_id: u64,
-    /// Its category.
-    pub category_id: u64,
-    /// `[x, y, width, height]` in pixels.
-    pub bbox: [f64; 4],
-    /// Confidence.
-    pub score: f64,
-}
-
-fn check_results(results: &[CocoResult], gt: &CocoDataset, path: &Path) -> Result<(), VisionError> {
-    let image_ids: HashSet<u64> = gt.images.iter().map(|i| i.id).collect();
-    for (i, r) in results.iter().enumerate() {
-        if !image_ids.contains(&r.image_id) {
-            return Err(coco_err(
-                path,
-                format!(
-                    "result {i} is for image id {}, which is not in the ground truth",
-                    r.image_id
-                ),
-            ));
-        }
-        check_bbox(&r.bbox).map_err(|m| coco_err(path, format!("result {i}: {m}")))?;
-        if !r.score.is_finite() {
-            return Err(coco_err(
-                path,
-                format!("result {i}: non-finite score {}", r.score),
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// Reads a COCO results file (`[{"image_id", "category_id", "bbox", "score"}]`) and checks it
-/// against the ground truth: every image id must be known, every value finite.
-pub fn load_results(
-    path: impl AsRef<Path>,
-    gt: &CocoDataset,
-) -> Result<Vec<CocoResult>, VisionError> {
-    let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(VisionError::io(path))?;
-    parse_results(&text, path, gt)
-}
-
-/// Parses a COCO results document (see [`load_results`]); `path` is only used in error messages.
-pub fn parse_results(
-    text: &str,
-    path: &Path,
-    gt: &CocoDataset,
-) -> Result<Vec<CocoResult>, VisionError> {
-    let results: Vec<CocoResult> = serde_json::from_str(text)
-        .map_err(|e| coco_err(path, format!("not a COCO results file: {e}")))?;
-    check_results(&results, gt, path)?;
-    Ok(results)
-}
-
-/// Writes a COCO results file (refuses non-finite values, which JSON cannot hold).
-pub fn save_results(path: impl AsRef<Path>, results: &[CocoResult]) -> Result<(), VisionError> {
-    let path = path.as_ref();
-    for (i, r) in results.iter().enumerate() {
-        if r.bbox.iter().any(|v| !v.is_finite()) || !r.score.is_finite() {
-            return Err(coco_err(
-                path,
-                format!("result {i} has a non-finite value: {r:?}"),
-            ));
-        }
-    }
-    let text = serde_json::to_string(results)
-        .map_err(|e| coco_err(path, format!("cannot encode results: {e}")))?;
-    std::fs::write(path, text).map_err(VisionError::io(path))
-}
+use super::{validate_results, CocoAnnotation, CocoDataset, CocoResult};
+use crate::VisionError;
 
 /// The twelve numbers of pycocotools' `COCOeval.summarize()` (`-1` where undefined).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -480,7 +241,7 @@ fn evaluate_img(
 ///
 /// Errors when a result is for an image not in `gt`, or has a non-finite value or a negative size.
 pub fn evaluate(gt: &CocoDataset, results: &[CocoResult]) -> Result<CocoMetrics, VisionError> {
-    check_results(results, gt, Path::new(""))?;
+    validate_results(results, gt, Path::new(""))?;
     let thresholds = iou_thresholds();
     let recall_thrs = recall_thresholds();
     let mut img_ids: Vec<u64> = gt.images.iter().map(|i| i.id).collect();
@@ -659,106 +420,27 @@ pub fn evaluate(gt: &CocoDataset, results: &[CocoResult]) -> Result<CocoMetrics,
     })
 }
 
-/// Where [`detect_dataset`] is: called before each image.
-#[derive(Debug, Clone)]
-pub struct Progress<'a> {
-    /// Images finished so far.
-    pub done: usize,
-    /// Images in the dataset.
-    pub total: usize,
-    /// The image about to be processed.
-    pub image: &'a CocoImage,
-}
-
-/// Runs `detector` over every image of `gt` (read from `image_root.join(file_name)`), returning
-/// its detections as COCO results with `category_id`. `progress` is called before each image (and
-/// once more with `done == total` at the end, with the last image) so a CLI can draw a progress
-/// bar. Detections with a non-finite box or score are dropped. An image that cannot be read, or
-/// whose size differs from the ground truth's, is an error naming the file.
-pub fn detect_dataset<D: Detector + ?Sized>(
-    detector: &mut D,
-    gt: &CocoDataset,
-    image_root: &Path,
-    category_id: u64,
-    mut progress: impl FnMut(&Progress<'_>),
-) -> Result<Vec<CocoResult>, VisionError> {
-    let total = gt.images.len();
-    let mut results = Vec::new();
-    for (done, image) in gt.images.iter().enumerate() {
-        progress(&Progress { done, total, image });
-        let path: PathBuf = image_root.join(&image.file_name);
-        let rgb = image::open(&path)
-            .map_err(|e| VisionError::Image {
-                path: path.clone(),
-                message: e.to_string(),
-            })?
-            .to_rgb8();
-        if rgb.width() != image.width || rgb.height() != image.height {
-            return Err(VisionError::Image {
-                path,
-                message: format!(
-                    "image is {}×{} but the ground truth says {}×{}",
-                    rgb.width(),
-                    rgb.height(),
-                    image.width,
-                    image.height
-                ),
-            });
-        }
-        for d in detector.detect(&rgb)? {
-            if !d.bbox.is_finite() || !d.score.is_finite() {
-                continue;
-            }
-            let [x, y, w, h] = d.bbox.to_xywh();
-            results.push(CocoResult {
-                image_id: image.id,
-                category_id,
-                bbox: [f64::from(x), f64::from(y), f64::from(w), f64::from(h)],
-                score: f64::from(d.score),
-            });
-        }
-    }
-    if let Some(last) = gt.images.last() {
-        progress(&Progress {
-            done: total,
-            total,
-            image: last,
-        });
-    }
-    Ok(results)
-}
-
 #[cfg(test)]
 mod tests {
+    use super::super::{parse_results, CocoCategory, CocoImage};
     use super::*;
 
     fn dataset(anns: &[(u64, u64, [f64; 4])], images: &[u64]) -> CocoDataset {
         CocoDataset {
             images: images
                 .iter()
-                .map(|&id| CocoImage {
-                    id,
-                    file_name: format!("{id}.jpg"),
-                    width: 500,
-                    height: 500,
-                })
+                .map(|&id| CocoImage::new(id, format!("{id}.jpg"), 500, 500))
                 .collect(),
             annotations: anns
                 .iter()
-                .map(|&(id, image_id, bbox)| CocoAnnotation {
-                    id,
-                    image_id,
-                    category_id: 1,
-                    bbox,
-                    area: bbox[2] * bbox[3],
-                    iscrowd: 0,
-                })
+                .map(|&(id, image_id, bbox)| CocoAnnotation::from_bbox(id, image_id, 1, bbox))
                 .collect(),
             categories: vec![CocoCategory {
                 id: 1,
                 name: "crack".into(),
                 supercategory: None,
             }],
+            ..CocoDataset::default()
         }
     }
 
@@ -902,96 +584,5 @@ mod tests {
         )
         .unwrap();
         assert_eq!(ok.len(), 1);
-    }
-
-    #[test]
-    fn ground_truth_is_validated() {
-        let p = Path::new("gt.json");
-        let cats = r#""categories": [{"id": 1, "name": "crack"}]"#;
-        let img = r#"{"id": 1, "file_name": "a.jpg", "width": 10, "height": 10, "extra": 3}"#;
-        let ann = |s: &str| format!(r#"{{"images": [{img}], {cats}, "annotations": [{s}]}}"#);
-        let ok = CocoDataset::from_json_str(
-            &ann(r#"{"id": 1, "image_id": 1, "category_id": 1, "bbox": [1, 2, 3, 4], "area": 12}"#),
-            p,
-        )
-        .unwrap();
-        assert_eq!(ok.annotations[0].iscrowd, 0);
-        let bad = [
-            "not json".to_string(),
-            format!(r#"{{"images": [{img}, {img}], {cats}}}"#),
-            ann(r#"{"id": 1, "image_id": 2, "category_id": 1, "bbox": [1, 2, 3, 4], "area": 12}"#),
-            ann(r#"{"id": 1, "image_id": 1, "category_id": 1, "bbox": [1, 2, -3, 4], "area": 12}"#),
-            ann(r#"{"id": 1, "image_id": 1, "category_id": 1, "bbox": [1, 2, 3, 4]}"#),
-            ann(r#"{"id": 1, "image_id": 1, "category_id": 5, "bbox": [1, 2, 3, 4], "area": 12}"#),
-            ann(
-                r#"{"id": 1, "image_id": 1, "category_id": 1, "bbox": [1, 2, 3, 1e999], "area": 12}"#,
-            ),
-        ];
-        for b in &bad {
-            let err = CocoDataset::from_json_str(b, p).unwrap_err();
-            assert!(err.to_string().contains("gt.json"), "{err}");
-        }
-    }
-
-    #[test]
-    fn results_round_trip_through_a_file() {
-        let gt = dataset(&[(1, 1, [0.0, 0.0, 10.0, 10.0])], &[1]);
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("dets.json");
-        let r = vec![res(1, [0.5, 1.25, 3.0, 4.0], 0.75)];
-        save_results(&path, &r).unwrap();
-        assert_eq!(load_results(&path, &gt).unwrap(), r);
-        assert!(save_results(&path, &[res(1, [0.0, 0.0, 1.0, 1.0], f64::NAN)]).is_err());
-        assert!(load_results(dir.path().join("missing.json"), &gt).is_err());
-    }
-
-    struct Fixed;
-    impl Detector for Fixed {
-        fn name(&self) -> String {
-            "fixed".into()
-        }
-        fn detect(
-            &mut self,
-            _image: &image::RgbImage,
-        ) -> Result<Vec<crate::Detection>, VisionError> {
-            Ok(vec![
-                crate::Detection {
-                    bbox: crate::BoundingBox::from_xywh(1.0, 2.0, 3.0, 4.0),
-                    score: 0.5,
-                },
-                crate::Detection {
-                    bbox: crate::BoundingBox::from_xywh(f32::NAN, 2.0, 3.0, 4.0),
-                    score: 0.5,
-                },
-            ])
-        }
-    }
-
-    #[test]
-    fn detect_dataset_runs_over_images_with_progress() {
-        let dir = tempfile::tempdir().unwrap();
-        let mut gt = dataset(&[], &[1, 2]);
-        for im in &mut gt.images {
-            im.width = 8;
-            im.height = 6;
-            image::RgbImage::new(8, 6)
-                .save(dir.path().join(format!("{}.png", im.id)))
-                .unwrap();
-            im.file_name = format!("{}.png", im.id);
-        }
-        let mut seen = Vec::new();
-        let r = detect_dataset(&mut Fixed, &gt, dir.path(), 1, |p| {
-            seen.push((p.done, p.total))
-        })
-        .unwrap();
-        assert_eq!(r.len(), 2);
-        assert_eq!(r[1].image_id, 2);
-        assert_eq!(r[0].bbox, [1.0, 2.0, 3.0, 4.0]);
-        assert_eq!(seen, vec![(0, 2), (1, 2), (2, 2)]);
-        gt.images[0].width = 9;
-        let err = detect_dataset(&mut Fixed, &gt, dir.path(), 1, |_| {}).unwrap_err();
-        assert!(err.to_string().contains("1.png"), "{err}");
-        gt.images[0].file_name = "nope.png".into();
-        assert!(detect_dataset(&mut Fixed, &gt, dir.path(), 1, |_| {}).is_err());
     }
 }

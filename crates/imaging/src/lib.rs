@@ -1,0 +1,19 @@
+//! `crackbot-imaging`: the few image-side definitions that the simulator and the vision crate
+//! share, each defined once.
+//!
+//! * [`homography`]: applying a plane homography between image pixels and surface millimetres,
+//!   with an explicit policy for points at or behind the horizon ([`Horizon`]), and the validated
+//!   pixel → surface [`Homography`] with its inverse and reprojection errors.
+//! * [`coco`]: COCO detection files (ground truth and results): the types, reading, validating
+//!   and writing them. crackbot's own extensions (the simulator's seed, homography and
+//!   per-crack fields, the photo datasets' mask files) are typed optional fields.
+//!
+//! The crate is deliberately light (nalgebra, serde, serde_json, thiserror): no image decoding,
+//! no runtime.
+
+pub mod coco;
+mod error;
+pub mod homography;
+
+pub use error::ImagingError;
+pub use homography::{Homography, Horizon, PointPair, ReprojectionStats};

@@ -1,0 +1,270 @@
+//! The `crackbot detect` flow: a detector over images, detections above a threshold, their
+//! centres on the surface through a homography, fusion over the frames of one view, and the
+//! boxes drawn into copies of the images.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::fusion::{fuse, FusionParams};
+use crate::homography::Homography;
+use crate::{Detection, Detector, VisionError};
+
+/// Colour of a frame's own detections in annotated images.
+pub const DETECTION_COLOUR: [u8; 3] = [255, 40, 40];
+/// Colour of the fused detections in annotated images.
+pub const FUSED_COLOUR: [u8; 3] = [40, 220, 255];
+
+/// What to do with the images.
+#[derive(Debug, Clone, Default)]
+pub struct DetectConfig {
+    /// Minimum score of a reported crack, in `[0, 1]`.
+    pub threshold: f32,
+    /// Pixel → surface homography: adds each detection's centre in mm.
+    pub homography: Option<Homography>,
+    /// Treat the images as frames of one view and fuse their detections.
+    pub fuse: Option<FusionParams>,
+    /// Write `<image stem>-detections.png` with the boxes drawn into this folder.
+    pub annotate: Option<PathBuf>,
+}
+
+/// One detection in a [`DetectReport`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DetectionReport {
+    /// `[x0, y0, x1, y1]` in pixels.
+    pub bbox: [f32; 4],
+    /// Confidence.
+    pub score: f32,
+    /// The box centre on the surface, mm (with a homography, where the centre maps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub centre_mm: Option<[f64; 2]>,
+    /// Frames the detection was seen in (fused detections only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames_seen: Option<usize>,
+}
+
+/// One image of a [`DetectReport`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ImageReport {
+    /// The image file.
+    pub file: String,
+    /// Width, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// Milliseconds of the `detect` call.
+    pub ms: f64,
+    /// Detections at or above the threshold, best first.
+    pub detections: Vec<DetectionReport>,
+}
+
+/// What `crackbot detect` reports (its `--json` object).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DetectReport {
+    /// The detector's name.
+    pub detector: String,
+    /// The score threshold.
+    pub threshold: f32,
+    /// Per image.
+    pub images: Vec<ImageReport>,
+    /// The fused detections (with fusion).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fused: Option<Vec<DetectionReport>>,
+    /// With fusion: frames a crack must be seen in.
+    #[serde(skip)]
+    pub min_frames: Option<usize>,
+    /// The annotated images written.
+    #[serde(skip)]
+    pub annotated: Vec<PathBuf>,
+}
+
+fn read_rgb(path: &Path) -> Result<image::RgbImage, VisionError> {
+    Ok(image::open(path)
+        .map_err(|e| VisionError::Image {
+            path: path.to_path_buf(),
+            message: format!("cannot read the image: {e}"),
+        })?
+        .to_rgb8())
+}
+
+/// Runs `detector` over `images` as `config` says. Errors on a threshold outside `[0, 1]`,
+/// invalid fusion parameters, an image that cannot be read, a failed detection, or an annotated
+/// image that cannot be written, naming the file.
+pub fn detect_images(
+    detector: &mut dyn Detector,
+    images: &[PathBuf],
+    config: &DetectConfig,
+) -> Result<DetectReport, VisionError> {
+    if !(0.0..=1.0).contains(&config.threshold) {
+        return Err(VisionError::Invalid(format!(
+            "threshold must be in [0, 1], got {}",
+            config.threshold
+        )));
+    }
+    if let Some(p) = &config.fuse {
+        p.validate()?;
+    }
+    let mut frames = Vec::with_capacity(images.len());
+    for path in images {
+        let rgb = read_rgb(path)?;
+        let started = Instant::now();
+        let mut found = detector.detect(&rgb)?;
+        let ms = started.elapsed().as_secs_f64() * 1e3;
+        found.retain(|d| d.score >= config.threshold);
+        frames.push((path, rgb, found, ms));
+    }
+    // A centre the homography cannot map (behind the camera's horizon) has no surface position.
+    let to_mm = |d: &Detection| -> Option<[f64; 2]> {
+        let (cx, cy) = d.bbox.centre();
+        config
+            .homography
+            .as_ref()
+            .and_then(|h| h.pixel_to_surface([f64::from(cx), f64::from(cy)]).ok())
+    };
+    let report_of = |d: &Detection, frames_seen: Option<usize>| DetectionReport {
+        bbox: [d.bbox.x0, d.bbox.y0, d.bbox.x1, d.bbox.y1],
+        score: d.score,
+        centre_mm: to_mm(d),
+        frames_seen,
+    };
+    let fused = config.fuse.as_ref().map(|params| {
+        let dets: Vec<Vec<Detection>> = frames.iter().map(|f| f.2.clone()).collect();
+        fuse(&dets, params)
+    });
+    let mut annotated = Vec::new();
+    if let Some(dir) = &config.annotate {
+        std::fs::create_dir_all(dir).map_err(VisionError::io(dir))?;
+        for (path, rgb, found, _) in &frames {
+            let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("image");
+            let out = dir.join(format!("{stem}-detections.png"));
+            let mut canvas = rgb.clone();
+            for d in found {
+                draw_box(&mut canvas, d, DETECTION_COLOUR);
+            }
+            for f in fused.iter().flatten() {
+                draw_box(&mut canvas, &f.detection, FUSED_COLOUR);
+            }
+            canvas.save(&out).map_err(|e| VisionError::Image {
+                path: out.clone(),
+                message: e.to_string(),
+            })?;
+            annotated.push(out);
+        }
+    }
+    Ok(DetectReport {
+        detector: detector.name(),
+        threshold: config.threshold,
+        images: frames
+            .iter()
+            .map(|(path, rgb, found, ms)| ImageReport {
+                file: path.display().to_string(),
+                width: rgb.width(),
+                height: rgb.height(),
+                ms: *ms,
+                detections: found.iter().map(|d| report_of(d, None)).collect(),
+            })
+            .collect(),
+        fused: fused.as_ref().map(|fused| {
+            fused
+                .iter()
+                .map(|f| report_of(&f.detection, Some(f.frames_seen)))
+                .collect()
+        }),
+        min_frames: config.fuse.as_ref().map(|p| p.min_frames),
+        annotated,
+    })
+}
+
+/// Draws a 3-pixel rectangle outline of `d`'s box (clipped to the image).
+pub fn draw_box(img: &mut image::RgbImage, d: &Detection, colour: [u8; 3]) {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    if w == 0 || h == 0 || !d.bbox.is_finite() {
+        return;
+    }
+    let clamp = |v: f32, hi: i64| (v.round() as i64).clamp(0, hi - 1);
+    let (x0, x1) = (clamp(d.bbox.x0, w), clamp(d.bbox.x1, w));
+    let (y0, y1) = (clamp(d.bbox.y0, h), clamp(d.bbox.y1, h));
+    for t in 0..3 {
+        for x in x0..=x1 {
+            for y in [y0 + t, y1 - t] {
+                if (0..h).contains(&y) {
+                    img.put_pixel(x as u32, y as u32, image::Rgb(colour));
+                }
+            }
+        }
+        for y in y0..=y1 {
+            for x in [x0 + t, x1 - t] {
+                if (0..w).contains(&x) {
+                    img.put_pixel(x as u32, y as u32, image::Rgb(colour));
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    struct Two;
+    impl Detector for Two {
+        fn name(&self) -> String {
+            "two".into()
+        }
+        fn detect(&mut self, _image: &image::RgbImage) -> Result<Vec<Detection>, VisionError> {
+            Ok(vec![
+                Detection {
+                    bbox: crate::BoundingBox::from_xywh(2.0, 2.0, 4.0, 4.0),
+                    score: 0.8,
+                },
+                Detection {
+                    bbox: crate::BoundingBox::from_xywh(10.0, 1.0, 3.0, 3.0),
+                    score: 0.1,
+                },
+            ])
+        }
+    }
+
+    #[test]
+    fn detections_are_thresholded_mapped_fused_and_drawn() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = dir.path().join("f.png");
+        image::RgbImage::new(16, 8).save(&img).unwrap();
+        let config = DetectConfig {
+            threshold: 0.5,
+            homography: Some(
+                Homography::from_matrix([[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]])
+                    .unwrap(),
+            ),
+            fuse: Some(FusionParams {
+                min_frames: 2,
+                ..FusionParams::default()
+            }),
+            annotate: Some(dir.path().join("out")),
+        };
+        let r = detect_images(&mut Two, &[img.clone(), img.clone()], &config).unwrap();
+        assert_eq!(r.images.len(), 2);
+        assert_eq!(r.images[0].detections.len(), 1);
+        assert_eq!(r.images[0].detections[0].centre_mm, Some([2.0, 2.0]));
+        let fused = r.fused.as_ref().unwrap();
+        assert_eq!(fused.len(), 1);
+        assert_eq!(fused[0].frames_seen, Some(2));
+        assert_eq!(r.annotated.len(), 2);
+        let drawn = image::open(&r.annotated[0]).unwrap().to_rgb8();
+        assert_eq!(drawn.get_pixel(2, 2).0, FUSED_COLOUR);
+        let json = serde_json::to_value(&r).unwrap();
+        assert!(json.get("min_frames").is_none() && json.get("annotated").is_none());
+        assert!(json["images"][0]["detections"][0]
+            .get("frames_seen")
+            .is_none());
+        let bad = DetectConfig {
+            threshold: 2.0,
+            ..DetectConfig::default()
+        };
+        assert!(detect_images(&mut Two, &[img], &bad).is_err());
+        let err = detect_images(&mut Two, &[dir.path().join("no.png")], &config).unwrap_err();
+        assert!(err.to_string().contains("no.png"), "{err}");
+    }
+}
