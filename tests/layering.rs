@@ -25,7 +25,11 @@ const LAYERS: &[(&str, &[&str])] = &[
     ),
     (
         "data: firmware, recordings, image geometry and annotations",
-        &["crackbot-firmware", "crackbot-recording", "crackbot-imaging"],
+        &[
+            "crackbot-firmware",
+            "crackbot-recording",
+            "crackbot-imaging",
+        ],
     ),
     (
         "components: sensor link, signals, classifiers, camera, simulator",
@@ -246,9 +250,7 @@ fn no_crate_depends_on_a_binary_crate() {
 fn no_std_crates_stay_no_std() {
     let ws = workspace();
     for name in NO_STD {
-        let p = ws
-            .get(*name)
-            .unwrap_or_else(|| panic!("{name} is missing"));
+        let p = ws.get(*name).unwrap_or_else(|| panic!("{name} is missing"));
         let lib = Path::new(&p.manifest)
             .parent()
             .expect("crate folder")
