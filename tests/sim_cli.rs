@@ -72,7 +72,7 @@ fn width_dataset_is_deterministic_and_in_the_authors_format() {
         assert!(rec.rows.iter().any(|r| r.direction == 0));
         assert!(rec.rows.iter().any(|r| r.direction == 1));
         for r in &rec.rows {
-            for v in [r.d1, r.d2, r.d3, r.p] {
+            for v in r.channels() {
                 assert!((0.0..=1023.0).contains(&v) && v.fract() == 0.0, "{v}");
             }
         }

@@ -48,7 +48,7 @@ pub fn fit_mounts(
             .iter()
             .flat_map(|r| r.rows.iter())
             .filter(|row| row.label == trace.label)
-            .map(|row| [row.d1, row.d2, row.d3, row.p])
+            .map(|row| row.channels())
             .collect();
         if rows.is_empty() {
             return Err(SimError::Invalid(format!(
@@ -129,7 +129,7 @@ pub fn real_quantiles(recordings: &[Recording]) -> Vec<ChannelQuantiles> {
                     .iter()
                     .flat_map(|r| r.rows.iter())
                     .filter(|row| row.label == label && row.direction == direction)
-                    .map(|row| [row.d1, row.d2, row.d3, row.p][channel])
+                    .map(|row| row.channels()[channel])
                     .collect();
                 out.push(ChannelQuantiles {
                     label,
@@ -550,8 +550,8 @@ pub fn real_noise(real: &[Recording]) -> [f64; 4] {
                 r.rows
                     .windows(2)
                     .map(move |w| {
-                        let a = [w[0].d1, w[0].d2, w[0].d3, w[0].p][c];
-                        let b = [w[1].d1, w[1].d2, w[1].d3, w[1].p][c];
+                        let a = w[0].channels()[c];
+                        let b = w[1].channels()[c];
                         b - a
                     })
                     .collect::<Vec<_>>()

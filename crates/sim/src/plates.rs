@@ -10,15 +10,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::SensorParams;
 
-/// Which of the paper's experiments.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Experiment {
-    /// Surface recognition: flat, crack, bump, wavy pattern.
-    Recognition,
-    /// Crack width: 0, 1, 2, 5, 8, 10 mm.
-    Width,
-}
+/// Which of the paper's experiments: the one definition in `crackbot-recording` (labels, class
+/// names), re-exported here.
+pub use crackbot_recording::Experiment;
 
 /// The geometry of the paper's samples, as simulated.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -55,14 +55,16 @@ pub fn experiment_of(recordings: &[Recording]) -> Experiment {
     }
 }
 
-/// The name of a class: the recognition experiment's surfaces (`flat`, `crack`, `bump`, `wavy`)
-/// or a crack width (`"2 mm"`).
+/// The name of a class ([`Experiment::class_names`]: `no crack`, `crack`, `bump`, `wavy`, or
+/// `"2 mm"`); a label outside the experiment's classes is `label 4`, or `4 mm` for a width.
 pub fn class_name(label: f64, experiment: Experiment) -> String {
-    match experiment {
-        Experiment::Recognition => ["flat", "crack", "bump", "wavy"]
-            .get(label as usize)
-            .map_or(format!("label {label}"), |s| s.to_string()),
-        Experiment::Width => format!("{label} mm"),
+    let known = experiment
+        .class_of(label)
+        .and_then(|c| experiment.class_names().get(c as usize));
+    match (known, experiment) {
+        (Some(name), _) => (*name).to_string(),
+        (None, Experiment::Width) => format!("{label} mm"),
+        (None, _) => format!("label {label}"),
     }
 }
 
@@ -104,7 +106,7 @@ fn pick(recs: &[Recording], label: f64, slide: u32) -> Option<SlideRows> {
         .rows
         .iter()
         .filter(|row| row.slide == slide)
-        .map(|row| [row.d1, row.d2, row.d3, row.p])
+        .map(|row| row.channels())
         .collect();
     (!rows.is_empty()).then_some(rows)
 }
@@ -168,7 +170,7 @@ mod tests {
         let c = compare_slides(&real, &sim, 2);
         assert_eq!(c.experiment, Experiment::Recognition);
         assert_eq!(c.classes.len(), 2);
-        assert_eq!(c.classes[0].name, "flat");
+        assert_eq!(c.classes[0].name, "no crack");
         assert_eq!(c.classes[0].real, None);
         assert_eq!(c.classes[1].name, "crack");
         assert_eq!(c.classes[1].real.as_ref().unwrap().len(), 2);
