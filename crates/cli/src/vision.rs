@@ -1,6 +1,6 @@
 //! `crackbot detect` and `crackbot eval-detector`: the camera half of the inspection.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
@@ -13,7 +13,7 @@ use crackbot_vision::homography::{read_pairs, HomographyCalibration};
 use crackbot_vision::model::{resolve_model, trained_models};
 use crackbot_vision::onnx::OnnxDetector;
 use crackbot_vision::preprocess::PostprocessParams;
-use crackbot_vision::tradeoff::{self, TradeoffConfig, TradeoffRow};
+use crackbot_vision::tradeoff::{self, TradeoffConfig};
 use crackbot_vision::Detector;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -282,7 +282,7 @@ pub fn detector_tradeoff(args: DetectorTradeoffArgs) -> Result<()> {
     )?;
     let (md_path, json_path) = report.write(&args.out)?;
     let png = args.out.join("tradeoff.png");
-    tradeoff_png(&png, &report.rows).with_context(|| format!("drawing {}", png.display()))?;
+    crackbot_plots::vision::detector_tradeoff_png(&png, &report.rows)?;
     print!("{}", report.markdown());
     println!(
         "written: {}, {}, {}",
@@ -290,65 +290,6 @@ pub fn detector_tradeoff(args: DetectorTradeoffArgs) -> Result<()> {
         json_path.display(),
         png.display()
     );
-    Ok(())
-}
-
-fn tradeoff_png(path: &Path, rows: &[TradeoffRow]) -> Result<()> {
-    use plotters::prelude::*;
-    let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let x_max = rows
-        .iter()
-        .map(|r| r.ms_per_frame)
-        .filter(|v| v.is_finite())
-        .fold(1.0f64, f64::max)
-        * 1.2;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "Crack detector: mAP@0.5 against ms per frame",
-            ("sans-serif", 24),
-        )
-        .margin(20)
-        .x_label_area_size(50)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f64..x_max, 0f64..1f64)
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
-    chart
-        .configure_mesh()
-        .x_desc("ms per frame (one core)")
-        .y_desc("mAP@0.5")
-        .label_style(("sans-serif", 16))
-        .draw()
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let onnx: Vec<(f64, f64)> = rows
-        .iter()
-        .filter(|r| r.input_size.is_some())
-        .map(|r| (r.ms_per_frame, r.map50))
-        .collect();
-    chart
-        .draw_series(LineSeries::new(onnx.clone(), BLUE.stroke_width(2)))
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
-    for r in rows {
-        let colour = if r.input_size.is_some() { BLUE } else { RED };
-        let label = r
-            .input_size
-            .map_or(r.detector.clone(), |s| format!("{s}×{s}"));
-        chart
-            .draw_series(std::iter::once(Circle::new(
-                (r.ms_per_frame, r.map50),
-                6,
-                colour.filled(),
-            )))
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                label,
-                (r.ms_per_frame, r.map50 + 0.03),
-                ("sans-serif", 16),
-            )))
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-    }
-    root.present().map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(())
 }
 

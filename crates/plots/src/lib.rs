@@ -3,7 +3,9 @@
 //! plotters (checked by `tests/layering.rs`).
 //!
 //! * [`tactile`]: confusion-matrix heat maps, the paper's Fig. 10-style accuracy box plots of the
-//!   intersession grid, the random forest's accuracy against its prediction latency.
+//!   intersession grid, the random forest's accuracy against its prediction latency;
+//! * [`vision`]: the detector's mAP@0.5 against ms per frame;
+//! * [`sim`]: the integrators' work-precision diagram, real against simulated slides.
 //!
 //! Text is drawn with a TrueType font read at run time (plotters' `ab_glyph` renderer does not
 //! look fonts up itself): `$CRACKBOT_FONT` if set, otherwise DejaVu Sans from Debian's
@@ -17,7 +19,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+pub mod sim;
 pub mod tactile;
+pub mod vision;
 
 /// Why a figure could not be drawn. Every variant about a file names it.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -75,6 +79,12 @@ pub enum PlotError {
         /// The target.
         path: PathBuf,
     },
+    /// No integrator of a work-precision run finished.
+    #[error("{}: no integrator finished, nothing to plot", path.display())]
+    NoFinishedIntegrator {
+        /// The target.
+        path: PathBuf,
+    },
 }
 
 /// Font files tried, in order, after `$CRACKBOT_FONT`.
@@ -85,6 +95,14 @@ pub const FONT_CANDIDATES: &[&str] = &[
 ];
 
 pub(crate) const FONT: &str = "sans-serif";
+
+/// Line colours of the figures with several series (matplotlib's first four).
+pub(crate) const COLOURS: [RGBColor; 4] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+];
 
 static LOADED_FONT: OnceLock<Result<PathBuf, String>> = OnceLock::new();
 

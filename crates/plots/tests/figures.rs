@@ -1,15 +1,21 @@
-//! The PNG figures: valid files of the documented sizes, and clear errors on unusable paths.
+//! The PNG figures of every crate: valid files of the documented sizes, and clear errors on
+//! unusable paths or empty results.
 
 use std::path::{Path, PathBuf};
 
+use crackbot_plots::sim::{compare_png, work_precision_png, WORK_PRECISION_SIZE};
 use crackbot_plots::tactile::{
     accuracy_boxplot_png, confusion_png, paper_plots, plots_markdown, tradeoff_png, BOXPLOT_SIZE,
     CONFUSION_SIZE, TRADEOFF_SIZE,
 };
+use crackbot_plots::vision::{detector_tradeoff_png, DETECTOR_TRADEOFF_SIZE};
+use crackbot_sim::recordings::{ClassSlides, Comparison};
+use crackbot_sim::work_precision::WorkPrecisionRow;
 use crackbot_tactile::dataset::Experiment;
 use crackbot_tactile::metrics::ConfusionMatrix;
 use crackbot_tactile::paper::{CellResult, PairResult, PaperTables};
-use crackbot_tactile::tradeoff::{Tradeoff, TradeoffConfig, TradeoffRow};
+use crackbot_tactile::tradeoff::{Tradeoff, TradeoffConfig, TradeoffRow as ForestRow};
+use crackbot_vision::tradeoff::TradeoffRow;
 
 /// A fresh, empty folder under Cargo's temporary folder for integration tests.
 fn scratch(name: &str) -> PathBuf {
@@ -166,7 +172,7 @@ fn tradeoff_plot_is_a_png_of_the_documented_size() {
     let mut rows = Vec::new();
     for (di, max_depth) in [None, Some(8)].into_iter().enumerate() {
         for (ti, n_trees) in [1usize, 10, 100].into_iter().enumerate() {
-            rows.push(TradeoffRow {
+            rows.push(ForestRow {
                 n_trees,
                 max_depth,
                 depth_reached: max_depth.unwrap_or(25),
@@ -230,4 +236,89 @@ fn unwritable_targets_are_clear_errors() {
         e.contains("taken.png") && e.contains("could not write"),
         "{e}"
     );
+}
+
+fn wp_row(method: &str, family: &str, rms: Option<f64>, ms: f64) -> WorkPrecisionRow {
+    WorkPrecisionRow {
+        method: method.into(),
+        family: family.into(),
+        rms_error_counts: rms,
+        max_error_counts: rms.map(|r| 10.0 * r),
+        ms_per_sim_second: ms,
+        real_time_factor: 1000.0 / ms,
+        rhs_per_sim_second: 800.0,
+        failure: rms.is_none().then(|| "blew up".to_string()),
+    }
+}
+
+#[test]
+fn the_simulator_and_detector_figures_are_pngs_of_their_sizes() {
+    let dir = scratch("sim-vision");
+    let rows = vec![
+        wp_row("sdirk2 x1", "sdirk2", Some(0.013), 0.66),
+        wp_row("sdirk2 x8", "sdirk2", Some(0.0019), 2.67),
+        wp_row("dopri5 1e-6", "dopri5", Some(8e-5), 17.2),
+        wp_row("symplectic x1", "symplectic-euler", None, 0.2),
+    ];
+    let wp = dir.join("work_precision.png");
+    work_precision_png(&wp, &rows).unwrap();
+    assert_eq!(png_size(&wp), WORK_PRECISION_SIZE);
+
+    let tradeoff = [
+        (Some(256), 0.25, 6.0),
+        (Some(320), 0.31, 9.5),
+        (None, 0.05, 30.0),
+    ]
+    .map(|(size, map50, ms)| TradeoffRow {
+        detector: size.map_or("classical".into(), |s| format!("onnx-{s}")),
+        input_size: size,
+        map: map50 / 2.0,
+        map50,
+        ar100: map50,
+        ms_per_frame: ms,
+    });
+    let png = dir.join("tradeoff.png");
+    detector_tradeoff_png(&png, &tradeoff).unwrap();
+    assert_eq!(png_size(&png), DETECTOR_TRADEOFF_SIZE);
+
+    let slide = |level: f64| {
+        Some(
+            (0..400)
+                .map(|k| [level, 430.0, 700.0, 500.0 - (k % 50) as f64])
+                .collect(),
+        )
+    };
+    let comparison = Comparison {
+        experiment: Experiment::Recognition,
+        slide: 3,
+        classes: vec![
+            ClassSlides {
+                label: 0.0,
+                name: "no crack".into(),
+                real: slide(650.0),
+                simulated: slide(652.0),
+            },
+            ClassSlides {
+                label: 1.0,
+                name: "crack".into(),
+                real: slide(660.0),
+                simulated: None,
+            },
+        ],
+    };
+    let cmp = dir.join("compare.png");
+    compare_png(&cmp, &comparison).unwrap();
+    assert_eq!(png_size(&cmp), (1600, 2 * 260 + 60));
+}
+
+#[test]
+fn figures_with_nothing_to_draw_or_a_bad_target_are_clear_errors() {
+    let dir = scratch("sim-vision-errors");
+    let failed = vec![wp_row("symplectic x1", "symplectic-euler", None, 0.2)];
+    let err = work_precision_png(&dir.join("wp.png"), &failed).unwrap_err();
+    assert!(err.to_string().contains("no integrator finished"), "{err}");
+    let err = detector_tradeoff_png(&dir.join("tradeoff.jpg"), &[]).unwrap_err();
+    assert!(err.to_string().contains("must end in .png"), "{err}");
+    let err = detector_tradeoff_png(&dir.join("no/such/folder/t.png"), &[]).unwrap_err();
+    assert!(err.to_string().contains("does not exist"), "{err}");
 }
