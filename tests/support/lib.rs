@@ -7,7 +7,8 @@ use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::{Mutex, OnceLock};
 
 /// Path of a workspace binary, built (once per test process) with the profile of the running
-/// test, so `cargo test` alone is enough.
+/// test, so `cargo test` alone is enough. `crackbot` comes with `crackbot-lab` beside it, which
+/// runs the research commands `crackbot` hands on.
 pub fn binary(name: &str) -> PathBuf {
     static BUILT: OnceLock<Mutex<Vec<String>>> = OnceLock::new();
     let exe = std::env::current_exe().expect("test executable path");
@@ -26,15 +27,11 @@ pub fn binary(name: &str) -> PathBuf {
     if !built.iter().any(|b| b == name) {
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
         let mut cmd = Command::new(cargo);
-        cmd.args([
-            "build",
-            "--quiet",
-            "--workspace",
-            "--bin",
-            name,
-            "--target-dir",
-        ])
-        .arg(&target_dir);
+        cmd.args(["build", "--quiet", "--workspace", "--bin", name]);
+        if name == "crackbot" {
+            cmd.args(["--bin", "crackbot-lab"]);
+        }
+        cmd.arg("--target-dir").arg(&target_dir);
         if release {
             cmd.arg("--release");
         }

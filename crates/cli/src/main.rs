@@ -1,4 +1,7 @@
-//! `crackbot`: the command line of the crackbot crack-inspection system.
+//! `crackbot`: what an operator runs (the headless tool of the robot's computer). Research tools
+//! (the paper's tables, trade-offs, detector metrics, the simulator's datasets and figures) are
+//! in `crackbot-lab`; `crackbot tactile|sim|eval-detector|detector-tradeoff …` hands those to it
+//! with the same arguments, so every command works from here too.
 //!
 //! * `crackbot demo` — the acquisition demo: the sensor firmware runs on this host, streams
 //!   400 Hz frames into a pseudo-terminal, the acquisition reads them back over the real serial
@@ -7,11 +10,12 @@
 //!   a time limit, or the port going away; nothing received is lost on any of these.
 //! * `crackbot replay FILE` — plays a recording back at its original or an accelerated rate.
 //! * `crackbot calibration check FILE` — validates a calibration file.
-//! * `crackbot tactile convert INPUT... --out DIR|FILE` — converts tactile recordings between the
-//!   authors' `.mat` files and `.csv`.
 //! * `crackbot detect IMAGE...` — candidate cracks in camera images (ONNX detector or the
 //!   classical baseline), with surface millimetres given a homography calibration.
-//! * `crackbot eval-detector --coco FILE` — COCO metrics of a detector on any COCO file.
+//! * `crackbot homography fit|check` — the camera's pixel ↔ millimetre calibration.
+//!
+//! The work is done by the libraries (`crackbot-mission`, `crackbot-acquisition`,
+//! `crackbot-vision`); this binary parses arguments, draws progress bars and prints reports.
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -27,8 +31,7 @@ use crackbot_mission::{run_demo, DemoConfig, DemoSurface};
 use crackbot_protocol::SAMPLE_RATE_HZ;
 use indicatif::{ProgressBar, ProgressStyle};
 
-mod sim;
-mod tactile;
+mod lab;
 mod vision;
 
 /// crackbot: find surface cracks with a camera and a fibre-optic tactile finger.
@@ -51,21 +54,23 @@ enum Command {
     /// Calibration files.
     #[command(subcommand)]
     Calibration(CalibrationCommand),
-    /// Tactile recordings: convert the authors' .mat files and .csv recordings.
-    #[command(subcommand)]
-    Tactile(tactile::TactileCommand),
     /// Find cracks in camera images (boxes, scores, surface millimetres with a calibration).
     Detect(vision::DetectArgs),
-    /// COCO metrics (mAP@[.5:.95], mAP@0.5, AR@100) of a detector on any COCO file.
-    EvalDetector(vision::EvalDetectorArgs),
-    /// Detector accuracy against run time: mAP@0.5 vs input size vs ms per frame (table + PNG).
-    DetectorTradeoff(vision::DetectorTradeoffArgs),
     /// Pixel ↔ surface-millimetre calibration of the camera (homography).
     #[command(subcommand)]
     Homography(vision::HomographyCommand),
-    /// The simulator: paper datasets, calibration against real recordings, work-precision.
-    #[command(subcommand)]
-    Sim(sim::SimCommand),
+    /// [research, runs crackbot-lab] Tactile recordings: convert, evaluate, the paper's tables.
+    #[command(disable_help_flag = true)]
+    Tactile(lab::Forwarded),
+    /// [research, runs crackbot-lab] COCO metrics of a detector on any COCO file.
+    #[command(disable_help_flag = true)]
+    EvalDetector(lab::Forwarded),
+    /// [research, runs crackbot-lab] Detector accuracy against run time.
+    #[command(disable_help_flag = true)]
+    DetectorTradeoff(lab::Forwarded),
+    /// [research, runs crackbot-lab] The simulator: datasets, calibration, figures, scenes.
+    #[command(disable_help_flag = true)]
+    Sim(lab::Forwarded),
 }
 
 #[derive(Debug, Args)]
@@ -159,12 +164,12 @@ fn main() -> Result<()> {
         Command::Demo(args) => runtime.block_on(demo(args)),
         Command::Record(args) => runtime.block_on(record(args)),
         Command::Replay(args) => runtime.block_on(replay(args)),
-        Command::Tactile(cmd) => tactile::run(cmd),
         Command::Detect(args) => vision::detect(args),
-        Command::EvalDetector(args) => vision::eval_detector(args),
-        Command::DetectorTradeoff(args) => vision::detector_tradeoff(args),
         Command::Homography(cmd) => vision::homography(cmd),
-        Command::Sim(cmd) => sim::run(cmd),
+        Command::Tactile(args) => lab::run("tactile", args),
+        Command::EvalDetector(args) => lab::run("eval-detector", args),
+        Command::DetectorTradeoff(args) => lab::run("detector-tradeoff", args),
+        Command::Sim(args) => lab::run("sim", args),
         Command::Calibration(CalibrationCommand::Check { file }) => {
             let cal = Calibration::load(&file)?;
             println!(

@@ -1,43 +1,42 @@
-//! `crackbot detect` and `crackbot eval-detector`: the camera half of the inspection.
+//! `crackbot detect` and `crackbot homography`: the camera half of the inspection, as an operator
+//! runs it. The work is `crackbot-vision`'s; this module parses and prints.
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, ValueEnum};
-use crackbot_vision::benchmark::{map_params, Benchmark, EvalReport};
-use crackbot_vision::classical::{ClassicalDetector, ClassicalParams};
-use crackbot_vision::coco::{save_results, CocoMetrics};
+use clap::Args;
 use crackbot_vision::detect::{detect_images, DetectConfig, DetectionReport};
 use crackbot_vision::fusion::FusionParams;
 use crackbot_vision::homography::{read_pairs, HomographyCalibration};
-use crackbot_vision::model::{resolve_model, trained_models};
-use crackbot_vision::onnx::OnnxDetector;
+use crackbot_vision::model::{build_detector, DetectorChoice, DetectorKind};
 use crackbot_vision::preprocess::PostprocessParams;
-use crackbot_vision::tradeoff::{self, TradeoffConfig};
 use crackbot_vision::Detector;
-use indicatif::{ProgressBar, ProgressStyle};
-
-/// Which detector to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum DetectorArg {
-    /// The trained model (ONNX Runtime).
-    Onnx,
-    /// The edge-based baseline (no model).
-    Classical,
-}
 
 /// Detector choice shared by `detect` and `eval-detector`.
 #[derive(Debug, Args)]
 pub struct DetectorArgs {
-    /// Detector.
-    #[arg(long, value_enum, default_value_t = DetectorArg::Onnx)]
-    detector: DetectorArg,
+    /// Detector: `onnx` (the trained model, ONNX Runtime) or `classical` (the edge-based
+    /// baseline, no model).
+    #[arg(long, default_value = "onnx")]
+    detector: DetectorKind,
     /// ONNX model (default: models/detector/crack-detector-320.onnx of this repository).
     #[arg(long)]
     model: Option<PathBuf>,
     /// ONNX Runtime threads.
     #[arg(long, default_value_t = 1)]
     threads: usize,
+}
+
+impl DetectorArgs {
+    /// The detector these flags name, built with `params` (errors name the model file).
+    fn build(&self, params: PostprocessParams) -> Result<Box<dyn Detector>> {
+        let choice = DetectorChoice {
+            kind: self.detector,
+            model: self.model.clone(),
+            threads: self.threads,
+        };
+        Ok(build_detector(&choice, params)?)
+    }
 }
 
 /// Arguments of `crackbot detect`.
@@ -69,38 +68,6 @@ pub struct DetectArgs {
     json: bool,
 }
 
-/// Arguments of `crackbot eval-detector`.
-#[derive(Debug, Args)]
-pub struct EvalDetectorArgs {
-    /// COCO ground truth (images, annotations, categories).
-    #[arg(long)]
-    coco: PathBuf,
-    /// Folder the COCO `file_name`s are relative to (default: the COCO file's folder).
-    #[arg(long)]
-    images: Option<PathBuf>,
-    #[command(flatten)]
-    detector: DetectorArgs,
-    /// Write the detections as a COCO results file.
-    #[arg(long)]
-    save_results: Option<PathBuf>,
-    /// Print one JSON object (map, map50, ar100, …).
-    #[arg(long)]
-    json: bool,
-}
-
-fn build_detector(args: &DetectorArgs, params: PostprocessParams) -> Result<Box<dyn Detector>> {
-    Ok(match args.detector {
-        DetectorArg::Onnx => {
-            let path = resolve_model(args.model.as_deref());
-            Box::new(
-                OnnxDetector::load(&path, params, args.threads)
-                    .with_context(|| format!("loading the detector {}", path.display()))?,
-            )
-        }
-        DetectorArg::Classical => Box::new(ClassicalDetector::new(ClassicalParams::default())?),
-    })
-}
-
 /// `crackbot detect`.
 pub fn detect(args: DetectArgs) -> Result<()> {
     if !(0.0..=1.0).contains(&args.threshold) {
@@ -114,7 +81,7 @@ pub fn detect(args: DetectArgs) -> Result<()> {
         score_threshold: args.threshold,
         ..PostprocessParams::default()
     };
-    let mut detector = build_detector(&args.detector, params)?;
+    let mut detector = args.detector.build(params)?;
     let config = DetectConfig {
         threshold: args.threshold,
         homography,
@@ -176,121 +143,6 @@ fn print_detection(d: &DetectionReport) {
         line += &format!("  in {n} frames");
     }
     println!("{line}");
-}
-
-/// A progress bar over the images of a benchmark (hidden when `quiet`).
-fn image_bar(total: usize, detector: &str, quiet: bool) -> ProgressBar {
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(total as u64).with_style(
-            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} images, {eta} left")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> "),
-        )
-    };
-    bar.set_message(detector.to_string());
-    bar
-}
-
-/// `crackbot eval-detector`.
-pub fn eval_detector(args: EvalDetectorArgs) -> Result<()> {
-    let bench = Benchmark::load(&args.coco, args.images.as_deref())?;
-    let mut detector = build_detector(&args.detector, map_params())?;
-    let bar = image_bar(bench.gt.images.len(), &detector.name(), args.json);
-    let run = bench.run(detector.as_mut(), |p| bar.set_position(p.done as u64))?;
-    bar.finish_and_clear();
-    if let Some(path) = &args.save_results {
-        save_results(path, &run.results)?;
-    }
-    let report = EvalReport::new(&bench, &run);
-    if args.json {
-        println!("{}", serde_json::to_value(&report)?);
-        return Ok(());
-    }
-    println!(
-        "{} on {} ({} images, {} boxes): {} detections, median {:.1} ms per image",
-        report.detector,
-        report.coco,
-        report.images,
-        report.ground_truth_boxes,
-        report.detections,
-        report.ms_per_image
-    );
-    for (name, v) in CocoMetrics::NAMES.iter().zip(report.metrics.stats()) {
-        println!("  {name:<10} {v:.4}");
-    }
-    Ok(())
-}
-
-/// Arguments of `crackbot detector-tradeoff`.
-#[derive(Debug, Args)]
-pub struct DetectorTradeoffArgs {
-    /// COCO ground truth to evaluate on.
-    #[arg(long)]
-    coco: PathBuf,
-    /// Folder the COCO `file_name`s are relative to (default: the COCO file's folder).
-    #[arg(long)]
-    images: Option<PathBuf>,
-    /// ONNX models to compare (default: crack-detector-{256,320,416}.onnx in models/detector/).
-    #[arg(long, num_args = 1..)]
-    models: Vec<PathBuf>,
-    /// Leave out the classical baseline.
-    #[arg(long)]
-    no_classical: bool,
-    /// ONNX Runtime threads.
-    #[arg(long, default_value_t = 1)]
-    threads: usize,
-    /// Output folder (tradeoff.md, tradeoff.json, tradeoff.png).
-    #[arg(long, default_value = "out/detector-tradeoff")]
-    out: PathBuf,
-}
-
-/// `crackbot detector-tradeoff`: mAP50 against input size against milliseconds per frame.
-pub fn detector_tradeoff(args: DetectorTradeoffArgs) -> Result<()> {
-    let bench = Benchmark::load(&args.coco, args.images.as_deref())?;
-    let config = TradeoffConfig {
-        models: if args.models.is_empty() {
-            trained_models()
-        } else {
-            args.models.clone()
-        },
-        classical: !args.no_classical,
-        threads: args.threads,
-    };
-    crackbot_plots::load_font()?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    let mut bar: Option<ProgressBar> = None;
-    let report = tradeoff::detector_tradeoff(
-        &bench,
-        &config,
-        |name, p| {
-            let b = bar.get_or_insert_with(|| image_bar(p.total, name, false));
-            b.set_position(p.done as u64);
-            if p.done == p.total {
-                b.finish_and_clear();
-                bar = None;
-            }
-        },
-        |r| {
-            println!(
-                "{}: mAP50 {:.3}, mAP {:.3}, {:.1} ms/frame",
-                r.detector, r.map50, r.map, r.ms_per_frame
-            )
-        },
-    )?;
-    let (md_path, json_path) = report.write(&args.out)?;
-    let png = args.out.join("tradeoff.png");
-    crackbot_plots::vision::detector_tradeoff_png(&png, &report.rows)?;
-    print!("{}", report.markdown());
-    println!(
-        "written: {}, {}, {}",
-        md_path.display(),
-        json_path.display(),
-        png.display()
-    );
-    Ok(())
 }
 
 /// `crackbot homography …`.

@@ -1,7 +1,113 @@
-//! Where the trained detector is: the default model file of this repository, found from the
-//! working directory or, for a binary built from this repository, from its source tree.
+//! Which detector to run and where the trained one is: the default model file of this
+//! repository, found from the working directory or, for a binary built from this repository, from
+//! its source tree.
 
 use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::classical::{ClassicalDetector, ClassicalParams};
+use crate::preprocess::PostprocessParams;
+use crate::{Detector, VisionError};
+
+/// The detectors crackbot has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DetectorKind {
+    /// The trained model, through ONNX Runtime (feature `onnx`).
+    #[default]
+    Onnx,
+    /// The edge-based baseline (no model).
+    Classical,
+}
+
+impl DetectorKind {
+    /// Every detector, in the order of [`DetectorKind::name`].
+    pub const ALL: [DetectorKind; 2] = [DetectorKind::Onnx, DetectorKind::Classical];
+
+    /// `"onnx"` or `"classical"`, as on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            DetectorKind::Onnx => "onnx",
+            DetectorKind::Classical => "classical",
+        }
+    }
+}
+
+impl std::fmt::Display for DetectorKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for DetectorKind {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        DetectorKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| format!("unknown detector {s:?}: use `onnx` (the trained model) or `classical` (the edge-based baseline)"))
+    }
+}
+
+/// A detector to build: which one, which model file, how many ONNX Runtime threads (default: the
+/// trained default model on one thread).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DetectorChoice {
+    /// Which detector.
+    pub kind: DetectorKind,
+    /// The ONNX model (`None`: [`default_model`]).
+    pub model: Option<PathBuf>,
+    /// ONNX Runtime intra-op threads.
+    pub threads: usize,
+}
+
+impl Default for DetectorChoice {
+    fn default() -> Self {
+        DetectorChoice {
+            kind: DetectorKind::Onnx,
+            model: None,
+            threads: 1,
+        }
+    }
+}
+
+/// Builds the detector `choice` names, with `params` for its post-processing.
+pub fn build_detector(
+    choice: &DetectorChoice,
+    params: PostprocessParams,
+) -> Result<Box<dyn Detector>, VisionError> {
+    match choice.kind {
+        DetectorKind::Onnx => onnx_detector(choice, params),
+        DetectorKind::Classical => Ok(Box::new(
+            ClassicalDetector::new(ClassicalParams::default())?,
+        )),
+    }
+}
+
+#[cfg(feature = "onnx")]
+fn onnx_detector(
+    choice: &DetectorChoice,
+    params: PostprocessParams,
+) -> Result<Box<dyn Detector>, VisionError> {
+    let path = resolve_model(choice.model.as_deref());
+    Ok(Box::new(crate::onnx::OnnxDetector::load(
+        &path,
+        params,
+        choice.threads,
+    )?))
+}
+
+#[cfg(not(feature = "onnx"))]
+fn onnx_detector(
+    _choice: &DetectorChoice,
+    _params: PostprocessParams,
+) -> Result<Box<dyn Detector>, VisionError> {
+    Err(VisionError::Runtime(
+        "this build of crackbot-vision has no ONNX detector (enable its `onnx` feature)".into(),
+    ))
+}
 
 /// The default model, relative to the repository root.
 pub const DEFAULT_MODEL: &str = "models/detector/crack-detector-320.onnx";
@@ -46,6 +152,24 @@ mod tests {
             resolve_model(Some(Path::new("x.onnx"))),
             PathBuf::from("x.onnx")
         );
+        let classical = build_detector(
+            &DetectorChoice {
+                kind: DetectorKind::Classical,
+                ..DetectorChoice::default()
+            },
+            PostprocessParams::default(),
+        )
+        .unwrap();
+        assert!(
+            classical.name().contains("classical"),
+            "{}",
+            classical.name()
+        );
+        assert_eq!(
+            "classical".parse::<DetectorKind>(),
+            Ok(DetectorKind::Classical)
+        );
+        assert!("yolo".parse::<DetectorKind>().unwrap_err().contains("onnx"));
         let all = trained_models();
         assert_eq!(all.len(), 3);
         assert!(all[1].ends_with("crack-detector-320.onnx"));
