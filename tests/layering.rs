@@ -324,15 +324,31 @@ fn libraries_leave_errors_text_and_progress_bars_to_binaries() {
     let ws = workspace();
     let mut problems = Vec::new();
     for (name, p) in &ws {
-        let library_only = p.has_lib && !p.has_bin && name != "crackbot-tests";
-        if !library_only {
+        if !p.has_lib || name == "crackbot-tests" {
             continue;
         }
-        for (dep, kind, _) in &p.deps {
-            if kind != "dev" && BINARY_ONLY_DEPS.contains(&dep.as_str()) {
+        // A crate with a library and a binary keeps its binary's dependencies optional, behind
+        // a feature the binary requires, so that users of the library do not compile them.
+        for (dep, kind, optional) in &p.deps {
+            if kind != "dev" && !optional && BINARY_ONLY_DEPS.contains(&dep.as_str()) {
                 problems.push(format!(
                     "the library {name} depends on {dep}: errors as thiserror enums, progress \
-                     through callbacks, argument parsing in binaries"
+                     through callbacks, argument parsing in binaries (a binary of the same \
+                     crate takes it through an optional feature)"
+                ));
+            }
+        }
+    }
+    for name in ROBOT_PATH {
+        let p = &ws[*name];
+        if p.has_bin {
+            continue;
+        }
+        for dep in normal_tree(name) {
+            if BINARY_ONLY_DEPS.contains(&dep.as_str()) {
+                problems.push(format!(
+                    "the library {name} compiles {dep} by default (through a dependency's \
+                     binary features?)"
                 ));
             }
         }

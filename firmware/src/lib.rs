@@ -71,6 +71,7 @@ pub trait SampleAdc {
 
 /// Error of an [`Mcp3008`] read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Mcp3008Error<E> {
     /// The SPI transfer failed.
     Spi(E),

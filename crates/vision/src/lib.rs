@@ -13,7 +13,8 @@
 //!   calibration file, and the point-pairs CSV reader.
 //! * [`detect`]: the `crackbot detect` flow (threshold, surface mm, fusion, annotated images) and
 //!   its report; [`benchmark`]: a detector over a COCO ground truth (metrics, median ms) and the
-//!   `crackbot eval-detector` report; [`tradeoff`]: accuracy against run time over input sizes;
+//!   `crackbot eval-detector` report; `tradeoff` (cargo feature `research`): accuracy against
+//!   run time over input sizes;
 //!   [`model`]: where the trained model is.
 
 pub mod benchmark;
@@ -28,6 +29,7 @@ pub mod model;
 #[cfg(feature = "onnx")]
 pub mod onnx;
 pub mod preprocess;
+#[cfg(feature = "research")]
 pub mod tradeoff;
 
 pub use boxes::{BoundingBox, Detection};
