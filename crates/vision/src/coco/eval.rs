@@ -553,36 +553,9 @@ mod tests {
         assert!(evaluate(&gt, &[res(1, [f64::NAN, 0.0, 1.0, 1.0], 0.5)]).is_err());
         assert!(evaluate(&gt, &[res(1, [0.0, 0.0, 1.0, 1.0], f64::INFINITY)]).is_err());
         assert!(evaluate(&gt, &[res(1, [0.0, 0.0, -1.0, 1.0], 0.5)]).is_err());
+        // Parsing results files is crackbot-imaging's (its `results_are_validated` test); the
+        // re-export keeps this crate's path working.
         let p = Path::new("dets.json");
-        let err = parse_results(
-            r#"[{"image_id": 9, "category_id": 1, "bbox": [0,0,1,1], "score": 0.5}]"#,
-            p,
-            &gt,
-        )
-        .unwrap_err();
-        assert!(
-            err.to_string().contains("dets.json") && err.to_string().contains('9'),
-            "{err}"
-        );
         assert!(parse_results("{}", p, &gt).is_err());
-        assert!(parse_results(
-            r#"[{"image_id": 1, "category_id": 1, "bbox": [0,0,1], "score": 0.5}]"#,
-            p,
-            &gt
-        )
-        .is_err());
-        assert!(parse_results(
-            r#"[{"image_id": 1, "category_id": 1, "bbox": [0,0,1,1]}]"#,
-            p,
-            &gt
-        )
-        .is_err());
-        let ok = parse_results(
-            r#"[{"image_id": 1, "category_id": 1, "bbox": [0,0,1,1], "score": 0.5}]"#,
-            p,
-            &gt,
-        )
-        .unwrap();
-        assert_eq!(ok.len(), 1);
     }
 }
