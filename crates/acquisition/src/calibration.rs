@@ -184,9 +184,8 @@ impl Calibration {
 
     /// The example calibration shipped with crackbot (`calibration/example.toml`), used when a run
     /// is given no calibration file of its own.
-    pub fn example() -> Self {
+    pub fn example() -> Result<Self, CalibrationError> {
         Self::from_toml_str(EXAMPLE_TOML, "built-in example calibration")
-            .unwrap_or_else(|_| Self::identity("identity"))
     }
 
     /// Parses and validates a calibration from TOML text; `source_name` names it in error messages.

@@ -30,18 +30,6 @@ pub enum RecordEnd {
     Disconnected(AcquisitionError),
 }
 
-impl RecordEnd {
-    /// `"time_limit"`, `"stopped"`, `"stream_ended"` or `"disconnected"`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            RecordEnd::TimeLimit => "time_limit",
-            RecordEnd::Stopped => "stopped",
-            RecordEnd::StreamEnded => "stream_ended",
-            RecordEnd::Disconnected(_) => "disconnected",
-        }
-    }
-}
-
 /// What [`record_stream`] did: the statistics of every sample it recorded and why it ended.
 #[derive(Debug)]
 pub struct RecordOutcome {

@@ -297,7 +297,7 @@ async fn record(args: RecordArgs) -> Result<()> {
 async fn demo(args: DemoArgs) -> Result<()> {
     let calibration = match &args.calibration {
         Some(path) => Calibration::load(path)?,
-        None => Calibration::example(),
+        None => Calibration::example()?,
     };
     let surface = match (&args.crack_width, &args.scene) {
         (Some(width), _) => DemoSurface::Crack { width_mm: *width },

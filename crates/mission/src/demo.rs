@@ -59,14 +59,14 @@ pub struct DemoConfig {
 impl DemoConfig {
     /// Five seconds across the first crack of the built-in scene, recorded to `out`, clean line,
     /// the example calibration.
-    pub fn new(out: impl Into<PathBuf>) -> Self {
-        DemoConfig {
+    pub fn new(out: impl Into<PathBuf>) -> Result<Self, MissionError> {
+        Ok(DemoConfig {
             seconds: 5.0,
             out: out.into(),
             flip_rate: 0.0,
             surface: DemoSurface::BuiltinScene,
-            calibration: Calibration::example(),
-        }
+            calibration: Calibration::example()?,
+        })
     }
 }
 
@@ -175,7 +175,7 @@ mod tests {
     #[test]
     fn the_demo_streams_the_simulated_crack_over_a_real_pty() {
         let dir = tempfile::tempdir().unwrap();
-        let mut config = DemoConfig::new(dir.path().join("demo.csv"));
+        let mut config = DemoConfig::new(dir.path().join("demo.csv")).unwrap();
         config.seconds = 1.0;
         config.surface = DemoSurface::Crack { width_mm: 5.0 };
         let mut seen = 0u64;
@@ -202,7 +202,7 @@ mod tests {
 
     #[test]
     fn bad_settings_are_refused_before_anything_streams() {
-        let mut config = DemoConfig::new("/nonexistent/never-written.csv");
+        let mut config = DemoConfig::new("/nonexistent/never-written.csv").unwrap();
         config.seconds = -1.0;
         let err = runtime()
             .block_on(run_demo(&config, std::future::pending(), |_| {}, |_| {}))
