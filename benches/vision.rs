@@ -14,6 +14,7 @@ use std::hint::black_box;
 use std::path::{Path, PathBuf};
 
 use crackbot_vision::classical::{ClassicalDetector, ClassicalParams};
+use crackbot_vision::coco::CocoDataset;
 use crackbot_vision::homography::{fit_dlt, PointPair};
 use crackbot_vision::onnx::OnnxDetector;
 use crackbot_vision::preprocess::{letterbox, postprocess, PostprocessParams};
@@ -25,10 +26,8 @@ const MODELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/models/detector");
 /// The first validation image of `dataset`.
 fn val_image(dataset: &str) -> image::RgbImage {
     let dir = crackbot_datasets::require(crackbot_datasets::CRACKS).join(dataset);
-    let coco: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("val.json")).expect("val.json"))
-            .expect("JSON");
-    let file = coco["images"][0]["file_name"].as_str().expect("file_name");
+    let coco = CocoDataset::load(dir.join("val.json")).expect("val.json");
+    let file = &coco.images.first().expect("an image").file_name;
     image::open(dir.join(file)).expect("image").to_rgb8()
 }
 

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use crackbot_vision::detect::{detect_images, DetectConfig, DetectionReport};
 use crackbot_vision::fusion::FusionParams;
@@ -17,7 +18,12 @@ use crackbot_vision::Detector;
 pub struct DetectorArgs {
     /// Detector: `onnx` (the trained model, ONNX Runtime) or `classical` (the edge-based
     /// baseline, no model).
-    #[arg(long, default_value = "onnx")]
+    #[arg(
+        long,
+        default_value = "onnx",
+        value_parser = PossibleValuesParser::new(DetectorKind::ALL.map(DetectorKind::name))
+            .try_map(|s| s.parse::<DetectorKind>())
+    )]
     detector: DetectorKind,
     /// ONNX model (default: models/detector/crack-detector-320.onnx of this repository).
     #[arg(long)]
@@ -74,7 +80,7 @@ pub fn detect(args: DetectArgs) -> Result<()> {
         bail!("--threshold must be in [0, 1], got {}", args.threshold);
     }
     let homography = match &args.calibration {
-        Some(p) => Some(HomographyCalibration::load(p)?.validate(p)?),
+        Some(p) => Some(HomographyCalibration::load(p)?.homography()?),
         None => None,
     };
     let params = PostprocessParams {
@@ -120,7 +126,7 @@ pub fn detect(args: DetectArgs) -> Result<()> {
         println!(
             "fused over {} frames (seen in at least {}): {} crack(s)",
             report.images.len(),
-            report.min_frames.unwrap_or(args.min_frames),
+            args.min_frames,
             fused.len()
         );
         for d in fused {
@@ -226,7 +232,7 @@ pub fn homography(cmd: HomographyCommand) -> Result<()> {
         }
         HomographyCommand::Check { file, pixels } => {
             let cal = HomographyCalibration::load(&file)?;
-            let h = cal.validate(&file)?;
+            let h = cal.homography()?;
             println!(
                 "{}: {} pairs, reprojection error RMS {:.3} mm (max {:.3}): OK",
                 file.display(),

@@ -234,12 +234,6 @@ impl CocoDataset {
             .collect()
     }
 
-    /// The document as JSON (keys in alphabetical order).
-    pub fn to_json_value(&self) -> Result<serde_json::Value, ImagingError> {
-        serde_json::to_value(self)
-            .map_err(|e| coco_err(Path::new(""), format!("cannot encode: {e}")))
-    }
-
     /// Validates the dataset and writes it as pretty-printed JSON (keys in alphabetical order).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), ImagingError> {
         let path = path.as_ref();

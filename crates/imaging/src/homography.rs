@@ -8,11 +8,11 @@
 //! * A homography `H` maps `p` to `(q_x / q_w, q_y / q_w)` with `q = H (p_x, p_y, 1)ᵀ`.
 //!
 //! Where `q_w` is (nearly) zero the point maps to infinity, and what counts as "nearly" depends on
-//! where the matrix comes from; [`Horizon`] names the two policies crackbot uses:
-//! * [`Horizon::InFront`], for a camera's exact plate ↔ image homography (built so that `q_w` is
+//! where the matrix comes from; crackbot uses two policies:
+//! * [`apply_in_front`], for a camera's exact plate ↔ image homography (built so that `q_w` is
 //!   the depth in front of the camera): `q_w ≤ 1e-12` (absolute) or NaN is at or behind the
 //!   horizon, and has no image.
-//! * [`Horizon::Finite`], for a homography fitted to point pairs (whose overall sign is
+//! * [`apply_finite`], for a homography fitted to point pairs (whose overall sign is
 //!   arbitrary): negative `q_w` is accepted, `|q_w| ≤ 1e-9 · Σ|H₂ⱼ| · (1 + |p_x| + |p_y|)` is at
 //!   infinity, and so is a non-finite result.
 
@@ -21,34 +21,15 @@ use serde::{Deserialize, Serialize};
 
 use crate::ImagingError;
 
-/// [`Horizon::InFront`]: `q_w` at or below this (absolute) is at or behind the horizon.
+/// [`apply_in_front`]: `q_w` at or below this (absolute) is at or behind the horizon.
 pub const IN_FRONT_EPS: f64 = 1e-12;
 
-/// [`Horizon::Finite`]: `|q_w|` at or below this, relative to the matrix's last row and the
+/// [`apply_finite`]: `|q_w|` at or below this, relative to the matrix's last row and the
 /// point's size, is at infinity.
 pub const INFINITY_EPS: f64 = 1e-9;
 
-/// Which points a homography maps, by their homogeneous `w` (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Horizon {
-    /// A camera's exact homography: only `w > 1e-12` (in front of the camera) maps.
-    InFront,
-    /// A fitted homography: any `|w|` above `1e-9` relative to the matrix and the point maps, if
-    /// the result is finite.
-    Finite,
-}
-
-/// Applies `h` to `p` under the `horizon` policy; `None` where the point does not map.
-#[inline]
-pub fn apply(h: &Matrix3<f64>, p: [f64; 2], horizon: Horizon) -> Option<[f64; 2]> {
-    match horizon {
-        Horizon::InFront => apply_in_front(h, p),
-        Horizon::Finite => apply_finite(h, p),
-    }
-}
-
 /// Applies a camera's homography `h` to `p`: `None` at or beyond the horizon (`w ≤ 1e-12` or
-/// NaN), [`Horizon::InFront`]. Cheap enough for per-pixel loops (no allocation, no generic
+/// NaN). Cheap enough for per-pixel loops (no allocation, no generic
 /// matrix code).
 #[inline]
 pub fn apply_in_front(h: &Matrix3<f64>, p: [f64; 2]) -> Option<[f64; 2]> {
@@ -64,7 +45,7 @@ pub fn apply_in_front(h: &Matrix3<f64>, p: [f64; 2]) -> Option<[f64; 2]> {
 }
 
 /// Applies a fitted homography `h` to `p`: `None` when the point maps to infinity (relative to
-/// the matrix and the point) or to a non-finite point, [`Horizon::Finite`].
+/// the matrix and the point) or to a non-finite point.
 #[inline]
 pub fn apply_finite(h: &Matrix3<f64>, p: [f64; 2]) -> Option<[f64; 2]> {
     let r = h * Vector3::new(p[0], p[1], 1.0);
@@ -103,7 +84,7 @@ impl PointPair {
 }
 
 /// A plane homography from pixels to surface millimetres, with its inverse, applied with the
-/// [`Horizon::Finite`] policy. Stored scaled so that `H[2][2] = 1` when that is possible.
+/// [`apply_finite`] policy. Stored scaled so that `H[2][2] = 1` when that is possible.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Homography {
     forward: Matrix3<f64>,
@@ -255,7 +236,6 @@ mod tests {
             let q = h * Vector3::new(p[0], p[1], 1.0);
             let got = apply_in_front(&h, p).unwrap();
             assert_eq!(got, [q.x / q.z, q.y / q.z]);
-            assert_eq!(apply(&h, p, Horizon::InFront), Some(got));
         }
         // w = 0.01 x + 0.02 y + 250 ≤ 1e-12 beyond the horizon.
         assert_eq!(apply_in_front(&h, [-25_000.0, 0.0]), None);
@@ -272,7 +252,7 @@ mod tests {
         let b = apply_in_front(&camera_like(), p).unwrap();
         assert!((a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9);
         let line = Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0);
-        assert_eq!(apply(&line, [-1.0, 5.0], Horizon::Finite), None);
+        assert_eq!(apply_finite(&line, [-1.0, 5.0]), None);
         assert_eq!(apply_finite(&line, [f64::NAN, 5.0]), None);
         assert!(apply_finite(&line, [1.0, 5.0]).is_some());
     }

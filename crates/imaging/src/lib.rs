@@ -2,7 +2,8 @@
 //! share, each defined once.
 //!
 //! * [`homography`]: applying a plane homography between image pixels and surface millimetres,
-//!   with an explicit policy for points at or behind the horizon ([`Horizon`]), and the validated
+//!   with an explicit policy for points at or behind the horizon
+//!   ([`homography::apply_in_front`], [`homography::apply_finite`]), and the validated
 //!   pixel → surface [`Homography`] with its inverse and reprojection errors.
 //! * [`coco`]: COCO detection files (ground truth and results): the types, reading, validating
 //!   and writing them. crackbot's own extensions (the simulator's seed, homography and
@@ -16,4 +17,4 @@ mod error;
 pub mod homography;
 
 pub use error::ImagingError;
-pub use homography::{Homography, Horizon, PointPair, ReprojectionStats};
+pub use homography::{Homography, PointPair, ReprojectionStats};

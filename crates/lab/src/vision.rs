@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use crackbot_vision::benchmark::{map_params, Benchmark, EvalReport};
 use crackbot_vision::coco::{save_results, CocoMetrics};
@@ -19,7 +20,12 @@ use indicatif::{ProgressBar, ProgressStyle};
 pub struct DetectorArgs {
     /// Detector: `onnx` (the trained model, ONNX Runtime) or `classical` (the edge-based
     /// baseline, no model).
-    #[arg(long, default_value = "onnx")]
+    #[arg(
+        long,
+        default_value = "onnx",
+        value_parser = PossibleValuesParser::new(DetectorKind::ALL.map(DetectorKind::name))
+            .try_map(|s| s.parse::<DetectorKind>())
+    )]
     detector: DetectorKind,
     /// ONNX model (default: models/detector/crack-detector-320.onnx of this repository).
     #[arg(long)]
@@ -162,10 +168,10 @@ pub fn detector_tradeoff(args: DetectorTradeoffArgs) -> Result<()> {
             )
         },
     )?;
-    let (md_path, json_path) = report.write(&args.out)?;
+    let (md, md_path, json_path) = report.write(&args.out)?;
     let png = args.out.join("tradeoff.png");
     crackbot_plots::vision::detector_tradeoff_png(&png, &report.rows)?;
-    print!("{}", report.markdown());
+    print!("{md}");
     println!(
         "written: {}, {}, {}",
         md_path.display(),

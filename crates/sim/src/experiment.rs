@@ -375,6 +375,6 @@ pub fn generate_dataset(
         rows,
         simulated_s,
         wall_s,
-        real_time_factor: rows as f64 / SAMPLE_RATE_HZ / wall_s.max(1e-9),
+        real_time_factor: simulated_s / wall_s.max(1e-9),
     })
 }

@@ -96,10 +96,10 @@ pub enum SimError {
         source: crackbot_recording::RecordingError,
     },
     /// A folder of recordings does not hold what is needed (no recording, none of the asked
-    /// repetition).
+    /// repetition), or a COCO file is malformed.
     #[error("{path}: {message}")]
     Data {
-        /// The folder.
+        /// The folder or file.
         path: String,
         /// What is missing.
         message: String,
@@ -120,6 +120,25 @@ impl SimError {
         move |source| SimError::Io {
             path: path.display().to_string(),
             source,
+        }
+    }
+}
+
+impl From<crackbot_imaging::ImagingError> for SimError {
+    /// I/O failures as [`SimError::Io`], malformed COCO files as [`SimError::Data`], anything
+    /// else (a homography that cannot be used) as [`SimError::Invalid`].
+    fn from(e: crackbot_imaging::ImagingError) -> Self {
+        use crackbot_imaging::ImagingError as E;
+        match e {
+            E::Io { path, source } => SimError::Io {
+                path: path.display().to_string(),
+                source,
+            },
+            E::Coco { path, message } => SimError::Data {
+                path: path.display().to_string(),
+                message,
+            },
+            other => SimError::Invalid(other.to_string()),
         }
     }
 }

@@ -45,10 +45,11 @@ pub fn recordings_of_repetition(dir: &Path, repetition: u32) -> Result<Vec<Recor
     Ok(recs)
 }
 
-/// The experiment a set of recordings belongs to: width when a label exceeds 3 (a crack width
-/// in mm), else recognition (labels 0–3).
-pub fn experiment_of(recordings: &[Recording]) -> Experiment {
-    if recordings.iter().filter_map(|r| r.label()).any(|l| l > 3.0) {
+/// The experiment recordings with these labels belong to: width when a label exceeds 3 (a crack
+/// width in mm), else recognition (labels 0–3). Unlike [`Experiment::detect`] it always answers
+/// (labels 0–2 alone are recognition), so that [`class_name`] can name labels of neither.
+pub fn experiment_of(labels: &[f64]) -> Experiment {
+    if labels.iter().any(|&l| l > 3.0) {
         Experiment::Width
     } else {
         Experiment::Recognition
@@ -117,7 +118,7 @@ pub fn compare_slides(real: &[Recording], simulated: &[Recording], slide: u32) -
     let mut labels: Vec<f64> = real.iter().filter_map(|r| r.label()).collect();
     labels.sort_by(f64::total_cmp);
     labels.dedup();
-    let experiment = experiment_of(real);
+    let experiment = experiment_of(&labels);
     Comparison {
         experiment,
         slide,
@@ -176,7 +177,7 @@ mod tests {
         assert_eq!(c.classes[1].real.as_ref().unwrap().len(), 2);
         assert_eq!(c.classes[1].real.as_ref().unwrap()[0][0], 1.0);
         assert_eq!(c.classes[1].simulated.as_ref().unwrap().len(), 1);
-        assert_eq!(experiment_of(&[rec(5.0, 1, &[1])]), Experiment::Width);
+        assert_eq!(experiment_of(&[5.0]), Experiment::Width);
         assert_eq!(class_name(5.0, Experiment::Width), "5 mm");
     }
 

@@ -205,7 +205,7 @@ fn decoys_are_boxed_as_decoys_and_not_annotated_as_cracks() {
     let decoys: Vec<_> = frame.boxes_of(BoxKind::Decoy).collect();
     assert_eq!(decoys.len(), 1);
     assert_eq!(decoys[0].feature_index, decoy_index);
-    let coco = coco_dataset(&[("a.png", &frame)]);
+    let coco = coco_dataset(&[("a.png", &frame)]).unwrap();
     let anns = coco["annotations"].as_array().unwrap();
     assert_eq!(anns.len(), cracks(&scene).len());
     assert!(anns

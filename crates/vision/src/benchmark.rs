@@ -33,11 +33,6 @@ impl<'a> Timed<'a> {
         }
     }
 
-    /// Milliseconds of each call so far.
-    pub fn ms(&self) -> &[f64] {
-        &self.ms
-    }
-
     /// The median milliseconds of one call (the upper median for an even count; NaN before
     /// the first call).
     pub fn median_ms(&self) -> f64 {

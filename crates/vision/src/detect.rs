@@ -71,9 +71,6 @@ pub struct DetectReport {
     /// The fused detections (with fusion).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fused: Option<Vec<DetectionReport>>,
-    /// With fusion: frames a crack must be seen in.
-    #[serde(skip)]
-    pub min_frames: Option<usize>,
     /// The annotated images written.
     #[serde(skip)]
     pub annotated: Vec<PathBuf>,
@@ -109,7 +106,10 @@ pub fn detect_images(
     for path in images {
         let rgb = read_rgb(path)?;
         let started = Instant::now();
-        let mut found = detector.detect(&rgb)?;
+        let mut found = detector.detect(&rgb).map_err(|e| VisionError::Image {
+            path: path.clone(),
+            message: format!("detecting: {e}"),
+        })?;
         let ms = started.elapsed().as_secs_f64() * 1e3;
         found.retain(|d| d.score >= config.threshold);
         frames.push((path, rgb, found, ms));
@@ -171,7 +171,6 @@ pub fn detect_images(
                 .map(|f| report_of(&f.detection, Some(f.frames_seen)))
                 .collect()
         }),
-        min_frames: config.fuse.as_ref().map(|p| p.min_frames),
         annotated,
     })
 }

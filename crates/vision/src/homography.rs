@@ -6,8 +6,8 @@
 //! * Surface points are `(x, y)` in millimetres in the work-surface frame.
 //! * [`Homography`] holds the 3×3 matrix `H` with `(x, y, 1)ᵀ ~ H (u, v, 1)ᵀ` (pixel → surface)
 //!   and its inverse; it is stored scaled so that `H[2][2] = 1` when that is possible. It, its
-//!   application to points ([`Horizon::Finite`](crackbot_imaging::Horizon::Finite): negative
-//!   `w` allowed, `|w|` near zero is at infinity), [`PointPair`] and [`ReprojectionStats`] are
+//!   application to points ([`apply_finite`]: negative `w` allowed, `|w|` near zero is at
+//!   infinity), [`PointPair`] and [`ReprojectionStats`] are
 //!   defined in `crackbot_imaging::homography` and re-exported here.
 //! * Fitting is the normalised DLT (Hartley): each side is translated so its centroid is at the
 //!   origin and scaled so the mean distance from it is √2, the 2n×9 system is solved by SVD, and
@@ -20,7 +20,7 @@
 
 use std::path::Path;
 
-use crackbot_imaging::homography::apply_finite;
+use crackbot_imaging::homography::{apply_finite, INFINITY_EPS};
 pub use crackbot_imaging::homography::{Homography, PointPair, ReprojectionStats};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -34,9 +34,6 @@ const GEOMETRY_EPS: f64 = 1e-9;
 /// The second-smallest singular value of the normalised DLT system, relative to the largest,
 /// below which the solution is not unique (ill-conditioned / degenerate configuration).
 const CONDITION_EPS: f64 = 1e-7;
-// Homogeneous `w` (in normalised coordinates) below which a point is "at infinity": the same
-// tolerance as `Homography` applies.
-use crackbot_imaging::homography::INFINITY_EPS;
 
 fn invalid(message: impl Into<String>) -> VisionError {
     VisionError::Invalid(message.into())

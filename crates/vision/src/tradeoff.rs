@@ -138,15 +138,15 @@ impl TradeoffReport {
     }
 
     /// Writes `dir/tradeoff.md` ([`TradeoffReport::markdown`]) and `dir/tradeoff.json` (the
-    /// rows), creating `dir`; returns both paths.
-    pub fn write(&self, dir: &Path) -> Result<(PathBuf, PathBuf), VisionError> {
-        std::fs::create_dir_all(dir).map_err(VisionError::io(dir))?;
+    /// rows) into the existing folder `dir`; returns the markdown and both paths.
+    pub fn write(&self, dir: &Path) -> Result<(String, PathBuf, PathBuf), VisionError> {
+        let md = self.markdown();
         let md_path = dir.join("tradeoff.md");
-        std::fs::write(&md_path, self.markdown()).map_err(VisionError::io(&md_path))?;
+        std::fs::write(&md_path, &md).map_err(VisionError::io(&md_path))?;
         let json_path = dir.join("tradeoff.json");
         let json = serde_json::to_string_pretty(&self.rows)
             .map_err(|e| VisionError::Invalid(format!("cannot encode the trade-off rows: {e}")))?;
         std::fs::write(&json_path, json).map_err(VisionError::io(&json_path))?;
-        Ok((md_path, json_path))
+        Ok((md, md_path, json_path))
     }
 }

@@ -154,12 +154,7 @@ impl CrackAssets {
                 continue;
             }
             found = true;
-            let text = std::fs::read_to_string(&coco_path).map_err(SimError::io(&coco_path))?;
-            let coco =
-                CocoDataset::from_json_str(&text, &coco_path).map_err(|e| SimError::Parse {
-                    path: coco_path.display().to_string(),
-                    message: e.to_string(),
-                })?;
+            let coco = CocoDataset::load(&coco_path)?;
             for img in &coco.images {
                 let Some(mask_file) = &img.mask_file else {
                     continue;

@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 
 use crackbot_imaging::coco::{CocoAnnotation, CocoCategory, CocoDataset, CocoImage};
 use crackbot_imaging::homography::matrix_rows;
-use crackbot_imaging::ImagingError;
 use serde_json::{json, Value};
 
 use super::assets::image_err;
@@ -37,15 +36,10 @@ fn crack_annotations(frame: &Frame, image_id: u64, first_id: u64) -> Vec<CocoAnn
         .collect()
 }
 
-/// JSON of a value of this module's types (cannot fail: they hold no map with non-string keys).
-fn to_json(value: &impl serde::Serialize) -> Value {
-    serde_json::to_value(value).unwrap_or(Value::Null)
-}
-
 /// The JSON description of a frame saved as `file_name`: size, seed, every ground-truth box,
 /// the plate → image homography (3 × 3, row-major), and COCO-style `images`, `annotations`
 /// (cracks only) and `categories`.
-pub fn frame_json(frame: &Frame, file_name: &str) -> Value {
+pub fn frame_json(frame: &Frame, file_name: &str) -> serde_json::Result<Value> {
     let (width, height) = frame.image.dimensions();
     let coco = CocoDataset {
         info: None,
@@ -53,7 +47,7 @@ pub fn frame_json(frame: &Frame, file_name: &str) -> Value {
         annotations: crack_annotations(frame, 1, 1),
         categories: categories(),
     };
-    let mut doc = to_json(&coco);
+    let mut doc = serde_json::to_value(&coco)?;
     if let Some(obj) = doc.as_object_mut() {
         obj.insert("file_name".into(), json!(file_name));
         obj.insert("width".into(), json!(width));
@@ -63,9 +57,9 @@ pub fn frame_json(frame: &Frame, file_name: &str) -> Value {
             "plate_to_image".into(),
             json!(matrix_rows(&frame.plate_to_image)),
         );
-        obj.insert("boxes".into(), to_json(&frame.boxes));
+        obj.insert("boxes".into(), serde_json::to_value(&frame.boxes)?);
     }
-    doc
+    Ok(doc)
 }
 
 /// Writes `dir/<stem>.png` and `dir/<stem>.json` ([`frame_json`]), creating `dir`.
@@ -77,7 +71,8 @@ pub fn write_frame(frame: &Frame, dir: &Path, stem: &str) -> Result<(), SimError
         .save_with_format(&png, image::ImageFormat::Png)
         .map_err(|e| image_err(&png, e))?;
     let json_path = dir.join(format!("{stem}.json"));
-    let text = serde_json::to_string_pretty(&frame_json(frame, &format!("{stem}.png")))
+    let text = frame_json(frame, &format!("{stem}.png"))
+        .and_then(|doc| serde_json::to_string_pretty(&doc))
         .map_err(|e| image_err(&json_path, e))?;
     std::fs::write(&json_path, text).map_err(SimError::io(&json_path))?;
     Ok(())
@@ -109,8 +104,8 @@ pub fn coco_file(frames: &[(&str, &Frame)]) -> CocoDataset {
 }
 
 /// [`coco_file`] as JSON.
-pub fn coco_dataset(frames: &[(&str, &Frame)]) -> Value {
-    to_json(&coco_file(frames))
+pub fn coco_dataset(frames: &[(&str, &Frame)]) -> serde_json::Result<Value> {
+    serde_json::to_value(coco_file(frames))
 }
 
 /// Writes `frames` as a COCO dataset: `dir/images/frame_NNNN.png` (with their
@@ -125,12 +120,6 @@ pub fn write_coco_dataset(frames: &[Frame], dir: &Path) -> Result<PathBuf, SimEr
     let files: Vec<String> = names.iter().map(|s| format!("{s}.png")).collect();
     let entries: Vec<(&str, &Frame)> = files.iter().map(String::as_str).zip(frames).collect();
     let coco_path = dir.join("coco.json");
-    coco_file(&entries).save(&coco_path).map_err(|e| match e {
-        ImagingError::Io { source, .. } => SimError::Io {
-            path: coco_path.display().to_string(),
-            source,
-        },
-        other => image_err(&coco_path, other),
-    })?;
+    coco_file(&entries).save(&coco_path)?;
     Ok(coco_path)
 }
