@@ -157,6 +157,15 @@ impl FeatureSpec {
         self.features.len() * self.set.channels().len()
     }
 
+    /// The features' names joined with `+`, e.g. `"MAV"` or `"MAV+RMS"`.
+    pub fn feature_name(&self) -> String {
+        self.features
+            .iter()
+            .map(|f| f.name())
+            .collect::<Vec<_>>()
+            .join("+")
+    }
+
     /// Column names, e.g. `"MAV_D1"`, in row order.
     pub fn column_names(&self) -> Vec<String> {
         let mut names = Vec::with_capacity(self.n_features());
@@ -285,9 +294,7 @@ pub fn extract_features(
     spec: &FeatureSpec,
     window: WindowConfig,
 ) -> Result<FeatureMatrix, DspError> {
-    spec.validate()?;
-    window.validate()?;
-    extract_checked(samples, spec, window)
+    FeatureExtractor::new(spec.clone(), window)?.extract(samples)
 }
 
 /// Computes the feature rows of the parts of a trial a segmentation kept: windows are taken inside each of the
@@ -302,9 +309,7 @@ pub fn extract_segment_features(
     spec: &FeatureSpec,
     window: WindowConfig,
 ) -> Result<FeatureMatrix, DspError> {
-    spec.validate()?;
-    window.validate()?;
-    extract_segment_checked(samples, segment, spec, window)
+    FeatureExtractor::new(spec.clone(), window)?.extract_segment(samples, segment)
 }
 
 /// A [`FeatureSpec`] and a [`WindowConfig`] checked once ([`FeatureSpec::validate`],
@@ -335,14 +340,17 @@ impl FeatureExtractor {
         self.window
     }
 
-    /// Values per row.
-    pub fn n_features(&self) -> usize {
-        self.spec.n_features()
-    }
-
     /// [`extract_features`] with the checked configuration.
     pub fn extract(&self, samples: &[[f64; 4]]) -> Result<FeatureMatrix, DspError> {
-        extract_checked(samples, &self.spec, self.window)
+        for (index, sample) in samples.iter().enumerate() {
+            check_sample(index, sample)?;
+        }
+        let mut m = FeatureMatrix {
+            n_features: self.spec.n_features(),
+            ..FeatureMatrix::default()
+        };
+        append_rows(samples, 0, &self.spec, self.window, &mut m);
+        Ok(m)
     }
 
     /// [`extract_segment_features`] with the checked configuration.
@@ -351,52 +359,25 @@ impl FeatureExtractor {
         samples: &[[f64; 4]],
         segment: &Segment,
     ) -> Result<FeatureMatrix, DspError> {
-        extract_segment_checked(samples, segment, &self.spec, self.window)
-    }
-}
-
-fn extract_checked(
-    samples: &[[f64; 4]],
-    spec: &FeatureSpec,
-    window: WindowConfig,
-) -> Result<FeatureMatrix, DspError> {
-    for (index, sample) in samples.iter().enumerate() {
-        check_sample(index, sample)?;
-    }
-    let mut m = FeatureMatrix {
-        data: Vec::new(),
-        n_features: spec.n_features(),
-        window_ends: Vec::new(),
-    };
-    append_rows(samples, 0, spec, window, &mut m);
-    Ok(m)
-}
-
-fn extract_segment_checked(
-    samples: &[[f64; 4]],
-    segment: &Segment,
-    spec: &FeatureSpec,
-    window: WindowConfig,
-) -> Result<FeatureMatrix, DspError> {
-    if segment.trial_len != samples.len() {
-        return Err(DspError::LengthMismatch {
-            segment_len: segment.trial_len,
-            len: samples.len(),
-        });
-    }
-    let mut m = FeatureMatrix {
-        data: Vec::new(),
-        n_features: spec.n_features(),
-        window_ends: Vec::new(),
-    };
-    for range in &segment.ranges {
-        let part = sub(samples, range)?;
-        for (k, sample) in part.iter().enumerate() {
-            check_sample(range.start + k, sample)?;
+        if segment.trial_len != samples.len() {
+            return Err(DspError::LengthMismatch {
+                segment_len: segment.trial_len,
+                len: samples.len(),
+            });
         }
-        append_rows(part, range.start, spec, window, &mut m);
+        let mut m = FeatureMatrix {
+            n_features: self.spec.n_features(),
+            ..FeatureMatrix::default()
+        };
+        for range in &segment.ranges {
+            let part = sub(samples, range)?;
+            for (k, sample) in part.iter().enumerate() {
+                check_sample(range.start + k, sample)?;
+            }
+            append_rows(part, range.start, &self.spec, self.window, &mut m);
+        }
+        Ok(m)
     }
-    Ok(m)
 }
 
 fn sub<'a>(samples: &'a [[f64; 4]], range: &Range<usize>) -> Result<&'a [[f64; 4]], DspError> {

@@ -434,10 +434,7 @@ impl SegmentationMethod {
     /// Segments one trial given its proximity. Checks the parameters on every call; to segment many trials
     /// (one call per slide), check them once with [`check`](Self::check).
     pub fn segment(&self, p: &[f64]) -> Result<Segment, DspError> {
-        match self {
-            SegmentationMethod::Paper(c) => c.segment(p),
-            SegmentationMethod::Robust(c) => c.segment(p),
-        }
+        self.check()?.segment(p)
     }
 
     /// Checks the parameters once ([`PaperSegmentation::validate`], [`RobustSegmentation::validate`]) into a
@@ -473,11 +470,6 @@ impl Segmenter {
             SegmentationMethod::Paper(c) => c.segment_checked(p),
             SegmentationMethod::Robust(c) => c.segment_checked(p),
         }
-    }
-
-    /// The checked method.
-    pub fn method(&self) -> &SegmentationMethod {
-        &self.method
     }
 }
 

@@ -95,3 +95,4 @@ pub use knn::{Knn, KnnParams};
 pub use params::{ForestParams, MaxFeatures};
 pub use qda::{Qda, QdaParams};
 pub use regressor::RandomForestRegressor;
+pub use train::TrainProgress;

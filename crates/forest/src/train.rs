@@ -442,7 +442,7 @@ fn build_tree<T: Task>(task: &T, p: &Prepared<'_>, tree: usize) -> TreeOut {
 }
 
 /// Reports training progress: called with `(trees done, trees in all)` after each tree.
-pub(crate) type Progress<'p> = &'p mut (dyn FnMut(usize, usize) + Send);
+pub type TrainProgress<'p> = &'p mut (dyn FnMut(usize, usize) + Send);
 
 /// Trains `params.n_trees` trees in parallel and flattens them. Returns the trees and the normalised
 /// mean-decrease-in-impurity feature importances. `progress` (unless `params.quiet`) is called once per finished
@@ -452,7 +452,7 @@ pub(crate) fn train<T: Task>(
     x: &[f32],
     n_features: usize,
     params: &ForestParams,
-    progress: Progress<'_>,
+    progress: TrainProgress<'_>,
 ) -> Result<(FlatTrees, Vec<f64>)> {
     let total = params.n_trees;
     let done = Mutex::new((0usize, progress));

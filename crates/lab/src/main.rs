@@ -13,6 +13,7 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+mod args;
 mod sim;
 mod tactile;
 mod vision;

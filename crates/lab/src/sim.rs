@@ -4,12 +4,15 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, Subcommand, ValueEnum};
+use clap::{Args, Subcommand};
+use crackbot_recording::Format;
 use crackbot_sim::calibrate::{calibrate_to_real, calibration_steps};
-use crackbot_sim::experiment::{generate_dataset, Experiment, ExperimentConfig};
+use crackbot_sim::experiment::{generate_dataset, ExperimentConfig};
 use crackbot_sim::recordings::{compare_slides, load_recordings, recordings_of_repetition};
 use crackbot_sim::work_precision::{default_methods, work_precision};
 use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::args::{ExperimentArg, FormatArg};
 
 /// Simulator commands.
 #[derive(Debug, Subcommand)]
@@ -58,33 +61,6 @@ pub struct RenderArgs {
 pub struct SceneArgs {
     /// Scene file (TOML); the built-in default scene when left out.
     scene: Option<PathBuf>,
-}
-
-/// Which experiment.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum ExperimentArg {
-    /// Flat, crack, bump, wavy pattern.
-    Recognition,
-    /// Cracks of 0, 1, 2, 5, 8, 10 mm.
-    Width,
-}
-
-impl From<ExperimentArg> for Experiment {
-    fn from(e: ExperimentArg) -> Self {
-        match e {
-            ExperimentArg::Recognition => Experiment::Recognition,
-            ExperimentArg::Width => Experiment::Width,
-        }
-    }
-}
-
-/// File format of the recordings written.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum FormatArg {
-    /// crackbot's CSV (the authors' nine columns with a header).
-    Csv,
-    /// MAT-file level 5, as the authors distribute them.
-    Mat,
 }
 
 /// `crackbot sim dataset`.
@@ -209,14 +185,15 @@ fn dataset(a: DatasetArgs) -> Result<()> {
         );
     }
     config.speed_mm_s = a.speed_mm_s;
-    let ext = match a.format {
-        FormatArg::Csv => "csv",
-        FormatArg::Mat => "mat",
-    };
     let total = config.surfaces().len() * a.recordings as usize;
     let pb = bar(total, "simulating");
-    let report = generate_dataset(&config, &a.out, ext, |done, _| pb.set_position(done as u64))
-        .with_context(|| format!("simulating into {}", a.out.display()))?;
+    let report = generate_dataset(
+        &config,
+        &a.out,
+        Format::from(a.format).extension(),
+        |done, _| pb.set_position(done as u64),
+    )
+    .with_context(|| format!("simulating into {}", a.out.display()))?;
     pb.finish_and_clear();
     println!(
         "wrote {} recordings ({} rows, {:.0} simulated s) to {} in {:.1} s ({:.0}× real time)",

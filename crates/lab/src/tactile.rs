@@ -12,15 +12,13 @@
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
-use std::sync::Mutex;
 
 use anyhow::{bail, Result};
 use clap::{Args, Subcommand, ValueEnum};
-use crackbot_recording::{
-    collect_recordings, conversion_targets, write_recording, Format, Recording,
-};
-use crackbot_tactile::dataset::Experiment;
+use crackbot_recording::{collect_recordings, conversion_targets, write_recording, Recording};
 use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::args::{ExperimentArg, FormatArg};
 
 /// Subcommands of `crackbot tactile`.
 #[derive(Debug, Subcommand)]
@@ -91,14 +89,6 @@ pub struct PipelineArgs {
 }
 
 impl PipelineArgs {
-    /// The experiment when given (`None`: detected from the labels).
-    fn experiment(&self) -> Option<Experiment> {
-        self.experiment.map(|e| match e {
-            ExperimentArg::Recognition => Experiment::Recognition,
-            ExperimentArg::Width => Experiment::Width,
-        })
-    }
-
     /// The paper's pipeline with these choices, windows `window`, no context.
     fn config(
         &self,
@@ -267,12 +257,6 @@ enum NormaliseArg {
     Median,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum ExperimentArg {
-    Recognition,
-    Width,
-}
-
 /// Arguments of `crackbot tactile convert`.
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
@@ -283,26 +267,8 @@ pub struct ConvertArgs {
     #[arg(long, short)]
     out: PathBuf,
     /// Form of the files written into an output folder.
-    #[arg(long, value_enum, default_value_t = OutFormat::Csv)]
-    format: OutFormat,
-}
-
-/// Form of the files written into an output folder.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum OutFormat {
-    /// CSV, crackbot's recording format.
-    Csv,
-    /// MAT-file level 5, the authors' format.
-    Mat,
-}
-
-impl From<OutFormat> for Format {
-    fn from(f: OutFormat) -> Format {
-        match f {
-            OutFormat::Csv => Format::Csv,
-            OutFormat::Mat => Format::Mat,
-        }
-    }
+    #[arg(long, value_enum, default_value_t = FormatArg::Csv)]
+    format: FormatArg,
 }
 
 /// Runs a `crackbot tactile` subcommand.
@@ -350,30 +316,17 @@ fn describe(rec: &Recording) -> String {
     )
 }
 
-/// A progress bar on stderr for one forest after another (`total` trees each), when stderr is a
-/// terminal and `show`; the library reports, this draws.
-struct TreeBars {
-    show: bool,
-    bar: Mutex<Option<ProgressBar>>,
-}
-
-impl TreeBars {
-    fn new(show: bool) -> Self {
-        TreeBars {
-            show: show && std::io::stderr().is_terminal(),
-            bar: Mutex::new(None),
-        }
-    }
-
-    /// One finished tree of a forest of `total` (reports come one at a time, `done` = 1..=total).
-    fn tree(&self, done: usize, total: usize) {
-        if !self.show {
+/// A progress bar on stderr for one forest after another, when stderr is a terminal and `show`:
+/// `tree(done, total)` after each finished tree of a forest of `total` (reports come one at a time,
+/// `done` = 1..=total). The library reports, this draws.
+fn tree_bars(show: bool) -> impl FnMut(usize, usize) + Send {
+    let show = show && std::io::stderr().is_terminal();
+    let mut bar: Option<ProgressBar> = None;
+    move |done, total| {
+        if !show {
             return;
         }
-        let Ok(mut slot) = self.bar.lock() else {
-            return;
-        };
-        let bar = slot.get_or_insert_with(|| {
+        let b = bar.get_or_insert_with(|| {
             let b = ProgressBar::new(total as u64);
             if let Ok(style) = ProgressStyle::with_template(
                 "training {bar:40} {pos}/{len} trees [{elapsed_precise}, eta {eta}]",
@@ -382,10 +335,10 @@ impl TreeBars {
             }
             b
         });
-        bar.set_position(done as u64);
+        b.set_position(done as u64);
         if done >= total {
-            bar.finish_and_clear();
-            *slot = None;
+            b.finish_and_clear();
+            bar = None;
         }
     }
 }
@@ -398,7 +351,7 @@ fn eval(args: EvalArgs) -> Result<()> {
     use crackbot_tactile::evaluation::{evaluate, EvalConfig, SlideVote};
 
     let config = EvalConfig {
-        experiment: args.pipeline.experiment(),
+        experiment: args.pipeline.experiment.map(Into::into),
         pipeline: PipelineConfig {
             context: args.context.then(|| ContextConfig {
                 scales: args.context_scales.clone(),
@@ -427,9 +380,9 @@ fn eval(args: EvalArgs) -> Result<()> {
             SlideVoteArg::Context => SlideVote::Context,
         },
     };
-    let bars = TreeBars::new(!args.json);
+    let mut tree = tree_bars(!args.json);
     let report = evaluate(&config, &args.train, &args.test, |_, done, total| {
-        bars.tree(done, total)
+        tree(done, total)
     })?;
     if args.json {
         // Through a `Value`: its maps sort their keys, at every level, as this output always has.
@@ -548,6 +501,7 @@ fn paper(args: PaperArgs) -> Result<()> {
         },
         seed: args.seed,
     };
+    config.validate()?;
     // Fail before the long grid, not after it, when the plots cannot draw text.
     crackbot_plots::load_font()?;
     let mut bar: Option<ProgressBar> = None;
@@ -643,7 +597,15 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
     use crackbot_dsp::WindowConfig;
     use crackbot_tactile::tradeoff::{depth_name, tradeoff_study, TradeoffConfig, TradeoffStudy};
 
-    let max_depths: Vec<Option<usize>> = args
+    // Errors in this order: trees and batch (checked beside the default depths), the depths, the font.
+    let mut grid = TradeoffConfig {
+        n_trees: args.trees.clone(),
+        seed: args.pipeline.seed,
+        latency_batch: args.batch,
+        ..TradeoffConfig::default()
+    };
+    grid.validate()?;
+    grid.max_depths = args
         .depths
         .iter()
         .map(|d| parse_depth(d))
@@ -652,14 +614,9 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
     let study = TradeoffStudy {
         train: args.train.clone(),
         test: args.test.clone(),
-        experiment: args.pipeline.experiment(),
+        experiment: args.pipeline.experiment.map(Into::into),
         pipeline: args.pipeline.config(WindowConfig::default()),
-        grid: TradeoffConfig {
-            n_trees: args.trees.clone(),
-            max_depths,
-            seed: args.pipeline.seed,
-            latency_batch: args.batch,
-        },
+        grid,
     };
     let report = tradeoff_study(
         &study,

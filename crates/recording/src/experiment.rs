@@ -83,12 +83,9 @@ impl Experiment {
     /// neither are an error that says so.
     pub fn detect(labels: &[f64]) -> Result<Experiment, ExperimentError> {
         let fits = |e: Experiment| labels.iter().all(|&l| e.class_of(l).is_some());
-        let has = |v: &[f64]| labels.iter().any(|l| v.contains(l));
         match (fits(Experiment::Recognition), fits(Experiment::Width)) {
             (true, false) => Ok(Experiment::Recognition),
             (false, true) => Ok(Experiment::Width),
-            (true, true) if has(&[3.0]) => Ok(Experiment::Recognition),
-            (true, true) if has(&[5.0, 8.0, 10.0]) => Ok(Experiment::Width),
             (true, true) => Err(ExperimentError::Ambiguous {
                 labels: labels.to_vec(),
             }),

@@ -313,14 +313,14 @@ pub fn collect_recordings(paths: &[PathBuf]) -> Result<Vec<(PathBuf, Recording)>
 }
 
 /// Whether `out` names one output file: an extension of a recording form, and not an existing folder.
-pub fn is_file_target(out: &Path) -> bool {
+fn is_file_target(out: &Path) -> bool {
     Format::of_path(out).is_ok() && !out.is_dir()
 }
 
 /// The files a conversion of the recordings read from `inputs` (in order) writes, creating the folders they go
 /// in:
 ///
-/// * `out` ending in `.csv` or `.mat` (and not an existing folder, see [`is_file_target`]) is that one file, for
+/// * `out` ending in `.csv` or `.mat` (and not an existing folder) is that one file, for
 ///   exactly one input ([`RecordingError::OneFileManyRecordings`] otherwise); its parent folder is created;
 /// * otherwise `out` is a folder (created if needed; it must exist already or have no extension) and each input
 ///   becomes `<stem>.<format>` there. Two inputs with the same stem are refused

@@ -97,18 +97,25 @@ impl PipelineConfig {
         let extractor = FeatureExtractor::new(self.spec.clone(), self.window)
             .map_err(TactileError::Pipeline)?;
         Ok(Pipeline {
-            config: self.clone(),
             segmenter,
             extractor,
+            normalisation: self.normalisation,
+            min_slide_len: self.min_slide_len,
+            context: self.context.clone(),
         })
     }
 
     /// Values per feature row.
     pub fn n_features(&self) -> usize {
-        match &self.context {
-            None => self.spec.n_features(),
-            Some(c) => c.n_features(self.spec.n_features(), self.spec.set.channels().len()),
-        }
+        n_features(&self.spec, self.context.as_ref())
+    }
+}
+
+/// Values per feature row of `spec`, with `context` features when given.
+fn n_features(spec: &FeatureSpec, context: Option<&ContextConfig>) -> usize {
+    match context {
+        None => spec.n_features(),
+        Some(c) => c.n_features(spec.n_features(), spec.set.channels().len()),
     }
 }
 
@@ -165,11 +172,6 @@ pub fn recording_label(path: &Path, rec: &Recording) -> Result<f64, TactileError
     })
 }
 
-/// Detects the experiment from the labels of all recordings.
-pub fn detect_experiment(recordings: &[(PathBuf, Recording)]) -> Result<Experiment, TactileError> {
-    detect_experiment_of(recordings)
-}
-
 /// The experiment: `given`, or detected from the labels of `train` and `test` together.
 pub fn choose_experiment(
     given: Option<Experiment>,
@@ -178,11 +180,12 @@ pub fn choose_experiment(
 ) -> Result<Experiment, TactileError> {
     match given {
         Some(e) => Ok(e),
-        None => detect_experiment_of(train.iter().chain(test)),
+        None => detect_experiment(train.iter().chain(test)),
     }
 }
 
-fn detect_experiment_of<'a>(
+/// Detects the experiment from the labels of all recordings.
+pub fn detect_experiment<'a>(
     recordings: impl IntoIterator<Item = &'a (PathBuf, Recording)>,
 ) -> Result<Experiment, TactileError> {
     let mut labels = Vec::new();
@@ -222,15 +225,20 @@ pub fn build_windows(
 /// A [`PipelineConfig`] whose parameters were checked ([`PipelineConfig::check`]).
 #[derive(Debug, Clone)]
 pub struct Pipeline {
-    config: PipelineConfig,
     segmenter: Option<Segmenter>,
     extractor: FeatureExtractor,
+    normalisation: Normalisation,
+    min_slide_len: usize,
+    context: Option<ContextConfig>,
 }
 
 impl Pipeline {
-    /// The checked configuration.
-    pub fn config(&self) -> &PipelineConfig {
-        &self.config
+    /// The same pipeline without context features: the paper's windows of the same slides.
+    pub fn without_context(&self) -> Pipeline {
+        Pipeline {
+            context: None,
+            ..self.clone()
+        }
     }
 
     /// Builds the labelled windows of `recordings` under `experiment`.
@@ -239,11 +247,11 @@ impl Pipeline {
         recordings: &[(PathBuf, Recording)],
         experiment: Experiment,
     ) -> Result<WindowSet, TactileError> {
-        let config = &self.config;
+        let (spec, context) = (self.extractor.spec(), self.context.as_ref());
         let mut set = WindowSet {
             experiment,
             x: Vec::new(),
-            n_features: config.n_features(),
+            n_features: n_features(spec, context),
             y: Vec::new(),
             label: Vec::new(),
             slides: Vec::new(),
@@ -258,7 +266,7 @@ impl Pipeline {
                     label,
                     experiment,
                 })?;
-            let offset = match config.normalisation {
+            let offset = match self.normalisation {
                 Normalisation::None => [0.0; 4],
                 Normalisation::RecordingMedian => channel_medians(rec),
             };
@@ -267,14 +275,13 @@ impl Pipeline {
                 std::array::from_fn(|i| c[i] - offset[i])
             };
             // The whole recording, offset-corrected, and its directions: what context spans see.
-            let (all_samples, all_directions): (Vec<[f64; 4]>, Vec<u8>) =
-                if config.context.is_some() {
-                    rec.rows.iter().map(|r| (corrected(r), r.direction)).unzip()
-                } else {
-                    (Vec::new(), Vec::new())
-                };
+            let (all_samples, all_directions): (Vec<[f64; 4]>, Vec<u8>) = if context.is_some() {
+                rec.rows.iter().map(|r| (corrected(r), r.direction)).unzip()
+            } else {
+                (Vec::new(), Vec::new())
+            };
             for range in rec.slides() {
-                if range.len() < config.min_slide_len.max(1) {
+                if range.len() < self.min_slide_len.max(1) {
                     continue;
                 }
                 let rows = &rec.rows[range.clone()];
@@ -305,7 +312,7 @@ impl Pipeline {
                     })?;
                 let start = set.y.len();
                 let n = m.n_rows();
-                match &config.context {
+                match context {
                     None => set.x.extend_from_slice(&m.data),
                     Some(c) => {
                         let baseline = slide_baseline(&samples, c.baseline_len);
@@ -322,8 +329,8 @@ impl Pipeline {
                             context_row(
                                 c,
                                 place,
-                                config.spec.set.channels(),
-                                config.window.len,
+                                spec.set.channels(),
+                                self.extractor.window().len,
                                 &baseline,
                                 &mut set.x,
                             );

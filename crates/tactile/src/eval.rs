@@ -67,7 +67,18 @@ impl ForestTuning {
 
 /// Reports the training of a random forest: `(trees done, trees in all)` after each tree, one call at a
 /// time, in order (see [`RandomForest::fit_with_progress`]). KNN and QDA report nothing.
-pub type TrainProgress<'p> = &'p mut (dyn FnMut(usize, usize) + Send);
+pub use crackbot_forest::TrainProgress;
+
+/// Refuses a forest of no trees: `--trees must be at least 1`, as the command line names it.
+pub(crate) fn check_n_trees(n_trees: usize) -> Result<(), TactileError> {
+    if n_trees == 0 {
+        return Err(TactileError::TooSmall {
+            argument: "--trees",
+            min: 1,
+        });
+    }
+    Ok(())
+}
 
 /// Trains `kind` on every window of `train`, reporting no progress.
 pub fn train_classifier(

@@ -12,14 +12,14 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use crackbot_dsp::{FeatureSpec, WindowConfig};
+use crackbot_dsp::WindowConfig;
 use crackbot_recording::{collect_recordings, Recording};
 use serde::Serialize;
 
 use crate::context::ContextConfig;
 use crate::dataset::{choose_experiment, Experiment, PipelineConfig};
 use crate::eval::{
-    test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
+    check_n_trees, test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
     width_regression_tuned, ClassifierKind, ForestTuning,
 };
 use crate::TactileError;
@@ -144,25 +144,6 @@ pub struct EvalReport {
     pub window_recall: f64,
 }
 
-/// The names of the features of `spec`, joined with `+`.
-fn feature_name(spec: &FeatureSpec) -> String {
-    spec.features
-        .iter()
-        .map(|f| f.name())
-        .collect::<Vec<_>>()
-        .join("+")
-}
-
-fn check(config: &EvalConfig) -> Result<(), TactileError> {
-    if config.n_trees == 0 {
-        return Err(TactileError::TooSmall {
-            argument: "--trees",
-            min: 1,
-        });
-    }
-    Ok(())
-}
-
 /// Reads the recordings named by `train` and `test` (files or folders, see [`collect_recordings`]) and
 /// runs [`evaluate_recordings`].
 pub fn evaluate(
@@ -171,10 +152,10 @@ pub fn evaluate(
     test: &[PathBuf],
     progress: impl FnMut(EvalStage, usize, usize) + Send,
 ) -> Result<EvalReport, TactileError> {
-    check(config)?;
+    check_n_trees(config.n_trees)?;
     let train = collect_recordings(train)?;
     let test = collect_recordings(test)?;
-    evaluate_recordings(config, &train, &test, progress)
+    evaluate_checked(config, &train, &test, progress)
 }
 
 /// Trains on `train`, tests on `test` (see the [module docs](self)). `progress(stage, done, total)` is
@@ -183,9 +164,19 @@ pub fn evaluate_recordings(
     config: &EvalConfig,
     train: &[(PathBuf, Recording)],
     test: &[(PathBuf, Recording)],
+    progress: impl FnMut(EvalStage, usize, usize) + Send,
+) -> Result<EvalReport, TactileError> {
+    check_n_trees(config.n_trees)?;
+    evaluate_checked(config, train, test, progress)
+}
+
+/// [`evaluate_recordings`] with the number of trees checked.
+fn evaluate_checked(
+    config: &EvalConfig,
+    train: &[(PathBuf, Recording)],
+    test: &[(PathBuf, Recording)],
     mut progress: impl FnMut(EvalStage, usize, usize) + Send,
 ) -> Result<EvalReport, TactileError> {
-    check(config)?;
     let experiment = choose_experiment(config.experiment, train, test)?;
     let pipeline = config.pipeline.check()?;
     let train_set = pipeline.build_windows(train, experiment)?;
@@ -198,11 +189,7 @@ pub fn evaluate_recordings(
     // With context, a forest on the paper's own window features (same segmentation and windows,
     // so the same slides) joins the slide verdicts.
     let voter = if config.pipeline.context.is_some() && config.slide_vote == SlideVote::Both {
-        let plain = PipelineConfig {
-            context: None,
-            ..config.pipeline.clone()
-        }
-        .check()?;
+        let plain = pipeline.without_context();
         let vote_train = plain.build_windows(train, experiment)?;
         let vote_test = plain.build_windows(test, experiment)?;
         let vote_model =
@@ -244,7 +231,7 @@ pub fn evaluate_recordings(
         classifier: kind.name().to_string(),
         context: p.context.clone(),
         experiment: experiment.name().to_string(),
-        feature: feature_name(&p.spec),
+        feature: p.spec.feature_name(),
         forest_tuning: tuning,
         n_features: train_set.n_features,
         normalisation: format!("{:?}", p.normalisation),

@@ -15,7 +15,7 @@ use crackbot_recording::{collect_recordings, Recording};
 use serde::Serialize;
 
 use crate::dataset::{detect_experiment, Experiment, PipelineConfig, WindowSet};
-use crate::eval::{test_classifier, train_classifier, ClassifierKind};
+use crate::eval::{check_n_trees, test_classifier, train_classifier, ClassifierKind};
 use crate::metrics::ConfusionMatrix;
 use crate::stats::{kruskal_wallis, mean_std, KruskalWallis};
 use crate::TactileError;
@@ -293,6 +293,13 @@ pub struct PaperConfig {
     pub seed: u64,
 }
 
+impl PaperConfig {
+    /// Checks the number of trees (`--trees must be at least 1`); [`paper_study`] does too.
+    pub fn validate(&self) -> Result<(), TactileError> {
+        check_n_trees(self.n_trees)
+    }
+}
+
 /// Progress of [`paper_study`].
 #[derive(Debug, Clone, Copy)]
 #[non_exhaustive]
@@ -344,12 +351,7 @@ pub fn paper_study(
     mut progress: impl FnMut(PaperEvent<'_>),
     mut figures: impl FnMut(&Path, &PaperTables) -> Result<String, TactileError>,
 ) -> Result<PaperReport, TactileError> {
-    if config.n_trees == 0 {
-        return Err(TactileError::TooSmall {
-            argument: "--trees",
-            min: 1,
-        });
-    }
+    config.validate()?;
     std::fs::create_dir_all(out).map_err(TactileError::creating(out))?;
     let mut markdown =
         String::from("# The paper's tables, reproduced by `crackbot tactile paper`\n\n");

@@ -37,6 +37,37 @@ pub struct TradeoffConfig {
     pub latency_batch: usize,
 }
 
+impl TradeoffConfig {
+    /// Checks the grid and the batch ([`run_tradeoff`] does too): at least one tree count and one
+    /// depth limit, all of them at least 1, and a batch of at least one window.
+    pub fn validate(&self) -> Result<(), TactileError> {
+        if self.n_trees.is_empty() || self.max_depths.is_empty() {
+            return Err(TactileError::InvalidSetting {
+                reason: "the grid needs at least one tree count and one depth limit",
+            });
+        }
+        if self.n_trees.contains(&0) {
+            return Err(TactileError::ListTooSmall {
+                argument: "--trees",
+                what: "tree count",
+                min: 1,
+            });
+        }
+        if self.latency_batch == 0 {
+            return Err(TactileError::TooSmall {
+                argument: "--batch",
+                min: 1,
+            });
+        }
+        if self.max_depths.contains(&Some(0)) {
+            return Err(TactileError::InvalidSetting {
+                reason: "tree counts and depth limits must be at least 1",
+            });
+        }
+        Ok(())
+    }
+}
+
 impl Default for TradeoffConfig {
     /// Trees 1, 2, 5, 10, 20, 50, 100, 200; depth unlimited, 20, 12, 8; seed 1; batches of 1000.
     fn default() -> Self {
@@ -130,23 +161,15 @@ pub fn median_latency(
     })
 }
 
-/// Runs the grid: trains on `train`, tests on `test`. `progress` is called after each forest.
+/// Runs the grid ([`TradeoffConfig::validate`] first): trains on `train`, tests on `test`.
+/// `progress` is called after each forest.
 pub fn run_tradeoff(
     train: &WindowSet,
     test: &WindowSet,
     config: &TradeoffConfig,
     mut progress: impl FnMut(&TradeoffRow),
 ) -> Result<Tradeoff, TactileError> {
-    if config.n_trees.is_empty() || config.max_depths.is_empty() {
-        return Err(TactileError::InvalidSetting {
-            reason: "the grid needs at least one tree count and one depth limit",
-        });
-    }
-    if config.n_trees.contains(&0) || config.max_depths.contains(&Some(0)) {
-        return Err(TactileError::InvalidSetting {
-            reason: "tree counts and depth limits must be at least 1",
-        });
-    }
+    config.validate()?;
     if train.experiment != test.experiment || train.n_features != test.n_features {
         return Err(TactileError::WindowSetMismatch {
             train_experiment: train.experiment,
@@ -275,7 +298,8 @@ pub struct TradeoffReport {
 /// The whole `crackbot tactile tradeoff` run: reads the recordings, builds their windows, runs the
 /// grid ([`run_tradeoff`], `progress` after each forest), creates `out`, lets `figure(png_path,
 /// tradeoff)` draw `out/tradeoff.png`, and writes `tradeoff.md` (which links the figure) and
-/// `tradeoff.json`.
+/// `tradeoff.json`. The grid is checked by [`run_tradeoff`]; call [`TradeoffConfig::validate`]
+/// first to refuse a bad one before the recordings are read.
 pub fn tradeoff_study(
     study: &TradeoffStudy,
     out: &Path,
@@ -283,19 +307,6 @@ pub fn tradeoff_study(
     figure: impl FnOnce(&Path, &Tradeoff) -> Result<(), TactileError>,
 ) -> Result<TradeoffReport, TactileError> {
     let grid = &study.grid;
-    if grid.n_trees.is_empty() || grid.n_trees.contains(&0) {
-        return Err(TactileError::ListTooSmall {
-            argument: "--trees",
-            what: "tree count",
-            min: 1,
-        });
-    }
-    if grid.latency_batch == 0 {
-        return Err(TactileError::TooSmall {
-            argument: "--batch",
-            min: 1,
-        });
-    }
     let train = collect_recordings(&study.train)?;
     let test = collect_recordings(&study.test)?;
     let experiment = choose_experiment(study.experiment, &train, &test)?;
@@ -319,11 +330,7 @@ pub fn tradeoff_study(
          {} on {} {}, segmentation {}; trained on {} ({} recordings), tested on {} ({} recordings); seed {}.\n\n\
          {}\n![accuracy against latency](tradeoff.png)\n",
         experiment.name(),
-        spec.features
-            .iter()
-            .map(|f| f.name())
-            .collect::<Vec<_>>()
-            .join("+"),
+        spec.feature_name(),
         spec.set.name(),
         study.pipeline.segmentation.name(),
         files(&study.train),
