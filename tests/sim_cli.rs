@@ -205,3 +205,82 @@ fn compare_and_work_precision_write_their_figures() {
         text(&o.stderr)
     );
 }
+
+#[test]
+fn detector_set_writes_images_masks_and_tight_crack_boxes() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().join("set");
+    let o = crackbot(&[
+        "sim",
+        "detector-set",
+        "--scenes",
+        "2",
+        "--frames-per-scene",
+        "1",
+        "--seed",
+        "11",
+        "--out",
+        utf8(&out),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stdout).contains("ms each"), "{}", text(&o.stdout));
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(out.join(name)).expect(name)).expect("json")
+    };
+    let coco = read("annotations.json");
+    let images = coco["images"].as_array().expect("images");
+    assert_eq!(images.len(), 2);
+    assert_eq!(coco["categories"][0]["id"], 1);
+    assert_eq!(coco["categories"][0]["name"], "crack");
+    let annotations = coco["annotations"].as_array().expect("annotations");
+    assert!(!annotations.is_empty());
+    for (k, im) in images.iter().enumerate() {
+        assert_eq!(im["scene_seed"], 11 + k as u64);
+        let file = im["file_name"].as_str().expect("file_name");
+        let rgb = image::open(out.join("images").join(file)).expect("image");
+        let mask_file = im["mask_file"].as_str().expect("mask_file");
+        let mask = image::open(out.join(mask_file)).expect("mask").to_luma8();
+        assert_eq!(mask.dimensions(), (rgb.width(), rgb.height()));
+        assert_eq!(im["width"], rgb.width());
+        assert!(mask.pixels().all(|p| p[0] == 0 || p[0] == 255));
+        let on = |c: u32, r: u32| mask.get_pixel(c, r)[0] > 0;
+        for a in annotations.iter().filter(|a| a["image_id"] == im["id"]) {
+            let b: Vec<u32> = a["bbox"]
+                .as_array()
+                .expect("bbox")
+                .iter()
+                .map(|v| v.as_f64().expect("number") as u32)
+                .collect();
+            let (x0, y0, x1, y1) = (b[0], b[1], b[0] + b[2] - 1, b[1] + b[3] - 1);
+            assert!(x1 < mask.width() && y1 < mask.height(), "{b:?}");
+            // Every edge of the box touches a crack pixel of the mask.
+            assert!((y0..=y1).any(|r| on(x0, r)), "left edge of {b:?}");
+            assert!((y0..=y1).any(|r| on(x1, r)), "right edge of {b:?}");
+            assert!((x0..=x1).any(|c| on(c, y0)), "top edge of {b:?}");
+            assert!((x0..=x1).any(|c| on(c, y1)), "bottom edge of {b:?}");
+        }
+    }
+    let features = read("features.json");
+    let frames = features["images"].as_array().expect("images");
+    assert_eq!(frames.len(), 2);
+    for f in frames {
+        assert_eq!(f["plate_to_image"].as_array().expect("H").len(), 3);
+        for b in f["boxes"].as_array().expect("boxes") {
+            let kind = b["kind"].as_str().expect("kind");
+            assert!(["crack", "decoy", "screw"].contains(&kind), "{kind}");
+            assert_eq!(b["bbox"].as_array().expect("bbox").len(), 4);
+            if kind != "screw" {
+                assert!(b["path_px"].as_array().expect("path_px").len() >= 2);
+                assert!(b["width_mm"].as_f64().is_some());
+            }
+        }
+    }
+
+    let o = crackbot(&["sim", "detector-set", "--scenes", "0", "--out", utf8(&out)]);
+    assert!(!o.status.success());
+    assert!(
+        text(&o.stderr).contains("--scenes must be at least 1"),
+        "{}",
+        text(&o.stderr)
+    );
+}

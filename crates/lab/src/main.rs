@@ -4,7 +4,8 @@
 //!   paper's tables and the forest's accuracy against run time.
 //! * `crackbot-lab eval-detector` — COCO metrics of a detector on any COCO file.
 //! * `crackbot-lab detector-tradeoff` — mAP@0.5 against input size against ms per frame.
-//! * `crackbot-lab sim dataset|calibrate|work-precision|compare|render|scene` — the simulator.
+//! * `crackbot-lab sim dataset|calibrate|work-precision|compare|render|detector-set|scene` — the
+//!   simulator.
 //!
 //! The work is done by the libraries (`crackbot-tactile`, `crackbot-vision`, `crackbot-sim`),
 //! figures by `crackbot-plots`; this binary parses arguments, draws progress bars and prints.

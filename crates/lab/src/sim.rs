@@ -28,6 +28,9 @@ pub enum SimCommand {
     /// Camera images of a scene with ground-truth boxes and the exact pixel↔mm homography
     /// (PNG + JSON per frame, and a COCO file for `crackbot eval-detector`).
     Render(RenderArgs),
+    /// Crack-detector data: frames of many random scenes with per-pixel crack masks (8-bit PNG,
+    /// 255 = crack), a COCO file and every feature's ground truth.
+    DetectorSet(DetectorSetArgs),
     /// Check a scene file and summarise it.
     Scene(SceneArgs),
 }
@@ -54,6 +57,33 @@ pub struct RenderArgs {
     /// ../shared/data/cracks).
     #[arg(long)]
     cracks: Option<PathBuf>,
+}
+
+/// `crackbot sim detector-set`.
+#[derive(Debug, Args)]
+pub struct DetectorSetArgs {
+    /// Random scenes to draw (seeds SEED, SEED + 1, …).
+    #[arg(long)]
+    scenes: u32,
+    /// Frames rendered of each scene (lighting, noise and crack photos change between them).
+    #[arg(long, default_value_t = 2)]
+    frames_per_scene: u32,
+    /// Seed of the first scene.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output folder: images/, masks/, annotations.json and features.json.
+    #[arg(long)]
+    out: PathBuf,
+    /// Random-scene parameters (TOML, the fields of `RandomSceneParams`; defaults when left out).
+    #[arg(long)]
+    params: Option<PathBuf>,
+    /// Folder of the real crack photos and masks (default: $CRACKBOT_CRACKS_DIR or
+    /// ../shared/data/cracks).
+    #[arg(long)]
+    cracks: Option<PathBuf>,
+    /// Print the summary as JSON (no progress bar).
+    #[arg(long)]
+    json: bool,
 }
 
 /// `crackbot sim scene`.
@@ -164,6 +194,7 @@ pub fn run(cmd: SimCommand) -> Result<()> {
         SimCommand::WorkPrecision(a) => work_precision_cmd(a),
         SimCommand::Compare(a) => compare(a),
         SimCommand::Render(a) => render_cmd(a),
+        SimCommand::DetectorSet(a) => detector_set_cmd(a),
         SimCommand::Scene(a) => scene_cmd(a),
     }
 }
@@ -371,5 +402,68 @@ fn render_cmd(a: RenderArgs) -> Result<()> {
         summary.coco.display(),
         summary.images.display()
     );
+    Ok(())
+}
+
+fn detector_set_cmd(a: DetectorSetArgs) -> Result<()> {
+    use crackbot_sim::render::{write_detector_set, CrackAssets};
+    use crackbot_sim::RandomSceneParams;
+    if a.scenes == 0 {
+        bail!("--scenes must be at least 1");
+    }
+    if a.frames_per_scene == 0 {
+        bail!("--frames-per-scene must be at least 1");
+    }
+    let params = match &a.params {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            toml::from_str::<RandomSceneParams>(&text)
+                .with_context(|| format!("parsing random-scene parameters {}", path.display()))?
+        }
+        None => RandomSceneParams::default(),
+    };
+    params.validate()?;
+    let assets = match &a.cracks {
+        Some(dir) => CrackAssets::load(dir)?,
+        None => CrackAssets::load_default()?,
+    };
+    let total = a.scenes as usize * a.frames_per_scene as usize;
+    let pb = if a.json {
+        ProgressBar::hidden()
+    } else {
+        bar(total, "rendering")
+    };
+    let summary = write_detector_set(
+        &params,
+        &assets,
+        a.scenes,
+        a.frames_per_scene,
+        a.seed,
+        &a.out,
+        |done, _| pb.set_position(done as u64),
+    )
+    .with_context(|| format!("writing the detector set to {}", a.out.display()))?;
+    pb.finish_and_clear();
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+    } else {
+        println!(
+            "rendered {} frames of {} random scenes ({:.0} ms each): {} cracks, {} decoys, {} screws in view",
+            summary.frames,
+            summary.scenes,
+            summary.ms_per_frame,
+            summary.cracks,
+            summary.decoys,
+            summary.screws
+        );
+        println!(
+            "wrote {} images, {} crack masks (8-bit, 255 = crack), {} and {}",
+            summary.images.display(),
+            summary.masks.display(),
+            summary.annotations.display(),
+            summary.features.display()
+        );
+    }
     Ok(())
 }

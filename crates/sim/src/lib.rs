@@ -14,6 +14,8 @@
 //! * [`scene`]: TOML scenes (plate, features, camera, manipulator, sensor) with validation and a
 //!   built-in default; [`render`]: camera images of a scene with ground-truth boxes and the exact
 //!   pixel↔mm homography.
+//! * [`random_scene`]: random scenes (plate material, cracks, decoys, screws, relief, camera)
+//!   for crack-detector data.
 //! * [`calibrate`]: fitting the optical parameters to the authors' real recordings;
 //!   [`recordings`]: reading folders of real or simulated recordings and choosing the slides that
 //!   compare them.
@@ -24,6 +26,7 @@ pub mod experiment;
 pub mod finger;
 pub mod optics;
 pub mod plates;
+pub mod random_scene;
 pub mod recordings;
 pub mod render;
 pub mod run;
@@ -35,6 +38,7 @@ use serde::{Deserialize, Serialize};
 
 pub use finger::{FingerParams, Integrator};
 pub use optics::OpticsParams;
+pub use random_scene::{random_scene, RandomSceneParams};
 pub use scene::Scene;
 pub use surface::{Feature, Surface};
 

@@ -461,3 +461,69 @@ fn frames_and_coco_datasets_are_written_and_readable() {
         assert!(tmp.path().join("ds/images").join(&im.file_name).is_file());
     }
 }
+
+/// The tight box `[x, y, w, h]` of the mask's non-zero pixels inside `b`, if any.
+fn mask_box_inside(mask: &image::GrayImage, b: [f64; 4]) -> Option<[f64; 4]> {
+    let (x0, y0) = (b[0] as u32, b[1] as u32);
+    let (x1, y1) = (x0 + b[2] as u32, y0 + b[3] as u32);
+    let (mut c0, mut c1, mut r0, mut r1) = (u32::MAX, 0, u32::MAX, 0);
+    for r in y0..y1 {
+        for c in x0..x1 {
+            if mask.get_pixel(c, r)[0] > 0 {
+                (c0, c1, r0, r1) = (c0.min(c), c1.max(c), r0.min(r), r1.max(r));
+            }
+        }
+    }
+    (c0 != u32::MAX).then(|| {
+        [
+            f64::from(c0),
+            f64::from(r0),
+            f64::from(c1 - c0 + 1),
+            f64::from(r1 - r0 + 1),
+        ]
+    })
+}
+
+#[test]
+fn crack_mask_is_exactly_the_cracks_visible_pixels() {
+    let scene = Scene::builtin_default();
+    let frame = render(&scene, assets(), &RenderOptions::default(), 3).unwrap();
+    let mask = &frame.crack_mask;
+    assert_eq!(mask.dimensions(), frame.image.dimensions());
+    assert!(mask.pixels().all(|p| p[0] == 0 || p[0] == 255));
+    let cracks: Vec<_> = frame.boxes_of(BoxKind::Crack).collect();
+    assert!(cracks.len() >= 3, "{cracks:?}");
+    let mut crack_pixels = 0u64;
+    for b in &cracks {
+        assert_eq!(mask_box_inside(mask, b.bbox()), Some(b.bbox()), "{b:?}");
+        crack_pixels += b.pixels;
+    }
+    // The default scene's cracks do not overlap: the mask holds exactly their pixels.
+    let on = mask.pixels().filter(|p| p[0] > 0).count() as u64;
+    assert_eq!(on, crack_pixels);
+    // Nothing of the decoy, nor of the screw heads, is in the mask.
+    let others: Vec<_> = frame
+        .boxes
+        .iter()
+        .filter(|b| b.kind != BoxKind::Crack)
+        .collect();
+    assert!(others.iter().any(|b| b.kind == BoxKind::Decoy));
+    for b in others {
+        let [x, y, w, h] = b.bbox();
+        for r in y as u32..(y + h) as u32 {
+            for c in x as u32..(x + w) as u32 {
+                let uv = [f64::from(c) + 0.5, f64::from(r) + 0.5];
+                if b.kind == BoxKind::Decoy && !cracks.iter().any(|k| k.contains(uv)) {
+                    assert_eq!(
+                        mask.get_pixel(c, r)[0],
+                        0,
+                        "decoy pixel ({c}, {r}) in the mask"
+                    );
+                }
+            }
+        }
+    }
+    // Same seed, same mask.
+    let again = render(&scene, assets(), &RenderOptions::default(), 3).unwrap();
+    assert_eq!(again.crack_mask, frame.crack_mask);
+}

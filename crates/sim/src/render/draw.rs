@@ -1,7 +1,7 @@
 //! The renderer: one camera frame of a scene, drawn in named steps (plate and texture, relief
 //! shading, screw cover, cracks and decoys, screws, then lighting and sensor noise).
 
-use image::RgbImage;
+use image::{GrayImage, RgbImage};
 use nalgebra::Matrix3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -86,6 +86,8 @@ struct Canvas {
     h: usize,
     px: Vec<[f32; 3]>,
     plate_mask: Vec<bool>,
+    /// 255 where a crack's pixel counts in its ground-truth box, else 0.
+    crack_mask: Vec<u8>,
 }
 
 /// Everything the drawing steps share.
@@ -165,10 +167,17 @@ pub fn render(
     let mut boxes = draw_lines(&ctx, assets, &cover, &mut canvas);
     boxes.extend(draw_screws(&ctx, &cover, &mut canvas));
     boxes.sort_by_key(|b| b.feature_index);
+    let crack_mask = GrayImage::from_raw(
+        ctx.cam.width(),
+        ctx.cam.height(),
+        std::mem::take(&mut canvas.crack_mask),
+    )
+    .ok_or_else(|| SimError::Invalid("crack mask buffer of the wrong size".into()))?;
     let image = develop(&ctx, canvas, noise_sigma, &mut noise_gen)?;
     Ok(Frame {
         image,
         boxes,
+        crack_mask,
         plate_to_image: ctx.cam.plate_to_image(),
         seed,
     })
@@ -198,6 +207,7 @@ fn paint_plate(ctx: &Ctx<'_>, background: [u8; 3]) -> Canvas {
         h,
         px,
         plate_mask,
+        crack_mask: vec![0; w * h],
     }
 }
 
@@ -412,6 +422,9 @@ fn draw_line(
             }
             if m > 0.5 && cover.at[k] == 0 {
                 acc.add(c, r);
+                if ink.is_none() {
+                    canvas.crack_mask[k] = 255;
+                }
             }
             // Rendered pixels per source pixel across: sharpen the mask's edge to ~1 pixel.
             let sigma = (half_w * taper / g / px_mm) as f32;

@@ -14,7 +14,7 @@ use super::frame::{BoxKind, Frame};
 use crate::SimError;
 
 /// The one category of the exports: `crack` (id 1).
-fn categories() -> Vec<CocoCategory> {
+pub(super) fn categories() -> Vec<CocoCategory> {
     vec![CocoCategory {
         id: 1,
         name: "crack".into(),
@@ -23,7 +23,11 @@ fn categories() -> Vec<CocoCategory> {
 }
 
 /// The crack boxes of `frame` as annotations of image `image_id`, ids from `first_id`.
-fn crack_annotations(frame: &Frame, image_id: u64, first_id: u64) -> Vec<CocoAnnotation> {
+pub(super) fn crack_annotations(
+    frame: &Frame,
+    image_id: u64,
+    first_id: u64,
+) -> Vec<CocoAnnotation> {
     frame
         .boxes_of(BoxKind::Crack)
         .enumerate()

@@ -1,7 +1,7 @@
 //! What the renderer produces: a frame, its ground-truth boxes, and the accumulator that finds a
 //! feature's tight box while its pixels are drawn.
 
-use image::RgbImage;
+use image::{GrayImage, RgbImage};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 
@@ -69,6 +69,10 @@ pub struct Frame {
     pub image: RgbImage,
     /// Boxes of the visible cracks, decoys and screws, in feature order.
     pub boxes: Vec<GroundTruthBox>,
+    /// Per-pixel crack mask, the image's size: 255 where a crack (not a decoy, not a screw) is
+    /// visible, exactly the pixels its ground-truth box is built from (the crack's mask above
+    /// 0.5 and no screw covering it), 0 elsewhere. Each crack box is the tight box of its pixels.
+    pub crack_mask: GrayImage,
     /// The exact homography from plate mm (z = 0) to pixels.
     pub plate_to_image: Matrix3<f64>,
     /// The seed the frame was rendered with.

@@ -27,15 +27,18 @@
 //! Ground-truth boxes are COCO-style `[x, y, w, h]` pixel boxes (top-left origin, tight around the
 //! pixels, `w = max col − min col + 1`) of the pixels where a crack's or decoy's (unsoftened) mask
 //! exceeds 0.5 and no screw covers it; a screw's box is its visible disc. Features that do not
-//! show in the image get no box.
+//! show in the image get no box. The frame's crack mask is exactly the cracks' such pixels (not
+//! the decoys'), so each crack box is the tight box of its mask pixels.
 //!
 //! The parts: `assets` (the real crack strips), `texture` (procedural
 //! texture, noise, shading), `geometry`, `draw` (the renderer's steps), `frame` (frames and
-//! ground-truth boxes), `export` (PNG, JSON and COCO files) and `dataset` (a run of frames
-//! written as a COCO dataset).
+//! ground-truth boxes), `export` (PNG, JSON and COCO files), `dataset` (a run of frames
+//! written as a COCO dataset) and `detector_set` (frames of many random scenes with per-pixel
+//! crack masks, for training and evaluating a crack detector).
 
 mod assets;
 mod dataset;
+mod detector_set;
 mod draw;
 mod export;
 mod frame;
@@ -44,6 +47,7 @@ mod texture;
 
 pub use assets::{CrackAssets, CrackStrip, CRACKS_DIR_ENV, CRACK_DATASETS};
 pub use dataset::{render_dataset, RenderSummary};
+pub use detector_set::{detector_frame_seed, write_detector_set, DetectorSetSummary};
 pub use draw::{render, RenderOptions, SCREW_GREY};
 pub use export::{coco_dataset, coco_file, frame_json, write_coco_dataset, write_frame};
 pub use frame::{BoxKind, Frame, GroundTruthBox};
