@@ -237,7 +237,9 @@ fn detector_set_writes_images_masks_and_tight_crack_boxes() {
     for (k, im) in images.iter().enumerate() {
         assert_eq!(im["scene_seed"], 11 + k as u64);
         let file = im["file_name"].as_str().expect("file_name");
-        let rgb = image::open(out.join("images").join(file)).expect("image");
+        // Paths relative to the COCO file's folder, as in the photo datasets.
+        assert!(file.starts_with("images/"), "{file}");
+        let rgb = image::open(out.join(file)).expect("image");
         let mask_file = im["mask_file"].as_str().expect("mask_file");
         let mask = image::open(out.join(mask_file)).expect("mask").to_luma8();
         assert_eq!(mask.dimensions(), (rgb.width(), rgb.height()));

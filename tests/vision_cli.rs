@@ -120,6 +120,12 @@ fn detect_with_calibration_annotation_and_fusion() {
     for d in dets {
         assert!(d["score"].as_f64().expect("score") >= 0.05);
         assert_eq!(d["centre_mm"].as_array().expect("centre_mm").len(), 2);
+        // The crack's course, for laying slides across it: in pixels and on the surface.
+        let px = d["polyline_px"].as_array().expect("polyline_px");
+        let mm = d["polyline_mm"].as_array().expect("polyline_mm");
+        assert!(px.len() >= 2 && px.len() == mm.len(), "{d}");
+        assert_eq!(d["axis_px"].as_array().expect("axis_px").len(), 2);
+        assert!(d["length_mm"].as_f64().expect("length_mm") > 0.0);
     }
     // Three copies of one frame fuse into the same detections, each seen 3 times.
     let fused = r["fused"].as_array().expect("fused");
@@ -163,6 +169,22 @@ fn eval_detector_agrees_with_the_python_evaluation_of_the_model() {
         }
         assert_eq!(rust["images"], py["images"]);
         assert!(rust["ms_per_image"].as_f64().expect("ms") > 0.0);
+        // uav75 has masks: the crack map is scored pixel by pixel; quaywall has boxes only.
+        let pixel = rust.get("pixel").and_then(Value::as_array);
+        if dataset == "uav75" {
+            let pixel = pixel.expect("pixel metrics on a split with masks");
+            assert_eq!(pixel.len(), 2);
+            for p in pixel {
+                let f1 = p["ods"]["f1"].as_f64().expect("ods f1");
+                assert!(f1 > 0.0 && f1 <= 1.0, "{p}");
+                assert!(p["ois_f1"].as_f64().expect("ois") >= f1 - 1e-9, "{p}");
+                assert_eq!(p["images"], rust["images"]);
+            }
+            // A wider tolerance forgives more.
+            assert!(pixel[1]["ods"]["f1"].as_f64() >= pixel[0]["ods"]["f1"].as_f64());
+        } else {
+            assert!(pixel.is_none(), "{rust}");
+        }
     }
     let classical = ok_json(&[
         "eval-detector",
@@ -177,6 +199,66 @@ fn eval_detector_agrees_with_the_python_evaluation_of_the_model() {
         let v = classical[k].as_f64().expect(k);
         assert!((0.0..=1.0).contains(&v), "{k} = {v}");
     }
+}
+
+#[test]
+fn eval_detector_on_rendered_plates_counts_cracks_found_and_decoys_proposed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let set = dir.path().join("set");
+    let out = crackbot(&[
+        "sim",
+        "detector-set",
+        "--scenes",
+        "3",
+        "--frames-per-scene",
+        "1",
+        "--seed",
+        "424242",
+        "--out",
+        s(&set),
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let features: Value = serde_json::from_str(
+        &std::fs::read_to_string(set.join("features.json")).expect("features.json"),
+    )
+    .expect("JSON");
+    let count = |kind: &str| {
+        features["images"]
+            .as_array()
+            .expect("images")
+            .iter()
+            .flat_map(|i| i["boxes"].as_array().expect("boxes").iter())
+            .filter(|b| b["kind"] == kind)
+            .count() as u64
+    };
+    let coco = set.join("annotations.json");
+    let r = ok_json(&["eval-detector", "--coco", s(&coco), "--json"]);
+    let scene = &r["scene"];
+    assert_eq!(scene["frames"], 3);
+    assert_eq!(scene["cracks"].as_u64(), Some(count("crack")));
+    assert_eq!(scene["decoys"].as_u64(), Some(count("decoy")));
+    let (found, cracks) = (scene["found"].as_u64().expect("found"), count("crack"));
+    assert!(found <= cracks && cracks > 0);
+    assert_eq!(
+        scene["missed"].as_array().expect("missed").len() as u64,
+        cracks - found
+    );
+    let by_width: u64 = scene["by_width"]
+        .as_array()
+        .expect("by_width")
+        .iter()
+        .map(|b| b["cracks"].as_u64().expect("cracks"))
+        .sum();
+    assert_eq!(by_width, cracks);
+    // Rendered masks: pixel metrics too.
+    assert_eq!(r["pixel"].as_array().expect("pixel").len(), 2);
+    // The text report says the same.
+    let out = crackbot(&["eval-detector", "--coco", s(&coco)]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let t = text(&out.stdout);
+    assert!(t.contains(&format!("{found}/{cracks} cracks found")), "{t}");
+    assert!(t.contains("ODS F1"), "{t}");
 }
 
 #[test]

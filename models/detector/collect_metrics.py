@@ -17,7 +17,7 @@ def load(path):
 
 def main():
     out = {"training": {}, "pycocotools_val": {}}
-    for run in sorted(glob.glob(os.path.join(HERE, "runs", "train*", "summary.json"))):
+    for run in sorted(glob.glob(os.path.join(HERE, "runs", "seg*", "summary.json"))):
         out["training"][os.path.basename(os.path.dirname(run))] = load(run)
     for size in (320, 256, 416):
         for name in ("crackforest", "uav75", "quaywall", "val_all"):

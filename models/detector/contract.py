@@ -1,18 +1,22 @@
-"""The crack-detector pre/post-processing contract, in plain numpy.
+"""The crack-detector pre/post-processing contract, in plain numpy (+ scipy for the components).
 
-This is the reference implementation of what the Rust inference side does (see MODEL_CARD.md).
-It is used by eval.py and make_reference.py; training uses its own augmentation pipeline.
+This is the reference implementation of what the Rust inference side does (see MODEL_CARD.md,
+crates/vision/src/preprocess.rs and crates/vision/src/crack_map.rs). It is used by train.py (model selection),
+eval.py and make_reference.py.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from scipy import ndimage
+
 DEFAULT_SIZE = 320
 PAD_VALUE = 0.5
-DETECT_THRESHOLD = 0.25
-EVAL_THRESHOLD = 0.001
-NMS_IOU = 0.5
+STRIDE = 2                 # canvas pixels per crack-map cell
+MAP_THRESHOLD = 0.5        # a cell at or above is a crack cell
 MAX_DETECTIONS = 100
+MIN_AREA_FRACTION = 0.001  # the dataset rule: boxes under 0.1% of the image are dropped
+DILATION_FRACTION = 0.02   # the dataset rule: dilation radius round(0.02 * max(W, H)) image px
 
 
 def letterbox_params(w: int, h: int, size: int = DEFAULT_SIZE):
@@ -59,45 +63,57 @@ def letterbox(img: np.ndarray, size: int = DEFAULT_SIZE):
     return np.ascontiguousarray(canvas.transpose(2, 0, 1)[None]), s
 
 
-def box_iou_one(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
-    ix0 = np.maximum(box[0], boxes[:, 0])
-    iy0 = np.maximum(box[1], boxes[:, 1])
-    ix1 = np.minimum(box[2], boxes[:, 2])
-    iy1 = np.minimum(box[3], boxes[:, 3])
-    inter = np.clip(ix1 - ix0, 0, None) * np.clip(iy1 - iy0, 0, None)
-    a = max(box[2] - box[0], 0) * max(box[3] - box[1], 0)
-    b = np.clip(boxes[:, 2] - boxes[:, 0], 0, None) * np.clip(boxes[:, 3] - boxes[:, 1], 0, None)
-    union = a + b - inter
-    return np.where(union > 0, inter / np.maximum(union, 1e-12), 0.0)
+def dilation_radius_cells(w: int, h: int, s: float) -> int:
+    r_img = int(np.floor(DILATION_FRACTION * max(w, h) + 0.5))
+    return max(1, int(np.floor(r_img * s / STRIDE + 0.5)))
 
 
-def nms(boxes: np.ndarray, scores: np.ndarray, iou: float = NMS_IOU, max_det: int = MAX_DETECTIONS) -> np.ndarray:
-    """Class-agnostic greedy NMS; stable sort by score descending. Returns kept indices."""
-    order = np.argsort(-scores, kind="stable")
-    keep = []
-    suppressed = np.zeros(len(order), dtype=bool)
-    for i_pos, i in enumerate(order):
-        if suppressed[i_pos]:
+def disk(r: int) -> np.ndarray:
+    y, x = np.mgrid[-r:r + 1, -r:r + 1]
+    return (x * x + y * y) <= r * r
+
+
+def valid_cells(size: int, nw: int, nh: int):
+    """Map cells that overlap the letterboxed image: rows < ceil(nh/2), cols < ceil(nw/2)."""
+    return (nh + STRIDE - 1) // STRIDE, (nw + STRIDE - 1) // STRIDE
+
+
+def map_to_detections(prob: np.ndarray, w: int, h: int, size: int, threshold: float = MAP_THRESHOLD,
+                      max_det: int = MAX_DETECTIONS):
+    """prob: [S/2, S/2] crack map of the letterboxed image -> list of (x0, y0, x1, y1, score), best first."""
+    prob = np.asarray(prob, dtype=np.float32).reshape(size // STRIDE, size // STRIDE)
+    s, nw, nh = letterbox_params(w, h, size)
+    vr, vc = valid_cells(size, nw, nh)
+    p = prob[:vr, :vc]
+    b = p >= np.float32(threshold)
+    if not b.any():
+        return []
+    r = dilation_radius_cells(w, h, s)
+    dil = ndimage.binary_dilation(b, structure=disk(r))
+    labels, n = ndimage.label(dil, structure=np.ones((3, 3), dtype=bool))
+    out = []
+    min_area = MIN_AREA_FRACTION * w * h
+    for k in range(1, n + 1):
+        cells = b & (labels == k)
+        rows, cols = np.nonzero(cells)
+        if len(rows) == 0:
             continue
-        keep.append(i)
-        if len(keep) >= max_det:
-            break
-        rest = order[i_pos + 1:]
-        if len(rest) == 0:
-            break
-        ious = box_iou_one(boxes[i], boxes[rest])
-        suppressed[i_pos + 1:] |= ious > iou
-    return np.array(keep, dtype=np.int64)
+        x0 = min(STRIDE * cols.min() / s, w)
+        y0 = min(STRIDE * rows.min() / s, h)
+        x1 = min(STRIDE * (cols.max() + 1) / s, w)
+        y1 = min(STRIDE * (rows.max() + 1) / s, h)
+        if (x1 - x0) * (y1 - y0) < min_area:
+            continue
+        score = float(p[cells].astype(np.float64).mean())
+        out.append((float(x0), float(y0), float(x1), float(y1), score))
+    order = sorted(range(len(out)), key=lambda i: -out[i][4])  # stable: ties keep raster order
+    return [out[i] for i in order[:max_det]]
 
 
-def postprocess(detections: np.ndarray, s: float, w: int, h: int, threshold: float = DETECT_THRESHOLD,
-                iou: float = NMS_IOU, max_det: int = MAX_DETECTIONS):
-    """Raw model output [1,N,5] (canvas pixels) -> list of (x0, y0, x1, y1, score) in image pixels."""
-    d = np.asarray(detections, dtype=np.float32).reshape(-1, 5)
-    d = d[d[:, 4] >= threshold]
-    boxes = d[:, :4].astype(np.float64) / s
-    boxes[:, [0, 2]] = np.clip(boxes[:, [0, 2]], 0, w)
-    boxes[:, [1, 3]] = np.clip(boxes[:, [1, 3]], 0, h)
-    scores = d[:, 4].astype(np.float64)
-    keep = nms(boxes, scores, iou, max_det)
-    return [(float(b[0]), float(b[1]), float(b[2]), float(b[3]), float(sc)) for b, sc in zip(boxes[keep], scores[keep])]
+def map_to_image(prob: np.ndarray, w: int, h: int, size: int) -> np.ndarray:
+    """The crack map at image resolution (nearest cell of each pixel centre): [H, W] float32."""
+    prob = np.asarray(prob, dtype=np.float32).reshape(size // STRIDE, size // STRIDE)
+    s, _, _ = letterbox_params(w, h, size)
+    cx = np.minimum(np.floor((np.arange(w) + 0.5) * s / STRIDE).astype(np.int64), size // STRIDE - 1)
+    cy = np.minimum(np.floor((np.arange(h) + 0.5) * s / STRIDE).astype(np.int64), size // STRIDE - 1)
+    return prob[cy][:, cx]

@@ -1,9 +1,10 @@
 """Evaluate a crack-detector ONNX model (onnxruntime + contract.py + pycocotools) on a COCO file.
 
   python eval.py --model crack-detector-320.onnx --ann ../shared/data/cracks/val_all.json \
-      --root ../shared/data/cracks [--size 320] [--results out/dets.json] [--json-metrics out/m.json]
+      --root ../shared/data/cracks [--results out/dets.json] [--json-metrics out/m.json]
 
---size defaults to the model's fixed input size. Score threshold 0.001, NMS 0.5, max 100 (the contract).
+Boxes come from the crack map by the dataset rule (contract.map_to_detections). The project's own evaluator is
+`crackbot eval-detector` (Rust); this script is its independent cross-check and what train.sh records.
 """
 from __future__ import annotations
 
@@ -25,15 +26,14 @@ def load_rgb(path: str) -> np.ndarray:
     return np.asarray(Image.open(path).convert("RGB"))
 
 
-def detect_all(run_fn, coco: dict, root: str, size: int, threshold: float = contract.EVAL_THRESHOLD):
-    """run_fn: float32 [1,3,S,S] -> [1,N,5]. Returns a COCO results list."""
+def detect_all(run_fn, coco: dict, root: str, size: int):
+    """run_fn: float32 [1,3,S,S] -> crack map [1,1,S/2,S/2]. Returns a COCO results list."""
     results = []
     for im in coco["images"]:
         img = load_rgb(os.path.join(root, im["file_name"]))
         h, w = img.shape[:2]
-        x, s = contract.letterbox(img, size)
-        dets = contract.postprocess(run_fn(x), s, w, h, threshold)
-        for x0, y0, x1, y1, sc in dets:
+        x, _ = contract.letterbox(img, size)
+        for x0, y0, x1, y1, sc in contract.map_to_detections(run_fn(x)[0, 0], w, h, size):
             results.append({"image_id": im["id"], "category_id": 1,
                             "bbox": [x0, y0, x1 - x0, y1 - y0], "score": sc})
     return results
@@ -62,13 +62,13 @@ def coco_metrics(coco: dict, results: list, verbose: bool = False) -> dict:
             "images": len(coco["images"]), "boxes": len(coco["annotations"]), "detections": len(results)}
 
 
-def ort_runner(model_path: str):
+def ort_runner(model_path: str, threads: int = 2):
     import onnxruntime as ort
     so = ort.SessionOptions()
-    so.intra_op_num_threads = 2
+    so.intra_op_num_threads = threads
     sess = ort.InferenceSession(model_path, so, providers=["CPUExecutionProvider"])
     size = sess.get_inputs()[0].shape[2]
-    return (lambda x: sess.run(["detections"], {"images": x})[0]), size
+    return (lambda x: sess.run(["crack_map"], {"images": x})[0]), size
 
 
 def main():
@@ -76,7 +76,6 @@ def main():
     ap.add_argument("--model", required=True)
     ap.add_argument("--ann", required=True, help="COCO json")
     ap.add_argument("--root", default=None, help="image root (default: the json's folder)")
-    ap.add_argument("--size", type=int, default=None)
     ap.add_argument("--results", default=None, help="write COCO results JSON here")
     ap.add_argument("--json-metrics", default=None)
     ap.add_argument("--verbose", action="store_true")
@@ -84,8 +83,7 @@ def main():
     root = a.root or os.path.dirname(os.path.abspath(a.ann))
     with open(a.ann) as f:
         coco = json.load(f)
-    run, msize = ort_runner(a.model)
-    size = a.size or msize
+    run, size = ort_runner(a.model)
     res = detect_all(run, coco, root, size)
     if a.results:
         os.makedirs(os.path.dirname(os.path.abspath(a.results)), exist_ok=True)

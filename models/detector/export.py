@@ -1,4 +1,4 @@
-"""Export a trained checkpoint to fixed-size ONNX files (one per input size) and check them with onnxruntime."""
+"""Export a trained CrackSeg checkpoint to fixed-size ONNX files (one per input size) and check them with onnxruntime."""
 from __future__ import annotations
 
 import argparse
@@ -11,32 +11,35 @@ import torch
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from model import CrackDet, num_outputs  # noqa: E402
+from model import OUTPUT_STRIDE, CrackSeg  # noqa: E402
 
 
 def export(ckpt: str, sizes, out_dir: str):
-    model = CrackDet().eval()
+    model = CrackSeg().eval()
     model.load_state_dict(torch.load(ckpt, map_location="cpu")["model"])
     import onnx
     import onnxruntime as ort
     paths = []
     for s in sizes:
+        assert s % 32 == 0, "input sizes must be multiples of 32"
         path = os.path.join(out_dir, f"crack-detector-{s}.onnx")
         x = torch.rand(1, 3, s, s)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            torch.onnx.export(model, (x,), path, input_names=["images"], output_names=["detections"],
+            torch.onnx.export(model, (x,), path, input_names=["images"], output_names=["crack_map"],
                               opset_version=17, dynamo=False, do_constant_folding=True)
         m = onnx.load(path)
         onnx.checker.check_model(m)
-        m.doc_string = f"crackbot crack detector, input images [1,3,{s},{s}] RGB 0..1, output detections [1,{num_outputs(s)},5]"
+        c = s // OUTPUT_STRIDE
+        m.doc_string = (f"crackbot crack detector (crack map), input images [1,3,{s},{s}] RGB 0..1, "
+                        f"output crack_map [1,1,{c},{c}] probabilities")
         onnx.save(m, path)
         sess = ort.InferenceSession(path, providers=["CPUExecutionProvider"])
-        o = sess.run(["detections"], {"images": x.numpy()})[0]
+        o = sess.run(["crack_map"], {"images": x.numpy()})[0]
         with torch.no_grad():
             t = model(x).numpy()
-        assert o.shape == (1, num_outputs(s), 5), o.shape
-        print(f"{path}: output {o.shape}, max |ort - torch| = {np.abs(o - t).max():.2e} px/score, "
+        assert o.shape == (1, 1, c, c), o.shape
+        print(f"{path}: output {o.shape}, max |ort - torch| = {np.abs(o - t).max():.2e}, "
               f"{os.path.getsize(path) / 1e6:.2f} MB")
         paths.append(path)
     return paths
@@ -44,7 +47,7 @@ def export(ckpt: str, sizes, out_dir: str):
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
-    ap.add_argument("--ckpt", default=os.path.join(HERE, "runs", "train", "best.pt"))
+    ap.add_argument("--ckpt", default=os.path.join(HERE, "runs", "seg2", "best.pt"))
     ap.add_argument("--sizes", type=int, nargs="+", default=[320, 256, 416])
     ap.add_argument("--out", default=HERE)
     a = ap.parse_args()

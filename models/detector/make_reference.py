@@ -1,5 +1,5 @@
-"""Reference outputs for the Rust side: 3 val images (one per dataset) as PNG, their post-processed detections
-(threshold 0.05) from the 320 model via onnxruntime + contract.py, and a synthetic-input check per model size."""
+"""Reference outputs for the Rust side: 3 val images (one per dataset) as PNG, their letterboxed input checksums,
+crack maps and detections from the 320 model via onnxruntime + contract.py, and a synthetic-input check per size."""
 from __future__ import annotations
 
 import argparse
@@ -16,9 +16,8 @@ import contract  # noqa: E402
 from eval import ort_runner  # noqa: E402
 
 # The crack photos beside the clone (../shared/data/cracks from the repository root); CRACKS_DATA overrides.
-DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "../../../shared/data/cracks")))
+DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(HERE, "../../../shared/data/cracks")))
 DATASETS = ["crackforest", "uav75", "quaywall"]
-REF_THRESHOLD = 0.05
 
 
 def synthetic_input(size: int) -> np.ndarray:
@@ -34,11 +33,11 @@ def main():
     ap.add_argument("--out", default=os.path.join(HERE, "reference"))
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
-    run320, size = ort_runner(os.path.join(a.models, "crack-detector-320.onnx"))
+    run320, size = ort_runner(os.path.join(a.models, "crack-detector-320.onnx"), threads=1)
     assert size == 320
-    ref = {"contract": {"S": 320, "pad": 0.5, "threshold": REF_THRESHOLD, "nms_iou": contract.NMS_IOU,
+    ref = {"contract": {"S": 320, "pad": 0.5, "map_threshold": contract.MAP_THRESHOLD,
                         "max_det": contract.MAX_DETECTIONS,
-                        "note": "detections computed with onnxruntime on the PNG via contract.py"},
+                        "note": "crack maps and detections computed with onnxruntime on the PNG via contract.py"},
            "images": [], "synthetic": []}
     for ds in DATASETS:
         with open(os.path.join(DATA, ds, "val.json")) as f:
@@ -50,25 +49,28 @@ def main():
         img = np.asarray(Image.open(os.path.join(a.out, png)).convert("RGB"))  # round-trip (lossless)
         h, w = img.shape[:2]
         x, s = contract.letterbox(img, 320)
-        dets = contract.postprocess(run320(x), s, w, h, REF_THRESHOLD)
+        prob = run320(x)[0, 0]
+        dets = contract.map_to_detections(prob, w, h, 320)
         gts = [a_["bbox"] for a_ in coco["annotations"] if a_["image_id"] == im["id"]]
         ref["images"].append({
             "file": png, "dataset": ds, "source_file": f"{ds}/{im['file_name']}", "W": w, "H": h, "S": 320,
             "scale": s, "input_checksum": {"sum": float(x.astype(np.float64).sum()),
                                            "first8_row0_R": [float(v) for v in x[0, 0, 0, :8]]},
+            "map_sum": float(prob.astype(np.float64).sum()),
+            "map_cells_at_least_threshold": int((prob >= contract.MAP_THRESHOLD).sum()),
             "detections": [{"bbox": [d[0], d[1], d[2], d[3]], "score": d[4]} for d in dets],
             "ground_truth_xywh": gts})
-        print(f"{png}: {w}x{h}, {len(dets)} detections >= {REF_THRESHOLD}, top: {dets[:1]}")
+        print(f"{png}: {w}x{h}, {len(dets)} detections, top: {dets[:1]}")
     for S in (256, 320, 416):
-        run, size = ort_runner(os.path.join(a.models, f"crack-detector-{S}.onnx"))
-        out = run(synthetic_input(S))[0]
-        best = int(np.argmax(out[:, 4]))
+        run, size = ort_runner(os.path.join(a.models, f"crack-detector-{S}.onnx"), threads=1)
+        out = run(synthetic_input(S))[0, 0].reshape(-1)
+        best = int(np.argmax(out))
         ref["synthetic"].append({
-            "model": f"crack-detector-{S}.onnx", "S": S, "N": int(out.shape[0]),
+            "model": f"crack-detector-{S}.onnx", "S": S, "cells": S // contract.STRIDE,
             "input": "value(c,y,x) = ((c*7 + y*3 + x*5) % 17) / 16.0, float32, [1,3,S,S]",
-            "first_rows": [[float(v) for v in r] for r in out[:64]],
-            "max_score_index": best, "max_score_row": [float(v) for v in out[best]]})
-        print(f"synthetic S={S}: N={out.shape[0]}, max score row {best}: {out[best]}")
+            "first_values": [float(v) for v in out[:64]], "sum": float(out.astype(np.float64).sum()),
+            "max_index": best, "max_value": float(out[best])})
+        print(f"synthetic S={S}: sum {out.sum():.4f}, max {out[best]:.4f} at {best}")
     with open(os.path.join(a.out, "reference.json"), "w") as f:
         json.dump(ref, f, indent=1)
     print("wrote", os.path.join(a.out, "reference.json"))

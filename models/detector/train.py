@@ -1,12 +1,14 @@
-"""Train the crack detector from scratch on the three train splits (augmented on the fly).
+"""Train CrackSeg from scratch: real photos with masks (crackforest, uav75), quaywall's boxes (weak, box-level
+supervision) and the simulator's rendered plates with exact masks (`crackbot-lab sim detector-set`).
 
-Wall-clock-budgeted: the LR follows a cosine over --minutes; val_all mAP@[.5:.95] (pycocotools, through the
-contract pipeline) picks the best EMA checkpoint.
+Wall-clock budgeted: cosine LR over --minutes. The EMA weights are checkpointed; model selection uses the real val
+splits only (val_all mAP@0.5 through the box rule of seg_post.py), never the unseen rendered scenes.
 """
 from __future__ import annotations
 
 import argparse
 import copy
+import glob
 import json
 import math
 import os
@@ -16,121 +18,211 @@ import time
 import numpy as np
 import torch
 import torch.nn.functional as F
+from PIL import Image, ImageFilter
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from augment import Augmenter, load_photos  # noqa: E402
-from model import STRIDES, CrackDet  # noqa: E402
-import eval as ev  # noqa: E402
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from contract import letterbox, resize_bilinear  # noqa: E402
+from model import OUTPUT_STRIDE, CrackSeg  # noqa: E402
+from contract import map_to_detections  # noqa: E402
 
-# The crack photos beside the clone (../shared/data/cracks from the repository root); CRACKS_DATA overrides.
-DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "../../../shared/data/cracks")))
-RANGES = {16: (0, 192), 32: (64, 1e9)}  # max box side (canvas px) handled by each stride
-RADIUS = 2.5
+DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(HERE, "../../../shared/data/cracks")))
+REF_SIZE = 320  # the default input: training scales are jittered around its letterbox scale
 
 
-class AugStream(torch.utils.data.IterableDataset):
-    def __init__(self, ann, root, size, batch, seed):
-        self.ann, self.root, self.size, self.batch, self.seed = ann, root, size, batch, seed
+def load_rgb(path):
+    return np.asarray(Image.open(path).convert("RGB"))
+
+
+class Source:
+    """Images with either a dense mask (uint8 0/1, same size) or a list of boxes [x0,y0,x1,y1]."""
+
+    def __init__(self, name, items, weight):
+        self.name, self.items, self.weight = name, items, weight
+
+
+def real_sources(split="train"):
+    out = []
+    for ds in ("crackforest", "uav75"):
+        d = json.load(open(os.path.join(DATA, ds, f"{split}.json")))
+        items = []
+        for im in d["images"]:
+            img = load_rgb(os.path.join(DATA, ds, im["file_name"]))
+            m = (np.asarray(Image.open(os.path.join(DATA, ds, im["mask_file"])).convert("L")) > 0).astype(np.uint8)
+            items.append((img, m, None))
+        out.append(Source(ds, items, 1.0))
+    d = json.load(open(os.path.join(DATA, "quaywall", f"{split}.json")))
+    boxes = {}
+    for a in d["annotations"]:
+        x, y, w, h = a["bbox"]
+        boxes.setdefault(a["image_id"], []).append([x, y, x + w, y + h])
+    items = [(load_rgb(os.path.join(DATA, "quaywall", im["file_name"])), None,
+              np.array(boxes.get(im["id"], []), dtype=np.float32).reshape(-1, 4)) for im in d["images"]]
+    out.append(Source("quaywall", items, 1.0))
+    return out
+
+
+def sim_source(root):
+    ann = json.load(open(os.path.join(root, "annotations.json")))
+    items = []
+    for im in ann["images"]:
+        img = load_rgb(os.path.join(root, "images", os.path.basename(im["file_name"])))
+        m = (np.asarray(Image.open(os.path.join(root, im["mask_file"])).convert("L")) > 0).astype(np.uint8)
+        items.append((img, m, None))
+    return Source("sim", items, 1.0)
+
+
+def mask_to_canvas(mask, nw, nh):
+    """0/1 mask -> canvas-resolution 0/1 (a canvas pixel is crack if >= 25% of its area is)."""
+    m = Image.fromarray(mask * 255).resize((nw, nh), Image.BOX)
+    return (np.asarray(m) >= 64).astype(np.uint8)
+
+
+def sample(src, rng, crop):
+    """One augmented crop: (img float32 [crop,crop,3] 0..1, target u8 [c/2,c/2] (0/1/255=ignore),
+    valid f32 [c/2,c/2], boxes in target cells (weak) or None)."""
+    img, mask, boxes = src.items[rng.integers(len(src.items))]
+    h, w = img.shape[:2]
+    s = REF_SIZE / max(w, h) * math.exp(rng.uniform(math.log(0.7), math.log(1.45)))
+    nw, nh = max(1, int(w * s + 0.5)), max(1, int(h * s + 0.5))
+    im = resize_bilinear(img, nw, nh) / 255.0
+    if mask is not None:
+        m = mask_to_canvas(mask, nw, nh)
+    else:
+        m = None
+        bx = boxes * np.array([nw / w, nh / h, nw / w, nh / h], dtype=np.float32)
+    # random crop / placement on a crop x crop canvas (pad 0.5), offsets even so cells align
+    ox = int(rng.integers(0, max(nw - crop, 0) + 1)) // 2 * 2
+    oy = int(rng.integers(0, max(nh - crop, 0) + 1)) // 2 * 2
+    canvas = np.full((crop, crop, 3), 0.5, dtype=np.float32)
+    cm = np.zeros((crop, crop), dtype=np.uint8)
+    valid = np.zeros((crop, crop), dtype=np.float32)
+    pw, ph = min(crop, nw - ox), min(crop, nh - oy)
+    canvas[:ph, :pw] = im[oy:oy + ph, ox:ox + pw]
+    valid[:ph, :pw] = 1
+    if m is not None:
+        cm[:ph, :pw] = m[oy:oy + ph, ox:ox + pw]
+    else:
+        bx = bx - np.array([ox, oy, ox, oy], dtype=np.float32)
+        bx[:, [0, 2]] = bx[:, [0, 2]].clip(0, pw)
+        bx[:, [1, 3]] = bx[:, [1, 3]].clip(0, ph)
+        bx = bx[((bx[:, 2] - bx[:, 0]) >= 4) & ((bx[:, 3] - bx[:, 1]) >= 4)]
+    # photometric
+    if rng.random() < 0.2:
+        canvas[:ph, :pw] = canvas[:ph, :pw].mean(2, keepdims=True)
+    gain = rng.uniform(0.65, 1.35)
+    contrast = rng.uniform(0.7, 1.3)
+    mean = canvas[:ph, :pw].mean()
+    canvas[:ph, :pw] = ((canvas[:ph, :pw] - mean) * contrast + mean) * gain
+    canvas[:ph, :pw] *= rng.uniform(0.9, 1.1, size=3).astype(np.float32)
+    canvas = np.clip(canvas, 0, 1)
+    canvas[:ph, :pw] = np.clip(canvas[:ph, :pw], 1e-4, 1) ** rng.uniform(0.75, 1.35)
+    if rng.random() < 0.25:
+        pil = Image.fromarray((canvas * 255).astype(np.uint8)).filter(ImageFilter.GaussianBlur(rng.uniform(0.3, 1.0)))
+        canvas = np.asarray(pil).astype(np.float32) / 255.0
+    if rng.random() < 0.5:
+        canvas = canvas + rng.normal(0, rng.uniform(0.0, 0.03), canvas.shape).astype(np.float32)
+    canvas = np.clip(canvas, 0, 1).astype(np.float32)
+    # geometric (flips / transpose keep the padding as it is: apply to everything alike)
+    k = OUTPUT_STRIDE
+    tgt = cm.reshape(crop // k, k, crop // k, k).max((1, 3))
+    val = valid.reshape(crop // k, k, crop // k, k).max((1, 3))
+    weak = None
+    if m is None:
+        weak = bx / k
+    ops = (rng.random() < 0.5, rng.random() < 0.5, rng.random() < 0.5)
+    canvas, tgt, val, weak = geometric(canvas, tgt, val, weak, ops, crop // k)
+    return canvas, tgt, val, weak
+
+
+def geometric(img, tgt, val, weak, ops, n):
+    fx, fy, tr = ops
+    if fx:
+        img, tgt, val = img[:, ::-1], tgt[:, ::-1], val[:, ::-1]
+        if weak is not None:
+            weak = np.stack([n - weak[:, 2], weak[:, 1], n - weak[:, 0], weak[:, 3]], 1)
+    if fy:
+        img, tgt, val = img[::-1], tgt[::-1], val[::-1]
+        if weak is not None:
+            weak = np.stack([weak[:, 0], n - weak[:, 3], weak[:, 2], n - weak[:, 1]], 1)
+    if tr:
+        img, tgt, val = img.transpose(1, 0, 2), tgt.T, val.T
+        if weak is not None:
+            weak = weak[:, [1, 0, 3, 2]]
+    return (np.ascontiguousarray(img), np.ascontiguousarray(tgt), np.ascontiguousarray(val),
+            None if weak is None else weak.astype(np.float32))
+
+
+class Stream(torch.utils.data.IterableDataset):
+    def __init__(self, sim_root, batch, crop, seed, mix):
+        self.sim_root, self.batch, self.crop, self.seed, self.mix = sim_root, batch, crop, seed, mix
 
     def __iter__(self):
         info = torch.utils.data.get_worker_info()
         wid = info.id if info else 0
-        aug = Augmenter(load_photos(self.ann, self.root), self.size)
+        srcs = {s.name: s for s in real_sources("train")}
+        if self.sim_root:
+            srcs["sim"] = sim_source(self.sim_root)
+        names = [n for n in self.mix if n in srcs]
+        p = np.array([self.mix[n] for n in names], dtype=np.float64)
+        p /= p.sum()
         rng = np.random.default_rng([self.seed, wid])
         while True:
-            imgs, boxes = [], []
+            xs, ts, vs, weaks = [], [], [], []
             for _ in range(self.batch):
-                c, b = aug.sample(rng)
-                imgs.append(c)
-                boxes.append(b)
-            x = torch.from_numpy(np.stack(imgs)).permute(0, 3, 1, 2).contiguous()  # uint8
-            yield x, [torch.from_numpy(b) for b in boxes]
+                src = srcs[names[rng.choice(len(names), p=p)]]
+                x, t, v, wk = sample(src, rng, self.crop)
+                xs.append(x); ts.append(t); vs.append(v); weaks.append(wk)
+            x = torch.from_numpy(np.stack(xs)).permute(0, 3, 1, 2).contiguous()
+            yield x, torch.from_numpy(np.stack(ts)), torch.from_numpy(np.stack(vs)), weaks
 
 
-def giou(a, b):
-    ix0 = torch.max(a[:, 0], b[:, 0]); iy0 = torch.max(a[:, 1], b[:, 1])
-    ix1 = torch.min(a[:, 2], b[:, 2]); iy1 = torch.min(a[:, 3], b[:, 3])
-    inter = (ix1 - ix0).clamp(min=0) * (iy1 - iy0).clamp(min=0)
-    aa = (a[:, 2] - a[:, 0]) * (a[:, 3] - a[:, 1])
-    bb = (b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1])
-    union = aa + bb - inter + 1e-7
-    iou = inter / union
-    cx0 = torch.min(a[:, 0], b[:, 0]); cy0 = torch.min(a[:, 1], b[:, 1])
-    cx1 = torch.max(a[:, 2], b[:, 2]); cy1 = torch.max(a[:, 3], b[:, 3])
-    carea = (cx1 - cx0) * (cy1 - cy0) + 1e-7
-    return iou, iou - (carea - union) / carea
-
-
-def assign(centres, stride, gt):
-    """centres [M,2], gt [K,4] -> index of assigned gt per cell (-1 = negative)."""
-    M = centres.shape[0]
-    if gt.shape[0] == 0:
-        return torch.full((M,), -1, dtype=torch.long)
-    cx, cy = centres[:, 0:1], centres[:, 1:2]
-    gw, gh = gt[:, 2] - gt[:, 0], gt[:, 3] - gt[:, 1]
-    gcx, gcy = (gt[:, 0] + gt[:, 2]) / 2, (gt[:, 1] + gt[:, 3]) / 2
-    inside = (cx > gt[:, 0]) & (cx < gt[:, 2]) & (cy > gt[:, 1]) & (cy < gt[:, 3])
-    near = ((cx - gcx).abs() < RADIUS * stride) & ((cy - gcy).abs() < RADIUS * stride)
-    lo, hi = RANGES[stride]
-    m = torch.max(gw, gh)
-    in_range = (m >= lo) & (m <= hi)
-    cand = inside & near & in_range[None]
-    # always keep the cell that contains the box centre (thin boxes may contain no cell centre)
-    idx = ((gcy // stride).clamp(min=0) * 0).long()  # placeholder for shape
-    cand_centre = ((cx - gcx).abs() <= stride / 2) & ((cy - gcy).abs() <= stride / 2) & in_range[None]
-    cand = cand | cand_centre
-    area = (gw * gh)[None].expand(M, -1).clone()
-    area[~cand] = float("inf")
-    best_area, best = area.min(1)
-    best[torch.isinf(best_area)] = -1
-    del idx
-    return best
-
-
-def compute_loss(model, x, gts):
-    levels = model.decoded(x)
-    B = x.shape[0]
-    logits_all, tgt_all = [], []
-    pbox_list, gbox_list = [], []
-    for (logit, ltrb, c), stride in zip(levels, STRIDES):
-        boxes = torch.cat([c[None] - ltrb[..., :2], c[None] + ltrb[..., 2:]], -1)  # [B,M,4]
-        tgt = torch.zeros_like(logit)
-        for i in range(B):
-            a = assign(c, stride, gts[i])
-            pos = a >= 0
-            if pos.any():
-                pb = boxes[i][pos]
-                gb = gts[i][a[pos]]
-                iou, _ = giou(pb.detach(), gb)
-                tgt[i, pos] = iou.clamp(min=0.0).detach()
-                pbox_list.append(pb)
-                gbox_list.append(gb)
-        logits_all.append(logit.reshape(-1))
-        tgt_all.append(tgt.reshape(-1))
-    logits = torch.cat(logits_all)
-    tgt = torch.cat(tgt_all)
-    npos = max(1, sum(p.shape[0] for p in pbox_list))
-    # quality focal loss: BCE against the IoU target, modulated by |sigma - target|^2
-    p = torch.sigmoid(logits)
-    qfl = (F.binary_cross_entropy_with_logits(logits, tgt, reduction="none") * (p - tgt).abs().pow(2)).sum() / npos
-    if pbox_list:
-        _, g = giou(torch.cat(pbox_list), torch.cat(gbox_list))
-        lbox = (1 - g).mean()
-    else:
-        lbox = logits.sum() * 0
-    return qfl + 2.0 * lbox, qfl.item(), lbox.item(), npos
-
-
-@torch.no_grad()
-def evaluate_torch(model, coco, root, size):
-    model.eval()
-    run = lambda xx: model(torch.from_numpy(xx)).numpy()  # noqa: E731
-    res = ev.detect_all(run, coco, root, size)
-    return ev.coco_metrics(coco, res)
+def seg_loss(logits, tgt, valid, weaks):
+    """Dense samples: BCE (ignoring a one-cell band around cracks) + soft Dice. Weak (box) samples: MIL on the
+    top cells of each box, background BCE outside all boxes at reduced weight."""
+    lg = logits[:, 0]
+    B = lg.shape[0]
+    dense = torch.tensor([w is None for w in weaks])
+    t = tgt.float()
+    near = F.max_pool2d(t[:, None], 3, 1, 1)[:, 0]
+    w = valid * (1.0 - (near - t))  # ignore the band next to a crack (label imprecision)
+    w = torch.where(t > 0, 3.0 * valid, w)
+    bce = F.binary_cross_entropy_with_logits(lg, t, reduction="none")
+    total = lg.sum() * 0
+    if dense.any():
+        d = dense
+        lb = (bce[d] * w[d]).sum() / w[d].sum().clamp(min=1)
+        p = torch.sigmoid(lg[d]) * valid[d]
+        inter = (p * t[d]).sum((1, 2))
+        dice = 1 - (2 * inter + 1) / (p.sum((1, 2)) + t[d].sum((1, 2)) + 1)
+        total = total + lb + dice.mean()
+    mil_terms, bg_terms = [], []
+    for i in range(B):
+        if weaks[i] is None:
+            continue
+        inside = torch.zeros_like(lg[i], dtype=torch.bool)
+        for bx in weaks[i]:
+            x0, y0 = int(math.floor(bx[0])), int(math.floor(bx[1]))
+            x1, y1 = int(math.ceil(bx[2])), int(math.ceil(bx[3]))
+            if x1 - x0 < 1 or y1 - y0 < 1:
+                continue
+            inside[y0:y1, x0:x1] = True
+            cells = lg[i, y0:y1, x0:x1].reshape(-1)
+            k = max(1, int(0.5 * math.hypot(x1 - x0, y1 - y0)))
+            top = cells.topk(min(k, cells.numel())).values
+            mil_terms.append(F.binary_cross_entropy_with_logits(top, torch.ones_like(top)).reshape(1))
+        out = (~inside) & (valid[i] > 0)
+        if out.any():
+            bg_terms.append(0.3 * bce[i][out].mean().reshape(1))
+    if mil_terms:
+        total = total + torch.cat(mil_terms).mean()
+    if bg_terms:
+        total = total + torch.cat(bg_terms).mean()
+    return total
 
 
 class EMA:
-    def __init__(self, model, decay=0.998, tau=300):
+    def __init__(self, model, decay=0.998, tau=200):
         self.m = copy.deepcopy(model).eval()
         for p in self.m.parameters():
             p.requires_grad_(False)
@@ -148,92 +240,108 @@ class EMA:
                 v.copy_(msd[k])
 
 
+@torch.no_grad()
+def val_metrics(model, size=REF_SIZE):
+    """val_all mAP@0.5 (pycocotools) of the box rule at threshold 0.5, and pixel F1 at 0.5 on masked val."""
+    from pycocotools.coco import COCO
+    from pycocotools.cocoeval import COCOeval
+    import contextlib
+    import io
+    model.eval()
+    gt = json.load(open(os.path.join(DATA, "val_all.json")))
+    res = []
+    for im in gt["images"]:
+        img = load_rgb(os.path.join(DATA, im["file_name"]))
+        x, _ = letterbox(img, size)
+        prob = model(torch.from_numpy(x)).numpy()[0, 0]
+        for x0, y0, x1, y1, sc in map_to_detections(prob, im["width"], im["height"], size, threshold=0.5):
+            res.append({"image_id": im["id"], "category_id": 1, "bbox": [x0, y0, x1 - x0, y1 - y0], "score": sc})
+    with contextlib.redirect_stdout(io.StringIO()):
+        c = COCO()
+        c.dataset = gt
+        c.createIndex()
+        if not res:
+            return {"mAP50": 0.0, "mAP": 0.0, "AR100": 0.0}
+        d = c.loadRes(res)
+        e = COCOeval(c, d, "bbox")
+        e.evaluate(); e.accumulate(); e.summarize()
+    return {"mAP": float(e.stats[0]), "mAP50": float(e.stats[1]), "AR100": float(e.stats[8])}
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--minutes", type=float, default=38.0, help="wall-clock training budget")
-    ap.add_argument("--max-iters", type=int, default=0, help="optional iteration cap (0 = time only)")
-    ap.add_argument("--batch", type=int, default=16)
-    ap.add_argument("--size", type=int, default=320)
-    ap.add_argument("--lr", type=float, default=2e-3)
-    ap.add_argument("--eval-every", type=float, default=150.0, help="seconds between val evaluations")
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "runs", "train"))
+    ap.add_argument("--minutes", type=float, default=45.0)
+    ap.add_argument("--batch", type=int, default=12)
+    ap.add_argument("--crop", type=int, default=256)
+    ap.add_argument("--lr", type=float, default=3e-3)
+    ap.add_argument("--sim", default=os.environ.get("SIM_TRAIN", ""), help="folder of `crackbot-lab sim detector-set`")
+    ap.add_argument("--eval-every", type=float, default=420.0)
+    ap.add_argument("--out", default=os.path.join(HERE, "runs", "seg"))
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--init", default=None,
-                    help="start from this checkpoint's weights (a second stage: a warm restart of the cosine)")
+    ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--max-iters", type=int, default=0)
+    ap.add_argument("--init", default=None)
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
     os.makedirs(a.out, exist_ok=True)
-    with open(os.path.join(DATA, "val_all.json")) as f:
-        val = json.load(f)
-
-    model = CrackDet()
+    mix = {"crackforest": 0.25, "uav75": 0.25, "quaywall": 0.2, "sim": 0.3}
+    model = CrackSeg()
     if a.init:
         model.load_state_dict(torch.load(a.init, map_location="cpu")["model"])
-        print(f"initialised from {a.init}", flush=True)
     nparams = sum(p.numel() for p in model.parameters())
     print(f"params: {nparams}", flush=True)
     ema = EMA(model)
-    decay, no_decay = [], []
-    for n_, p in model.named_parameters():
-        (no_decay if p.ndim <= 1 else decay).append(p)
-    opt = torch.optim.AdamW([{"params": decay, "weight_decay": 5e-4}, {"params": no_decay, "weight_decay": 0}],
-                            lr=a.lr, betas=(0.9, 0.99))
-    ds = AugStream(os.path.join(DATA, "train_all.json"), DATA, a.size, a.batch, a.seed)
-    dl = torch.utils.data.DataLoader(ds, batch_size=None, num_workers=a.workers,
-                                     persistent_workers=a.workers > 0, prefetch_factor=4 if a.workers else None)
+    opt = torch.optim.AdamW(model.parameters(), lr=a.lr, weight_decay=1e-4)
+    ds = Stream(a.sim, a.batch, a.crop, a.seed, mix)
+    dl = torch.utils.data.DataLoader(ds, batch_size=None, num_workers=a.workers, persistent_workers=a.workers > 0,
+                                     prefetch_factor=4 if a.workers else None,
+                                     collate_fn=lambda b: b)
     budget = a.minutes * 60
     t0 = time.time()
     last_eval = t0
-    best = {"mAP": -1}
+    best = {"mAP50": -1.0}
     log = open(os.path.join(a.out, "log.jsonl"), "a")
     it = 0
-    warm = 50 if a.init else 150
-    for x, gts in dl:
+    for x, t, v, weaks in dl:
         el = time.time() - t0
         prog = min(1.0, el / budget)
-        lr = a.lr * min(1.0, (it + 1) / warm) * (0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * prog)))
+        lr = a.lr * min(1.0, (it + 1) / 100) * (0.02 + 0.98 * 0.5 * (1 + math.cos(math.pi * prog)))
         for g in opt.param_groups:
             g["lr"] = lr
         model.train()
-        x = x.float() / 255.0
-        gts = [g.float() for g in gts]
-        loss, lq, lb, npos = compute_loss(model, x, gts)
+        loss = seg_loss(model.logits(x), t, v, weaks)
         opt.zero_grad(set_to_none=True)
         loss.backward()
-        torch.nn.utils.clip_grad_norm_(model.parameters(), 10.0)
+        torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
         opt.step()
         ema.update(model)
         it += 1
-        if it % 20 == 0:
-            rec = {"it": it, "t": round(el, 1), "lr": lr, "loss": loss.item(), "qfl": lq, "giou": lb, "npos": npos}
+        if it % 25 == 0:
+            rec = {"it": it, "t": round(el, 1), "lr": round(lr, 6), "loss": round(loss.item(), 4)}
             print(json.dumps(rec), flush=True)
             log.write(json.dumps(rec) + "\n"); log.flush()
         done = el >= budget or (a.max_iters and it >= a.max_iters)
         if time.time() - last_eval >= a.eval_every or done:
             te = time.time()
-            m = evaluate_torch(ema.m, val, DATA, a.size)
+            m = val_metrics(ema.m)
             last_eval = time.time()
-            rec = {"it": it, "t": round(el, 1), "eval_s": round(last_eval - te, 1), "val_all": {k: m[k] for k in ("mAP", "mAP50", "AR100")}}
-            improved = (m["mAP"], m["mAP50"]) > (best.get("mAP", -1), best.get("mAP50", -1))
-            if improved:
-                best = {"mAP": m["mAP"], "mAP50": m["mAP50"], "AR100": m["AR100"], "it": it, "t": round(el, 1)}
-                torch.save({"model": ema.m.state_dict(), "it": it, "t": el, "metrics": m, "params": nparams},
-                           os.path.join(a.out, "best.pt"))
-            torch.save({"model": ema.m.state_dict(), "it": it, "t": el, "metrics": m, "params": nparams},
-                       os.path.join(a.out, "last.pt"))
+            rec = {"it": it, "t": round(el, 1), "eval_s": round(last_eval - te, 1), "val_all": m}
+            ck = {"model": ema.m.state_dict(), "it": it, "t": el, "metrics": m, "params": nparams}
+            if (m["mAP50"], m["AR100"]) > (best["mAP50"], best.get("AR100", -1)):
+                best = dict(m, it=it, t=round(el, 1))
+                torch.save(ck, os.path.join(a.out, "best.pt"))
+            torch.save(ck, os.path.join(a.out, "last.pt"))
             rec["best"] = best
             print(json.dumps(rec), flush=True)
             log.write(json.dumps(rec) + "\n"); log.flush()
         if done:
             break
-    summary = {"iterations": it, "wall_s": round(time.time() - t0, 1), "batch": a.batch, "size": a.size,
+    summary = {"iterations": it, "wall_s": round(time.time() - t0, 1), "batch": a.batch, "crop": a.crop,
                "images_seen": it * a.batch, "best": best, "params": nparams, "minutes_budget": a.minutes,
-               "lr": a.lr, "seed": a.seed, "init": a.init}
-    with open(os.path.join(a.out, "summary.json"), "w") as f:
-        json.dump(summary, f, indent=1)
+               "lr": a.lr, "seed": a.seed, "mix": mix, "sim": a.sim, "threads": a.threads}
+    json.dump(summary, open(os.path.join(a.out, "summary.json"), "w"), indent=1)
     print("summary:", json.dumps(summary), flush=True)
 
 

@@ -108,6 +108,38 @@ pub fn eval_detector(args: EvalDetectorArgs) -> Result<()> {
     for (name, v) in CocoMetrics::NAMES.iter().zip(report.metrics.stats()) {
         println!("  {name:<10} {v:.4}");
     }
+    for p in &report.pixel {
+        println!(
+            "  pixels, tolerance {} px ({} masks): ODS F1 {:.3} (P {:.3}, R {:.3} at {:.2}), OIS F1 {:.3}, at 0.5: F1 {:.3}",
+            p.tolerance_px,
+            p.images,
+            p.ods.f1,
+            p.ods.precision,
+            p.ods.recall,
+            p.ods.threshold,
+            p.ois_f1,
+            p.at_half.f1
+        );
+    }
+    if let Some(s) = &report.scene {
+        println!(
+            "  rendered scenes: {}/{} cracks found ({:.1}%; {} by IoU ≥ 0.5 alone), {}/{} decoys proposed, {} other detections",
+            s.found,
+            s.cracks,
+            100.0 * s.recall,
+            s.found_by_iou,
+            s.decoys_proposed,
+            s.decoys,
+            s.other_detections
+        );
+        for b in &s.by_width {
+            let hi = b.up_to_mm.map_or("∞".to_string(), |h| format!("{h}"));
+            println!(
+                "    width ({}, {hi}] mm: {}/{} found",
+                b.above_mm, b.found, b.cracks
+            );
+        }
+    }
     Ok(())
 }
 

@@ -6,8 +6,13 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::coco::{detect_dataset, evaluate, CocoDataset, CocoMetrics, CocoResult, Progress};
+use crate::coco::{
+    detect_dataset_with_maps, evaluate, CocoDataset, CocoImage, CocoMetrics, CocoResult, Progress,
+};
+use crate::crack_map::CrackMap;
+use crate::pixel::{PixelEvaluator, PixelMetrics};
 use crate::preprocess::PostprocessParams;
+use crate::scene_recall::{scene_recall, SceneRecall, SceneTruth};
 use crate::{Detection, Detector, VisionError};
 
 /// Post-processing for mAP: every candidate down to a score of 0.001, as COCO evaluations do.
@@ -52,6 +57,39 @@ impl Detector for Timed<'_> {
         self.ms.push(started.elapsed().as_secs_f64() * 1e3);
         out
     }
+    fn detect_with_map(
+        &mut self,
+        image: &image::RgbImage,
+    ) -> Result<(Vec<Detection>, Option<CrackMap>), VisionError> {
+        let started = Instant::now();
+        let out = self.inner.detect_with_map(image);
+        self.ms.push(started.elapsed().as_secs_f64() * 1e3);
+        out
+    }
+}
+
+/// Pixel tolerances the crack map is scored at: 2 px (the usual figure for CrackForest) and 5 px.
+pub const PIXEL_TOLERANCES_PX: [f64; 2] = [2.0, 5.0];
+
+/// Reads a crack mask (any image; non-zero luma is crack), checking its size.
+fn read_mask(path: &Path, width: u32, height: u32) -> Result<Vec<bool>, VisionError> {
+    let mask = image::open(path)
+        .map_err(|e| VisionError::Image {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?
+        .to_luma8();
+    if mask.dimensions() != (width, height) {
+        return Err(VisionError::Image {
+            path: path.to_path_buf(),
+            message: format!(
+                "mask is {}×{} but its image is {width}×{height}",
+                mask.width(),
+                mask.height()
+            ),
+        });
+    }
+    Ok(mask.as_raw().iter().map(|&v| v > 0).collect())
 }
 
 /// A COCO ground truth, the folder of its images and the category to report.
@@ -65,6 +103,8 @@ pub struct Benchmark {
     pub root: PathBuf,
     /// The category detections are reported as: the only one, or the one named `crack`.
     pub category: u64,
+    /// Every feature of every frame, for rendered frames (`features.json` beside the COCO file).
+    pub scene_truth: Option<SceneTruth>,
 }
 
 /// One run of a detector over a [`Benchmark`].
@@ -78,6 +118,12 @@ pub struct BenchmarkRun {
     pub metrics: CocoMetrics,
     /// Median milliseconds of one `detect` call (image decoding excluded).
     pub median_ms: f64,
+    /// Pixel-level metrics of the crack map at each of [`PIXEL_TOLERANCES_PX`], over the images
+    /// with a `mask_file` (empty for detectors without a map, or without masks).
+    pub pixel: Vec<PixelMetrics>,
+    /// Cracks found and decoys proposed at the `detect` threshold (rendered frames with a
+    /// `features.json`).
+    pub scene: Option<SceneRecall>,
 }
 
 impl Benchmark {
@@ -105,11 +151,18 @@ impl Benchmark {
                 .map(|c| c.id)
                 .ok_or_else(|| err("several categories and none named `crack`"))?,
         };
+        let features = coco.with_file_name("features.json");
+        let scene_truth = if features.is_file() {
+            Some(SceneTruth::load(&features)?)
+        } else {
+            None
+        };
         Ok(Self {
             coco: coco.to_path_buf(),
             gt,
             root,
             category,
+            scene_truth,
         })
     }
 
@@ -121,13 +174,47 @@ impl Benchmark {
         progress: impl FnMut(&Progress<'_>),
     ) -> Result<BenchmarkRun, VisionError> {
         let mut timed = Timed::new(detector);
-        let results = detect_dataset(&mut timed, &self.gt, &self.root, self.category, progress)?;
+        let mut pixel: Vec<PixelEvaluator> = PIXEL_TOLERANCES_PX
+            .iter()
+            .map(|&t| PixelEvaluator::new(t))
+            .collect::<Result<_, _>>()?;
+        let root = self.root.clone();
+        let on_map = |image: &CocoImage, map: &CrackMap| -> Result<(), VisionError> {
+            let Some(mask_file) = &image.mask_file else {
+                return Ok(());
+            };
+            let truth = read_mask(&root.join(mask_file), image.width, image.height)?;
+            let prob = map.to_image();
+            for e in &mut pixel {
+                e.add(&prob, &truth, image.width as usize, image.height as usize)?;
+            }
+            Ok(())
+        };
+        let results = detect_dataset_with_maps(
+            &mut timed,
+            &self.gt,
+            &self.root,
+            self.category,
+            progress,
+            on_map,
+        )?;
         let metrics = evaluate(&self.gt, &results)?;
+        let scene = match &self.scene_truth {
+            Some(truth) => Some(scene_recall(
+                &self.gt,
+                truth,
+                &results,
+                PostprocessParams::default().score_threshold,
+            )?),
+            None => None,
+        };
         Ok(BenchmarkRun {
+            scene,
             detector: timed.name(),
             median_ms: timed.median_ms(),
             results,
             metrics,
+            pixel: pixel.iter().filter_map(PixelEvaluator::finish).collect(),
         })
     }
 }
@@ -152,6 +239,12 @@ pub struct EvalReport {
     pub ms_per_image: f64,
     /// What `ms_per_image` measures.
     pub ms_per_image_is: &'static str,
+    /// Pixel-level precision/recall/F1 of the crack map where the ground truth has masks.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pixel: Vec<PixelMetrics>,
+    /// Cracks found and decoys proposed, on rendered frames with a `features.json`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scene: Option<SceneRecall>,
 }
 
 impl EvalReport {
@@ -166,6 +259,8 @@ impl EvalReport {
             detections: run.results.len(),
             ms_per_image: run.median_ms,
             ms_per_image_is: "median of one detect call, image decoding excluded",
+            pixel: run.pixel.clone(),
+            scene: run.scene.clone(),
         }
     }
 }
@@ -186,6 +281,7 @@ mod tests {
             Ok(vec![Detection {
                 bbox: crate::BoundingBox::from_xywh(0.0, 0.0, w as f32, h as f32),
                 score: 0.9,
+                shape: None,
             }])
         }
     }

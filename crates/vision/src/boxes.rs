@@ -82,12 +82,27 @@ impl BoundingBox {
 }
 
 /// One candidate crack.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Detection {
     /// Where, in image pixels.
     pub bbox: BoundingBox,
     /// Confidence in `[0, 1]`.
     pub score: f32,
+    /// Where the crack runs inside the box (detectors that predict a crack map; `None` for box
+    /// detectors).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape: Option<crate::crack_map::CrackShape>,
+}
+
+impl Detection {
+    /// A detection with a box and a score only.
+    pub fn boxed(bbox: BoundingBox, score: f32) -> Self {
+        Self {
+            bbox,
+            score,
+            shape: None,
+        }
+    }
 }
 
 /// Greedy non-maximum suppression: keeps detections best score first, dropping any whose IoU with
@@ -118,6 +133,7 @@ pub(crate) fn det(x0: f32, y0: f32, x1: f32, y1: f32, score: f32) -> Detection {
     Detection {
         bbox: BoundingBox { x0, y0, x1, y1 },
         score,
+        shape: None,
     }
 }
 

@@ -526,6 +526,7 @@ fn detect(image: &image::RgbImage, p: &ClassicalParams) -> Vec<Detection> {
                     y1: (s.y1 + 1) as f32,
                 },
                 score: score as f32,
+                shape: None,
             })
         })
         .collect();
@@ -582,7 +583,7 @@ mod tests {
             assert_eq!(det.name(), "classical");
             let found = det.detect(&img).unwrap();
             assert!(!found.is_empty(), "seed {seed}: nothing found");
-            let best = found[0];
+            let best = found[0].clone();
             assert!(
                 best.bbox.iou(&truth) > 0.5,
                 "seed {seed}: {best:?} vs {truth:?} (all {found:?})"

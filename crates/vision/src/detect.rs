@@ -42,6 +42,21 @@ pub struct DetectionReport {
     /// Frames the detection was seen in (fused detections only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frames_seen: Option<usize>,
+    /// The crack's main axis, its two ends in pixels (detectors with a crack map).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis_px: Option<[[f32; 2]; 2]>,
+    /// The crack's centre line in pixels, end to end (detectors with a crack map).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub polyline_px: Option<Vec<[f32; 2]>>,
+    /// The main axis on the surface, mm (with a homography that maps both ends).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis_mm: Option<[[f64; 2]; 2]>,
+    /// The centre line on the surface, mm (with a homography that maps every point).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub polyline_mm: Option<Vec<[f64; 2]>>,
+    /// Length of the centre line on the surface, mm.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length_mm: Option<f64>,
 }
 
 /// One image of a [`DetectReport`].
@@ -122,11 +137,31 @@ pub fn detect_images(
             .as_ref()
             .and_then(|h| h.pixel_to_surface([f64::from(cx), f64::from(cy)]).ok())
     };
-    let report_of = |d: &Detection, frames_seen: Option<usize>| DetectionReport {
-        bbox: [d.bbox.x0, d.bbox.y0, d.bbox.x1, d.bbox.y1],
-        score: d.score,
-        centre_mm: to_mm(d),
-        frames_seen,
+    // Points of the crack's course on the surface: all of them, or none.
+    let points_mm = |pts: &[[f32; 2]]| -> Option<Vec<[f64; 2]>> {
+        let h = config.homography.as_ref()?;
+        pts.iter()
+            .map(|p| h.pixel_to_surface([f64::from(p[0]), f64::from(p[1])]).ok())
+            .collect()
+    };
+    let report_of = |d: &Detection, frames_seen: Option<usize>| {
+        let shape = d.shape.as_ref();
+        let polyline_mm = shape.and_then(|s| points_mm(&s.polyline));
+        DetectionReport {
+            bbox: [d.bbox.x0, d.bbox.y0, d.bbox.x1, d.bbox.y1],
+            score: d.score,
+            centre_mm: to_mm(d),
+            frames_seen,
+            axis_px: shape.map(|s| s.axis),
+            polyline_px: shape.map(|s| s.polyline.clone()),
+            axis_mm: shape.and_then(|s| points_mm(&s.axis)).map(|a| [a[0], a[1]]),
+            length_mm: polyline_mm.as_ref().map(|p| {
+                p.windows(2)
+                    .map(|s| (s[1][0] - s[0][0]).hypot(s[1][1] - s[0][1]))
+                    .sum()
+            }),
+            polyline_mm,
+        }
     };
     let fused = config.fuse.as_ref().map(|params| {
         let dets: Vec<Vec<Detection>> = frames.iter().map(|f| f.2.clone()).collect();
@@ -175,7 +210,8 @@ pub fn detect_images(
     })
 }
 
-/// Draws a 3-pixel rectangle outline of `d`'s box (clipped to the image).
+/// Draws a 3-pixel rectangle outline of `d`'s box (clipped to the image), and the crack's
+/// centre line where the detector gives one.
 pub fn draw_box(img: &mut image::RgbImage, d: &Detection, colour: [u8; 3]) {
     let (w, h) = (img.width() as i64, img.height() as i64);
     if w == 0 || h == 0 || !d.bbox.is_finite() {
@@ -200,6 +236,32 @@ pub fn draw_box(img: &mut image::RgbImage, d: &Detection, colour: [u8; 3]) {
             }
         }
     }
+    draw_course(img, d);
+}
+
+/// Colour of a crack's centre line in annotated images.
+pub const COURSE_COLOUR: [u8; 3] = [255, 230, 0];
+
+/// Draws the crack's centre line of `d` (one pixel wide), where the detector gives one.
+fn draw_course(img: &mut image::RgbImage, d: &Detection) {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    if let Some(shape) = &d.shape {
+        for seg in shape.polyline.windows(2) {
+            let (a, b) = (seg[0], seg[1]);
+            let steps = ((b[0] - a[0]).abs().max((b[1] - a[1]).abs()).ceil() as usize).max(1);
+            for k in 0..=steps {
+                let t = k as f32 / steps as f32;
+                let (x, y) = (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
+                if !(x.is_finite() && y.is_finite()) {
+                    continue;
+                }
+                let (x, y) = (x.round() as i64, y.round() as i64);
+                if (0..w).contains(&x) && (0..h).contains(&y) {
+                    img.put_pixel(x as u32, y as u32, image::Rgb(COURSE_COLOUR));
+                }
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -217,13 +279,79 @@ mod tests {
                 Detection {
                     bbox: crate::BoundingBox::from_xywh(2.0, 2.0, 4.0, 4.0),
                     score: 0.8,
+                    shape: None,
                 },
                 Detection {
                     bbox: crate::BoundingBox::from_xywh(10.0, 1.0, 3.0, 3.0),
                     score: 0.1,
+                    shape: None,
                 },
             ])
         }
+    }
+
+    /// One crack with its centre line, from (2, 2) over (6, 2) to (6, 6).
+    struct Shaped;
+    impl Detector for Shaped {
+        fn name(&self) -> String {
+            "shaped".into()
+        }
+        fn detect(&mut self, _image: &image::RgbImage) -> Result<Vec<Detection>, VisionError> {
+            Ok(vec![Detection {
+                bbox: crate::BoundingBox::from_xywh(2.0, 2.0, 4.0, 4.0),
+                score: 0.9,
+                shape: Some(crate::crack_map::CrackShape {
+                    axis: [[2.0, 2.0], [6.0, 6.0]],
+                    polyline: vec![[2.0, 2.0], [6.0, 2.0], [6.0, 6.0]],
+                    length_px: 8.0,
+                }),
+            }])
+        }
+    }
+
+    #[test]
+    fn the_crack_course_is_reported_in_pixels_and_millimetres_and_drawn() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = dir.path().join("f.png");
+        image::RgbImage::new(16, 8).save(&img).unwrap();
+        let config = DetectConfig {
+            threshold: 0.5,
+            homography: Some(
+                Homography::from_matrix([[0.5, 0.0, 1.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]])
+                    .unwrap(),
+            ),
+            fuse: None,
+            annotate: Some(dir.path().join("out")),
+        };
+        let r = detect_images(&mut Shaped, &[img], &config).unwrap();
+        let d = &r.images[0].detections[0];
+        assert_eq!(d.polyline_px.as_ref().unwrap().len(), 3);
+        assert_eq!(d.axis_px, Some([[2.0, 2.0], [6.0, 6.0]]));
+        let mm = d.polyline_mm.as_ref().unwrap();
+        for (got, want) in mm.iter().zip([[2.0, 1.0], [4.0, 1.0], [4.0, 3.0]]) {
+            assert!(
+                (got[0] - want[0]).abs() < 1e-9 && (got[1] - want[1]).abs() < 1e-9,
+                "{mm:?}"
+            );
+        }
+        assert!((d.length_mm.unwrap() - 4.0).abs() < 1e-9);
+        assert!(d.axis_mm.is_some());
+        let drawn = image::open(&r.annotated[0]).unwrap().to_rgb8();
+        assert_eq!(drawn.get_pixel(4, 2).0, COURSE_COLOUR);
+        assert_eq!(drawn.get_pixel(6, 4).0, COURSE_COLOUR);
+        assert_eq!(drawn.get_pixel(4, 4).0, DETECTION_COLOUR);
+        // Without a homography: pixels only.
+        let r = detect_images(
+            &mut Shaped,
+            &[dir.path().join("f.png")],
+            &DetectConfig {
+                threshold: 0.5,
+                ..DetectConfig::default()
+            },
+        )
+        .unwrap();
+        let d = &r.images[0].detections[0];
+        assert!(d.polyline_px.is_some() && d.polyline_mm.is_none() && d.length_mm.is_none());
     }
 
     #[test]

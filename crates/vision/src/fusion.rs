@@ -75,7 +75,7 @@ pub fn fuse(frames: &[Vec<Detection>], params: &FusionParams) -> Vec<FusedDetect
     let mut all: Vec<(usize, usize, Detection)> = frames
         .iter()
         .enumerate()
-        .flat_map(|(f, dets)| dets.iter().enumerate().map(move |(i, d)| (f, i, *d)))
+        .flat_map(|(f, dets)| dets.iter().enumerate().map(move |(i, d)| (f, i, d.clone())))
         .filter(|(_, _, d)| d.bbox.is_finite() && d.score.is_finite() && d.score >= 0.0)
         .collect();
     // Stable: ties keep frame order, then order within the frame.
@@ -137,6 +137,12 @@ pub fn fuse(frames: &[Vec<Detection>], params: &FusionParams) -> Vec<FusedDetect
                         y1: mean(|b| b.y1),
                     },
                     score: (total / n_frames as f64) as f32,
+                    // The crack's course from the member the fused score trusts most.
+                    shape: c
+                        .members
+                        .iter()
+                        .max_by(|a, b| a.2.score.total_cmp(&b.2.score))
+                        .and_then(|(_, _, d)| d.shape.clone()),
                 },
                 frames_seen: c.members.len(),
                 members: c.members.iter().map(|&(f, i, _)| (f, i)).collect(),

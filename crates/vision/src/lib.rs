@@ -6,8 +6,12 @@
 //!   - [`classical`]: an edge-based baseline (no model, no runtime).
 //! * [`preprocess`]: the letterbox contract shared with the model (`models/detector/MODEL_CARD.md`).
 //! * [`boxes`]: boxes, IoU, non-maximum suppression.
+//! * [`crack_map`]: detections from a segmentation detector's crack map (boxes by the crack
+//!   datasets' rule, each crack's main axis and centre line).
 //! * [`coco`]: COCO files and the COCO detection metrics (mAP@[.5:.95], mAP@0.5, AR@100), as
 //!   pycocotools computes them.
+//! * [`pixel`]: pixel-level precision, recall and F1 (ODS, OIS) of a crack map against a mask.
+//! * [`scene_recall`]: cracks found and decoys proposed on rendered plates (`features.json`).
 //! * [`fusion`]: combining detections over several frames of one view.
 //! * [`homography`]: pixel ↔ surface millimetres from point pairs (normalised DLT, RANSAC), its
 //!   calibration file, and the point-pairs CSV reader.
@@ -21,6 +25,7 @@ pub mod benchmark;
 pub mod boxes;
 pub mod classical;
 pub mod coco;
+pub mod crack_map;
 pub mod detect;
 mod error;
 pub mod fusion;
@@ -28,7 +33,9 @@ pub mod homography;
 pub mod model;
 #[cfg(feature = "onnx")]
 pub mod onnx;
+pub mod pixel;
 pub mod preprocess;
+pub mod scene_recall;
 #[cfg(feature = "research")]
 pub mod tradeoff;
 
@@ -43,4 +50,13 @@ pub trait Detector {
     /// Candidate cracks in `image`, boxes in the image's pixel coordinates (x right, y down, origin
     /// at the top-left corner of the top-left pixel), scores in `[0, 1]`, best first.
     fn detect(&mut self, image: &image::RgbImage) -> Result<Vec<Detection>, VisionError>;
+
+    /// [`Detector::detect`], with the crack map behind the detections for detectors that
+    /// predict one (pixel-level evaluation); the default has no map.
+    fn detect_with_map(
+        &mut self,
+        image: &image::RgbImage,
+    ) -> Result<(Vec<Detection>, Option<crack_map::CrackMap>), VisionError> {
+        Ok((self.detect(image)?, None))
+    }
 }

@@ -17,8 +17,29 @@ use std::sync::OnceLock;
 use ort::session::Session;
 use ort::value::TensorRef;
 
+use crate::crack_map::{map_detections, CrackMap, MAP_STRIDE};
 use crate::preprocess::{letterbox, postprocess, Letterbox, PostprocessParams};
 use crate::{Detection, Detector, VisionError};
+
+/// What a model returns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelOutput {
+    /// `detections` `[1, N, 5]`: boxes and scores (the box detector).
+    Boxes,
+    /// `crack_map` `[1, 1, S/2, S/2]`: crack probabilities (the segmentation detector; see
+    /// [`crate::crack_map`]).
+    CrackMap,
+}
+
+impl ModelOutput {
+    /// The output tensor's name.
+    pub fn tensor_name(self) -> &'static str {
+        match self {
+            ModelOutput::Boxes => "detections",
+            ModelOutput::CrackMap => "crack_map",
+        }
+    }
+}
 
 /// The ONNX Runtime version this build expects (the `api-31` feature of `ort` refuses older ones).
 pub const ORT_VERSION: &str = "1.31.1";
@@ -110,6 +131,7 @@ fn environment() -> Result<&'static ort::environment::Environment, VisionError> 
 pub struct OnnxDetector {
     session: Session,
     size: usize,
+    output: ModelOutput,
     params: PostprocessParams,
     name: String,
 }
@@ -119,14 +141,15 @@ impl std::fmt::Debug for OnnxDetector {
         f.debug_struct("OnnxDetector")
             .field("name", &self.name)
             .field("size", &self.size)
+            .field("output", &self.output)
             .field("params", &self.params)
             .finish()
     }
 }
 
 impl OnnxDetector {
-    /// Loads `model` (one input `images` `[1, 3, S, S]` f32, one output `detections` `[1, N, 5]`
-    /// f32), running it on `threads` intra-op threads.
+    /// Loads `model` (one input `images` `[1, 3, S, S]` f32; an output `detections` `[1, N, 5]`
+    /// or `crack_map` `[1, 1, S/2, S/2]` f32), running it on `threads` intra-op threads.
     pub fn load(
         model: &Path,
         params: PostprocessParams,
@@ -150,19 +173,25 @@ impl OnnxDetector {
                 inputs.iter().map(|i| i.name()).collect::<Vec<_>>()
             )));
         }
-        if outputs.is_empty() || outputs[0].name() != "detections" {
-            return Err(fail(&format!(
-                "expected an output named `detections`, found {:?}",
-                outputs.iter().map(|o| o.name()).collect::<Vec<_>>()
-            )));
-        }
+        let output = match outputs.first().map(|o| o.name()) {
+            Some("detections") => ModelOutput::Boxes,
+            Some("crack_map") => ModelOutput::CrackMap,
+            _ => {
+                return Err(fail(&format!(
+                    "expected an output named `detections` (boxes) or `crack_map` (a crack map), found {:?}",
+                    outputs.iter().map(|o| o.name()).collect::<Vec<_>>()
+                )))
+            }
+        };
         let shape: Vec<i64> = inputs[0]
             .dtype()
             .tensor_shape()
             .map(|s| s.iter().copied().collect())
             .unwrap_or_default();
         let size = match shape.as_slice() {
-            [1, 3, h, w] if h == w && *h > 0 => *h as usize,
+            [1, 3, h, w] if h == w && *h > 0 && (*h as usize).is_multiple_of(MAP_STRIDE) => {
+                *h as usize
+            }
             _ => {
                 return Err(fail(&format!(
                     "input `images` has shape {shape:?}, expected [1, 3, S, S] with a fixed S"
@@ -176,9 +205,15 @@ impl OnnxDetector {
         Ok(Self {
             session,
             size,
+            output,
             params,
             name: format!("onnx:{stem}"),
         })
+    }
+
+    /// What the model returns.
+    pub fn output(&self) -> ModelOutput {
+        self.output
     }
 
     /// The model's input side `S` in pixels.
@@ -196,8 +231,8 @@ impl OnnxDetector {
         self.params = params;
     }
 
-    /// Runs the model on an input tensor (`3·S·S` values, NCHW) and returns the raw `detections`
-    /// rows (`N × 5`).
+    /// Runs the model on an input tensor (`3·S·S` values, NCHW) and returns its output: the raw
+    /// `detections` rows (`N × 5`) of a box model, or the `(S/2)²` cells of a crack map.
     pub fn run_tensor(&mut self, tensor: &[f32]) -> Result<Vec<f32>, VisionError> {
         let s = self.size;
         if tensor.len() != 3 * s * s {
@@ -206,25 +241,46 @@ impl OnnxDetector {
                 tensor.len()
             )));
         }
-        let fail = |e: ort::Error| VisionError::Runtime(format!("{}: {e}", self.name));
-        let input = TensorRef::from_array_view(([1usize, 3, s, s], tensor)).map_err(fail)?;
         let name = self.name.clone();
         let fail = |e: ort::Error| VisionError::Runtime(format!("{name}: {e}"));
+        let input = TensorRef::from_array_view(([1usize, 3, s, s], tensor)).map_err(fail)?;
         let outputs = self
             .session
             .run(ort::inputs!["images" => input])
             .map_err(fail)?;
+        let tensor_name = self.output.tensor_name();
         let out = outputs
-            .get("detections")
-            .ok_or_else(|| VisionError::Runtime(format!("{name}: no `detections` output")))?;
+            .get(tensor_name)
+            .ok_or_else(|| VisionError::Runtime(format!("{name}: no `{tensor_name}` output")))?;
         let (shape, data) = out.try_extract_tensor::<f32>().map_err(fail)?;
-        if shape.len() != 3 || shape[2] != 5 {
+        let shape: Vec<i64> = shape.iter().copied().collect();
+        let cells = (s / MAP_STRIDE) as i64;
+        let ok = match self.output {
+            ModelOutput::Boxes => shape.len() == 3 && shape[2] == 5,
+            ModelOutput::CrackMap => shape == [1, 1, cells, cells],
+        };
+        if !ok {
+            let want = match self.output {
+                ModelOutput::Boxes => "[1, N, 5]".to_string(),
+                ModelOutput::CrackMap => format!("[1, 1, {cells}, {cells}]"),
+            };
             return Err(VisionError::Runtime(format!(
-                "{name}: `detections` has shape {:?}, expected [1, N, 5]",
-                shape.iter().collect::<Vec<_>>()
+                "{name}: `{tensor_name}` has shape {shape:?}, expected {want}"
             )));
         }
         Ok(data.to_vec())
+    }
+
+    /// The crack map of `image` (crack-map models only).
+    pub fn crack_map(&mut self, image: &image::RgbImage) -> Result<CrackMap, VisionError> {
+        if self.output != ModelOutput::CrackMap {
+            return Err(VisionError::Invalid(format!(
+                "{} returns boxes, not a crack map",
+                self.name
+            )));
+        }
+        let (tensor, lb) = self.preprocess(image)?;
+        CrackMap::new(self.run_tensor(&tensor)?, lb)
     }
 
     /// Letterboxes `image` for this model (see [`crate::preprocess`]).
@@ -242,8 +298,21 @@ impl Detector for OnnxDetector {
     }
 
     fn detect(&mut self, image: &image::RgbImage) -> Result<Vec<Detection>, VisionError> {
+        Ok(self.detect_with_map(image)?.0)
+    }
+
+    fn detect_with_map(
+        &mut self,
+        image: &image::RgbImage,
+    ) -> Result<(Vec<Detection>, Option<CrackMap>), VisionError> {
         let (tensor, lb) = self.preprocess(image)?;
-        let rows = self.run_tensor(&tensor)?;
-        postprocess(&rows, &lb, &self.params)
+        let out = self.run_tensor(&tensor)?;
+        match self.output {
+            ModelOutput::Boxes => Ok((postprocess(&out, &lb, &self.params)?, None)),
+            ModelOutput::CrackMap => {
+                let map = CrackMap::new(out, lb)?;
+                Ok((map_detections(&map, &self.params), Some(map)))
+            }
+        }
     }
 }

@@ -142,6 +142,7 @@ pub fn postprocess(
             }
             .clipped(w, h),
             score: r[4],
+            shape: None,
         })
         .collect();
     Ok(nms(candidates, params.iou_threshold, params.max_detections))

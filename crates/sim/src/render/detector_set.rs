@@ -8,8 +8,9 @@
 //! * `masks/<name>.png`: its crack mask (8-bit grey, 255 = crack, 0 = anything else, decoys and
 //!   screws included), [`Frame::crack_mask`];
 //! * `annotations.json`: COCO detection file as `sim render` writes it (category `crack`, id 1,
-//!   crack boxes only), each image also with `mask_file` (relative to the folder) and
-//!   `scene_seed`;
+//!   crack boxes only), its `file_name`s and each image's `mask_file` relative to the folder (as
+//!   in the photo datasets: `crackbot eval-detector --coco DIR/annotations.json` needs no
+//!   `--images`), each image also with `scene_seed`;
 //! * `features.json`: per image, every ground-truth box (crack, decoy, screw) with its kind,
 //!   `bbox` `[x, y, w, h]`, `width_mm`, the polyline projected into pixels (`path_px`, cracks and
 //!   decoys) and the plate → image homography (row-major).
@@ -168,9 +169,9 @@ pub fn write_detector_set(
             let frame = render(&scene, assets, &options, detector_frame_seed(scene_seed, k))?;
             render_s += start.elapsed().as_secs_f64();
             let stem = format!("s{scene_seed:08}_f{k:02}");
-            let file_name = format!("{stem}.png");
+            let file_name = format!("images/{stem}.png");
             let mask_file = format!("masks/{stem}.png");
-            let png = images_dir.join(&file_name);
+            let png = out.join(&file_name);
             frame
                 .image
                 .save_with_format(&png, image::ImageFormat::Png)

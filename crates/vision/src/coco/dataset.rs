@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use super::{CocoDataset, CocoImage, CocoResult};
+use crate::crack_map::CrackMap;
 use crate::{Detector, VisionError};
 
 /// Where [`detect_dataset`] is: called before each image.
@@ -26,7 +27,21 @@ pub fn detect_dataset<D: Detector + ?Sized>(
     gt: &CocoDataset,
     image_root: &Path,
     category_id: u64,
+    progress: impl FnMut(&Progress<'_>),
+) -> Result<Vec<CocoResult>, VisionError> {
+    detect_dataset_with_maps(detector, gt, image_root, category_id, progress, |_, _| {
+        Ok(())
+    })
+}
+
+/// [`detect_dataset`], handing each image's crack map (detectors that predict one) to `on_map`.
+pub fn detect_dataset_with_maps<D: Detector + ?Sized>(
+    detector: &mut D,
+    gt: &CocoDataset,
+    image_root: &Path,
+    category_id: u64,
     mut progress: impl FnMut(&Progress<'_>),
+    mut on_map: impl FnMut(&CocoImage, &CrackMap) -> Result<(), VisionError>,
 ) -> Result<Vec<CocoResult>, VisionError> {
     let total = gt.images.len();
     let mut results = Vec::new();
@@ -51,7 +66,11 @@ pub fn detect_dataset<D: Detector + ?Sized>(
                 ),
             });
         }
-        for d in detector.detect(&rgb)? {
+        let (detections, map) = detector.detect_with_map(&rgb)?;
+        if let Some(map) = &map {
+            on_map(image, map)?;
+        }
+        for d in detections {
             if !d.bbox.is_finite() || !d.score.is_finite() {
                 continue;
             }
@@ -91,10 +110,12 @@ mod tests {
                 crate::Detection {
                     bbox: crate::BoundingBox::from_xywh(1.0, 2.0, 3.0, 4.0),
                     score: 0.5,
+                    shape: None,
                 },
                 crate::Detection {
                     bbox: crate::BoundingBox::from_xywh(f32::NAN, 2.0, 3.0, 4.0),
                     score: 0.5,
+                    shape: None,
                 },
             ])
         }
