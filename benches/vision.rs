@@ -2,9 +2,10 @@
 //! (`../shared/data/cracks/*/val.json`, first image):
 //!
 //! * `detector/onnx_{256,320,416}`: one `detect` call of the trained model (letterbox + ONNX Runtime
-//!   with one thread + NMS) at each input size; `detector/classical`: the edge-based baseline.
-//! * `preprocess/letterbox_*`: the letterbox alone; `postprocess/decode_nms`: decoding the model's
-//!   rows and NMS.
+//!   with one thread + crack map → boxes and courses) at each input size; `detector/classical`: the
+//!   edge-based baseline.
+//! * `preprocess/letterbox_*`: the letterbox alone; `postprocess/crack_map_to_boxes_*`: the crack
+//!   map → boxes (dataset rule) and centre lines.
 //! * `homography/pixel_to_surface`: one point through a fitted homography.
 //!
 //! mAP@0.5 of each detector comes from `crackbot detector-tradeoff` (see `benches/README.md`).
@@ -17,7 +18,8 @@ use crackbot_vision::classical::{ClassicalDetector, ClassicalParams};
 use crackbot_vision::coco::CocoDataset;
 use crackbot_vision::homography::{fit_dlt, PointPair};
 use crackbot_vision::onnx::OnnxDetector;
-use crackbot_vision::preprocess::{letterbox, postprocess, PostprocessParams};
+use crackbot_vision::crack_map::map_detections;
+use crackbot_vision::preprocess::{letterbox, PostprocessParams};
 use crackbot_vision::Detector;
 use criterion::{criterion_group, criterion_main, Criterion};
 
@@ -68,16 +70,11 @@ fn bench(c: &mut Criterion) {
         1,
     )
     .expect("model");
-    let (tensor, lb) = letterbox(uav, 320).expect("letterbox");
-    let rows = model.run_tensor(&tensor).expect("run");
+    let map = model.crack_map(uav).expect("crack map");
     let mut g = c.benchmark_group("postprocess");
-    let eval = PostprocessParams {
-        score_threshold: 0.001,
-        ..PostprocessParams::default()
-    };
     g.bench_function(
-        format!("decode_nms_{}_rows_threshold_0.001", rows.len() / 5),
-        |b| b.iter(|| postprocess(black_box(&rows), &lb, &eval).expect("postprocess")),
+        format!("crack_map_to_boxes_and_courses_{0}x{0}_cells", map.cells()),
+        |b| b.iter(|| map_detections(black_box(&map), &PostprocessParams::default())),
     );
     g.finish();
 

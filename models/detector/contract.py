@@ -104,7 +104,7 @@ def map_to_detections(prob: np.ndarray, w: int, h: int, size: int, threshold: fl
         y1 = min(STRIDE * (rows.max() + 1) / s, h)
         if (x1 - x0) * (y1 - y0) < min_area:
             continue
-        score = float(p[cells].astype(np.float64).mean())
+        score = float(p[cells].max())
         out.append((float(x0), float(y0), float(x1), float(y1), score))
     order = sorted(range(len(out)), key=lambda i: -out[i][4])  # stable: ties keep raster order
     return [out[i] for i in order[:max_det]]

@@ -148,6 +148,21 @@ fn print_detection(d: &DetectionReport) {
     if let Some(n) = d.frames_seen {
         line += &format!("  in {n} frames");
     }
+    match (&d.axis_mm, d.length_mm, &d.axis_px) {
+        (Some([a, b]), Some(len), _) => {
+            line += &format!(
+                "  runs ({:.1}, {:.1}) → ({:.1}, {:.1}) mm, {len:.1} mm long",
+                a[0], a[1], b[0], b[1]
+            );
+        }
+        (_, _, Some([a, b])) => {
+            line += &format!(
+                "  runs ({:.0}, {:.0}) → ({:.0}, {:.0}) px",
+                a[0], a[1], b[0], b[1]
+            );
+        }
+        _ => {}
+    }
     println!("{line}");
 }
 
