@@ -16,9 +16,9 @@ use std::path::{Path, PathBuf};
 
 use crackbot_vision::classical::{ClassicalDetector, ClassicalParams};
 use crackbot_vision::coco::CocoDataset;
+use crackbot_vision::crack_map::map_detections;
 use crackbot_vision::homography::{fit_dlt, PointPair};
 use crackbot_vision::onnx::OnnxDetector;
-use crackbot_vision::crack_map::map_detections;
 use crackbot_vision::preprocess::{letterbox, PostprocessParams};
 use crackbot_vision::Detector;
 use criterion::{criterion_group, criterion_main, Criterion};

@@ -13,8 +13,10 @@ use serde::Serialize;
 
 use crate::VisionError;
 
-/// Thresholds swept: `(k + 0.5) / THRESHOLDS` for `k = 0 … THRESHOLDS − 1`.
-pub const THRESHOLDS: usize = 50;
+/// Thresholds swept: `(k + 1) / (THRESHOLDS + 1)` for `k = 0 … THRESHOLDS − 1` (0.01, 0.02, …, 0.99).
+pub const THRESHOLDS: usize = 99;
+/// Index of the threshold 0.5 in the sweep.
+const HALF: usize = 49;
 
 /// Counts of one image or a whole dataset, per threshold.
 #[derive(Debug, Clone, PartialEq)]
@@ -92,7 +94,7 @@ impl Counts {
 
 /// Threshold number `k` of the sweep.
 pub fn threshold(k: usize) -> f64 {
-    (k as f64 + 0.5) / THRESHOLDS as f64
+    (k as f64 + 1.0) / (THRESHOLDS + 1) as f64
 }
 
 /// Precision, recall and F1 at one threshold.
@@ -200,7 +202,7 @@ impl PixelEvaluator {
         let mut c = Counts::new();
         // Pixel counted at thresholds 0..=bin(p): the thresholds t_k ≤ p.
         let bin = |p: f32| -> Option<usize> {
-            let k = (f64::from(p) * THRESHOLDS as f64 - 0.5).floor();
+            let k = (f64::from(p) * (THRESHOLDS + 1) as f64 - 1.0).floor();
             (k >= 0.0).then(|| (k as usize).min(THRESHOLDS - 1))
         };
         let mut pred_hist = vec![0u64; THRESHOLDS];
@@ -245,7 +247,7 @@ impl PixelEvaluator {
             images: self.per_image_best.len(),
             ods: self.total.best(),
             ois_f1: self.per_image_best.iter().sum::<f64>() / self.per_image_best.len() as f64,
-            at_half: self.total.at(THRESHOLDS / 2),
+            at_half: self.total.at(HALF),
         })
     }
 }
@@ -285,6 +287,14 @@ mod tests {
             e.add(&shifted(d), &truth, w, h).unwrap();
             assert_eq!(e.finish().unwrap().at_half.f1, f1, "shift {d} tol {tol}");
         }
+    }
+
+    #[test]
+    fn the_sweep_holds_one_half() {
+        assert_eq!(threshold(HALF), 0.5);
+        assert!(
+            (threshold(0) - 0.01).abs() < 1e-12 && (threshold(THRESHOLDS - 1) - 0.99).abs() < 1e-12
+        );
     }
 
     #[test]

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Every figure of MODEL_CARD.md by crackbot's own (Rust) evaluator, release build, one ONNX Runtime thread:
+#   bash models/detector/evaluate.sh            # writes models/detector/out/rust/*.json and the trade-off tables
+# The val splits of the photos; unseen rendered scenes of two families (seeds 900000.. with the training family's
+# parameters, 950000.. with eval/unseen-layout-b.toml), never rendered for training; 8 frames of the built-in
+# default scene; the edge baseline on the same sets; mAP@0.5 vs input size vs ms at 1 and 2 threads.
+set -euo pipefail
+HERE="$(cd "$(dirname "$0")" && pwd)"
+ROOT="$(cd "$HERE/../.." && pwd)"
+C="${CRACKS_DATA:-$(cd "$ROOT/../shared/data/cracks" && pwd)}"
+OUT="$HERE/out/rust"
+mkdir -p "$OUT"
+(cd "$ROOT" && cargo build --release --quiet -p crackbot-cli -p crackbot-lab)
+T="${CARGO_TARGET_DIR:-$ROOT/target}/release"
+B="$T/crackbot"
+L="$T/crackbot-lab"
+SIM="$HERE/out/sim"
+[ -d "$SIM/unseen-a" ] || "$L" sim detector-set --scenes 20 --frames-per-scene 2 --seed 900000 --out "$SIM/unseen-a" --json > /dev/null
+[ -d "$SIM/unseen-b" ] || "$L" sim detector-set --params "$HERE/eval/unseen-layout-b.toml" --scenes 20 --frames-per-scene 2 \
+    --seed 950000 --out "$SIM/unseen-b" --json > /dev/null
+[ -d "$SIM/default" ] || "$B" sim render --out "$SIM/default" --frames 8 > /dev/null
+for det in onnx classical; do
+  for ds in crackforest uav75 quaywall; do
+    "$L" eval-detector --coco "$C/$ds/val.json" --detector $det --json > "$OUT/${det}_$ds.json"
+  done
+  "$L" eval-detector --coco "$C/val_all.json" --detector $det --json > "$OUT/${det}_val_all.json"
+  for s in unseen-a unseen-b; do
+    "$L" eval-detector --coco "$SIM/$s/annotations.json" --detector $det --json > "$OUT/${det}_$s.json"
+  done
+  "$L" eval-detector --coco "$SIM/default/coco.json" --images "$SIM/default/images" --detector $det --json \
+      > "$OUT/${det}_default_scene.json"
+done
+for th in 1 2; do
+  "$L" detector-tradeoff --coco "$C/val_all.json" --threads $th --out "$OUT/tradeoff-val_all-${th}thread"
+  "$L" detector-tradeoff --coco "$SIM/unseen-a/annotations.json" --threads $th --no-classical \
+      --out "$OUT/tradeoff-unseen-a-${th}thread"
+done
+python3 - "$OUT" <<'PY'
+import json, sys, glob, os
+out = sys.argv[1]
+print(f"{'set':34s} {'mAP':>6s} {'mAP50':>6s} {'AR100':>6s} {'ODS2':>6s} {'ODS5':>6s} {'found':>9s} {'decoys':>7s}")
+for p in sorted(glob.glob(os.path.join(out, "*.json"))):
+    r = json.load(open(p))
+    pix = {x["tolerance_px"]: x["ods"]["f1"] for x in r.get("pixel", [])}
+    sc = r.get("scene")
+    found = f"{sc['found']}/{sc['cracks']}" if sc else ""
+    dec = f"{sc['decoys_proposed']}/{sc['decoys']}" if sc else ""
+    f = lambda v: f"{100*v:6.1f}" if v is not None else "     -"
+    print(f"{os.path.basename(p)[:-5]:34s} {f(r['map'])} {f(r['map50'])} {f(r['ar100'])} {f(pix.get(2.0))} {f(pix.get(5.0))} {found:>9s} {dec:>7s}")
+PY
