@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import copy
-import glob
 import json
 import math
 import os
