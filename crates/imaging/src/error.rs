@@ -23,6 +23,14 @@ pub enum ImagingError {
         /// What is wrong.
         message: String,
     },
+    /// A JSON file of another kind (e.g. a detector set's `features.json`) is malformed.
+    #[error("{path}: {message}")]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// A homography that cannot be used (not finite, singular), or a point it cannot map.
     #[error("{0}")]
     Homography(String),

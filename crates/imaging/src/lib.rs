@@ -8,6 +8,8 @@
 //! * [`coco`]: COCO detection files (ground truth and results): the types, reading, validating
 //!   and writing them. crackbot's own extensions (the simulator's seed, homography and
 //!   per-crack fields, the photo datasets' mask files) are typed optional fields.
+//! * [`scene_truth`]: a detector set's `features.json` (every crack, decoy and screw of every
+//!   rendered frame), written by the simulator and read by the detector's evaluation.
 //!
 //! The crate is deliberately light (nalgebra, serde, serde_json, thiserror): no image decoding,
 //! no runtime.
@@ -15,6 +17,7 @@
 pub mod coco;
 mod error;
 pub mod homography;
+pub mod scene_truth;
 
 pub use error::ImagingError;
 pub use homography::{Homography, PointPair, ReprojectionStats};

@@ -129,7 +129,7 @@ impl SimError {
 }
 
 impl From<crackbot_imaging::ImagingError> for SimError {
-    /// I/O failures as [`SimError::Io`], malformed COCO files as [`SimError::Data`], anything
+    /// I/O failures as [`SimError::Io`], malformed COCO or JSON files as [`SimError::Data`], anything
     /// else (a homography that cannot be used) as [`SimError::Invalid`].
     fn from(e: crackbot_imaging::ImagingError) -> Self {
         use crackbot_imaging::ImagingError as E;
@@ -138,7 +138,7 @@ impl From<crackbot_imaging::ImagingError> for SimError {
                 path: path.display().to_string(),
                 source,
             },
-            E::Coco { path, message } => SimError::Data {
+            E::Coco { path, message } | E::Json { path, message } => SimError::Data {
                 path: path.display().to_string(),
                 message,
             },

@@ -178,7 +178,7 @@ impl Benchmark {
             .iter()
             .map(|&t| PixelEvaluator::new(t))
             .collect::<Result<_, _>>()?;
-        let root = self.root.clone();
+        let root = &self.root;
         let on_map = |image: &CocoImage, map: &CrackMap| -> Result<(), VisionError> {
             let Some(mask_file) = &image.mask_file else {
                 return Ok(());

@@ -305,12 +305,14 @@ impl Detector for OnnxDetector {
         &mut self,
         image: &image::RgbImage,
     ) -> Result<(Vec<Detection>, Option<CrackMap>), VisionError> {
-        let (tensor, lb) = self.preprocess(image)?;
-        let out = self.run_tensor(&tensor)?;
         match self.output {
-            ModelOutput::Boxes => Ok((postprocess(&out, &lb, &self.params)?, None)),
+            ModelOutput::Boxes => {
+                let (tensor, lb) = self.preprocess(image)?;
+                let rows = self.run_tensor(&tensor)?;
+                Ok((postprocess(&rows, &lb, &self.params)?, None))
+            }
             ModelOutput::CrackMap => {
-                let map = CrackMap::new(out, lb)?;
+                let map = self.crack_map(image)?;
                 Ok((map_detections(&map, &self.params), Some(map)))
             }
         }

@@ -9,9 +9,9 @@
 //! all. A decoy is *proposed* by the same test. Decoys are flat to the touch: rejecting them is
 //! the tactile check's job, so proposing one is not an error, only work for the finger.
 
-use std::path::Path;
+use serde::Serialize;
 
-use serde::{Deserialize, Serialize};
+pub use crackbot_imaging::scene_truth::{FeatureTruth, FrameTruth, SceneTruth};
 
 use crate::boxes::BoundingBox;
 use crate::coco::{CocoDataset, CocoResult};
@@ -22,48 +22,6 @@ pub const CENTRE_LINE_INSIDE: f64 = 0.8;
 
 /// Crack widths the recall is broken down by, mm (upper bounds; the last bin is open).
 pub const WIDTH_BINS_MM: [f64; 5] = [0.5, 1.0, 2.0, 5.0, 10.0];
-
-/// `features.json`: every ground-truth feature of every rendered frame.
-#[derive(Debug, Clone, Deserialize)]
-pub struct SceneTruth {
-    /// Per frame.
-    pub images: Vec<FrameTruth>,
-}
-
-/// One frame's features.
-#[derive(Debug, Clone, Deserialize)]
-pub struct FrameTruth {
-    /// The image, as in the COCO file.
-    pub file_name: String,
-    /// Cracks, decoys and screws.
-    pub boxes: Vec<FeatureTruth>,
-}
-
-/// One feature in a frame.
-#[derive(Debug, Clone, Deserialize)]
-pub struct FeatureTruth {
-    /// `crack`, `decoy` or `screw`.
-    pub kind: String,
-    /// `[x, y, w, h]` of its visible pixels.
-    pub bbox: [f64; 4],
-    /// The centre line in pixels (cracks and decoys).
-    #[serde(default)]
-    pub path_px: Option<Vec<[f64; 2]>>,
-    /// Width on the plate, mm (cracks and decoys).
-    #[serde(default)]
-    pub width_mm: Option<f64>,
-}
-
-impl SceneTruth {
-    /// Reads `features.json`, naming the file in errors.
-    pub fn load(path: &Path) -> Result<Self, VisionError> {
-        let text = std::fs::read_to_string(path).map_err(VisionError::io(path))?;
-        serde_json::from_str(&text).map_err(|e| VisionError::Coco {
-            path: path.to_path_buf(),
-            message: format!("not a features file: {e}"),
-        })
-    }
-}
 
 /// Recall of the cracks of one width bin.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -138,8 +96,11 @@ fn finds(det: &BoundingBox, f: &FeatureTruth) -> (bool, bool) {
             && p[1] >= f64::from(b.y0) - pad
             && p[1] <= f64::from(b.y1) + pad
     };
+    // Segments with an end behind the camera have no pixels.
     for seg in path.windows(2) {
-        let (a, b) = (seg[0], seg[1]);
+        let (Some(a), Some(b)) = (seg[0], seg[1]) else {
+            continue;
+        };
         let n = ((b[0] - a[0]).hypot(b[1] - a[1]).ceil() as usize).max(1);
         for k in 0..n {
             let t = k as f64 / n as f64;
@@ -273,9 +234,26 @@ mod tests {
     fn feature(kind: &str, bbox: [f64; 4], path: &[[f64; 2]], width: f64) -> FeatureTruth {
         FeatureTruth {
             kind: kind.into(),
+            feature_index: 0,
             bbox,
-            path_px: Some(path.to_vec()),
+            pixels: 1,
             width_mm: Some(width),
+            path_px: Some(path.iter().map(|&p| Some(p)).collect()),
+            path_mm: None,
+            centre_mm: None,
+        }
+    }
+
+    fn frame(file_name: &str, boxes: Vec<FeatureTruth>) -> FrameTruth {
+        FrameTruth {
+            file_name: file_name.into(),
+            width: 100,
+            height: 100,
+            seed: 0,
+            scene_seed: 0,
+            material: "PLA".into(),
+            plate_to_image: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            boxes,
         }
     }
 
@@ -297,9 +275,10 @@ mod tests {
             categories: vec![],
         };
         let truth = SceneTruth {
-            images: vec![FrameTruth {
-                file_name: "a.png".into(),
-                boxes: vec![
+            description: String::new(),
+            images: vec![frame(
+                "a.png",
+                vec![
                     // Found by IoU.
                     feature(
                         "crack",
@@ -329,12 +308,13 @@ mod tests {
                     ),
                     FeatureTruth {
                         kind: "screw".into(),
-                        bbox: [0.0, 0.0, 5.0, 5.0],
                         path_px: None,
                         width_mm: None,
+                        centre_mm: Some([1.0, 1.0]),
+                        ..feature("screw", [0.0, 0.0, 5.0, 5.0], &[], 0.0)
                     },
                 ],
-            }],
+            )],
         };
         let results = vec![
             result([10.0, 10.0, 20.0, 5.0], 0.9),
@@ -352,7 +332,10 @@ mod tests {
         assert_eq!(r.missed[0].width_mm, Some(0.3));
         let first = &r.by_width[0];
         assert_eq!((first.above_mm, first.cracks, first.found), (0.0, 1, 0));
-        let missing = SceneTruth { images: vec![] };
+        let missing = SceneTruth {
+            description: String::new(),
+            images: vec![],
+        };
         assert!(scene_recall(&gt, &missing, &results, 0.25).is_err());
     }
 }

@@ -22,6 +22,7 @@ use std::time::Instant;
 
 use crackbot_imaging::coco::{CocoDataset, CocoImage};
 use crackbot_imaging::homography::{apply_in_front, matrix_rows};
+use crackbot_imaging::scene_truth::{FeatureTruth, FrameTruth, SceneTruth};
 use serde::Serialize;
 use serde_json::{json, Value};
 
@@ -65,48 +66,43 @@ pub fn detector_frame_seed(scene_seed: u64, k: u32) -> u64 {
 }
 
 /// The ground truth of one frame for `features.json`.
-fn frame_features(scene: &Scene, frame: &Frame, file_name: &str, scene_seed: u64) -> Value {
+fn frame_features(scene: &Scene, frame: &Frame, file_name: &str, scene_seed: u64) -> FrameTruth {
     let h = &frame.plate_to_image;
-    let boxes: Vec<Value> = frame
+    let boxes = frame
         .boxes
         .iter()
         .map(|b| {
-            let mut v = json!({
-                "kind": b.kind.as_str(),
-                "feature_index": b.feature_index,
-                "bbox": b.bbox(),
-                "pixels": b.pixels,
-                "width_mm": b.width_mm,
-            });
-            let path = match scene.features.get(b.feature_index) {
+            let feature = scene.features.get(b.feature_index);
+            let path = match feature {
                 Some(Feature::Crack { path, .. } | Feature::Decoy { path, .. }) => Some(path),
                 _ => None,
             };
-            if let (Some(path), Some(obj)) = (path, v.as_object_mut()) {
-                let px: Vec<Option<[f64; 2]>> =
-                    path.iter().map(|&p| apply_in_front(h, p)).collect();
-                obj.insert("path_px".into(), json!(px));
-                obj.insert("path_mm".into(), json!(path));
+            FeatureTruth {
+                kind: b.kind.as_str().to_string(),
+                feature_index: b.feature_index,
+                bbox: b.bbox(),
+                pixels: b.pixels,
+                width_mm: b.width_mm,
+                path_px: path.map(|p| p.iter().map(|&q| apply_in_front(h, q)).collect()),
+                path_mm: path.cloned(),
+                centre_mm: match feature {
+                    Some(Feature::Screw { centre, .. }) => Some(*centre),
+                    _ => None,
+                },
             }
-            if let (Some(Feature::Screw { centre, .. }), Some(obj)) =
-                (scene.features.get(b.feature_index), v.as_object_mut())
-            {
-                obj.insert("centre_mm".into(), json!(centre));
-            }
-            v
         })
         .collect();
     let (width, height) = frame.image.dimensions();
-    json!({
-        "file_name": file_name,
-        "width": width,
-        "height": height,
-        "seed": frame.seed,
-        "scene_seed": scene_seed,
-        "material": scene.plate.material.name,
-        "plate_to_image": matrix_rows(h),
-        "boxes": boxes,
-    })
+    FrameTruth {
+        file_name: file_name.to_string(),
+        width,
+        height,
+        seed: frame.seed,
+        scene_seed,
+        material: scene.plate.material.name.clone(),
+        plate_to_image: matrix_rows(h),
+        boxes,
+    }
 }
 
 fn write_json(path: &Path, doc: &Value) -> Result<(), SimError> {
@@ -211,13 +207,14 @@ pub fn write_detector_set(
     }
     write_json(&annotations, &doc)?;
     let features_path = out.join("features.json");
-    write_json(
-        &features_path,
-        &json!({
-            "description": "every ground-truth box of each image (cracks, printed decoys, screws), the features' paths in pixels and mm, and the plate → image homography (row-major)",
-            "images": features,
-        }),
-    )?;
+    SceneTruth {
+        description: "every ground-truth box of each image (cracks, printed decoys, screws), the \
+                      features' paths in pixels and mm, and the plate → image homography \
+                      (row-major)"
+            .into(),
+        images: features,
+    }
+    .save(&features_path)?;
     Ok(DetectorSetSummary {
         scenes: scenes as usize,
         frames: total,
