@@ -55,6 +55,10 @@ if ! ls "$ort_venv"/lib/python3*/site-packages/onnxruntime/capi/libonnxruntime.s
   "$ort_venv/bin/pip" install --quiet --disable-pip-version-check "onnxruntime==$ort_version"
 fi
 
+# The forest → ONNX exporter (scripts/forest_to_onnx.py; tests/forest_onnx.rs, benches/tactile.rs): numpy
+# and onnx, pinned in scripts/forest_to_onnx.requirements.txt, in $crackbot_cache/forest-onnx-venv.
+bash "$crackbot_root/scripts/forest_to_onnx.sh" --setup
+
 # Keep build artefacts outside the clone when CRACKBOT_TARGET_DIR is set (CI does this).
 if [ -n "${CRACKBOT_TARGET_DIR:-}" ]; then
   export CARGO_TARGET_DIR="$CRACKBOT_TARGET_DIR"
