@@ -89,7 +89,7 @@ pub(crate) fn check_value(index: usize, channel: Channel, value: f64) -> Result<
 
 /// Checks the four channels of one sample, in the order D1, D2, D3, P.
 #[inline]
-pub(crate) fn check_sample(index: usize, sample: &[f64; 4]) -> Result<(), DspError> {
+pub fn check_sample(index: usize, sample: &[f64; 4]) -> Result<(), DspError> {
     for (channel, &value) in Channel::ALL.iter().zip(sample) {
         check_value(index, *channel, value)?;
     }

@@ -89,7 +89,7 @@ mod features;
 mod segment;
 mod streaming;
 
-pub use error::DspError;
+pub use error::{check_sample, DspError};
 pub use features::{
     extract_features, extract_segment_features, mav, rms, Feature, FeatureExtractor, FeatureMatrix,
     FeatureSet, FeatureSpec, WindowConfig,

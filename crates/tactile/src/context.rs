@@ -96,17 +96,36 @@ const PER_SHAPE: usize = 4;
 /// Values per channel of the slide-so-far block.
 const PER_PREFIX: usize = 3;
 
+/// Smallest sample value the context features see: samples are rounded to whole ADC counts and
+/// clamped to `[SAMPLE_MIN, SAMPLE_MAX]` (a 12-bit converter's range with room for offset-corrected
+/// values), so every statistic is an exact integer and the streaming form equals this one bit for bit.
+pub const SAMPLE_MIN: i32 = -4096;
+/// Largest sample value the context features see (see [`SAMPLE_MIN`]).
+pub const SAMPLE_MAX: i32 = 8191;
+/// Longest context span (and baseline) in samples.
+pub const MAX_SCALE: usize = 60_000;
+
 impl ContextConfig {
-    /// Checks that every scale and the baseline length are at least 1.
+    /// Checks that every scale and the baseline length are between 1 and [`MAX_SCALE`].
     pub fn validate(&self) -> Result<(), TactileError> {
         if self.scales.contains(&0) {
             return Err(TactileError::Context {
                 reason: "context scales must be at least 1 sample",
             });
         }
+        if self.scales.iter().any(|&s| s > MAX_SCALE) {
+            return Err(TactileError::Context {
+                reason: "context scales must be at most 60000 samples (150 s at 400 Hz)",
+            });
+        }
         if self.baseline_len == 0 {
             return Err(TactileError::Context {
                 reason: "the baseline length must be at least 1 sample",
+            });
+        }
+        if self.baseline_len > MAX_SCALE {
+            return Err(TactileError::Context {
+                reason: "the baseline length must be at most 60000 samples",
             });
         }
         Ok(())
@@ -132,23 +151,118 @@ impl ContextConfig {
     }
 }
 
-/// Median of the first `len` values of each channel (the slide's baseline).
+/// A sample value as the context features see it: rounded to whole counts, clamped to
+/// [`SAMPLE_MIN`]`..=`[`SAMPLE_MAX`]. Callers reject non-finite samples first (NaN maps to 0).
+#[inline]
+pub fn quantise(x: f64) -> i32 {
+    if x.is_nan() {
+        return 0;
+    }
+    x.round().clamp(f64::from(SAMPLE_MIN), f64::from(SAMPLE_MAX)) as i32
+}
+
+/// Twice the median of `sorted` (ascending): the median in half counts, exact for an even count.
+pub(crate) fn twice_median(sorted: &[i32]) -> i64 {
+    let n = sorted.len();
+    match n {
+        0 => 0,
+        _ if n % 2 == 1 => 2 * i64::from(sorted[n / 2]),
+        _ => i64::from(sorted[n / 2 - 1]) + i64::from(sorted[n / 2]),
+    }
+}
+
+/// Median of the first `len` values of each channel, in counts (quantised, see [`quantise`]):
+/// the baseline of a window whose slide has seen these samples so far.
 pub fn slide_baseline(samples: &[[f64; 4]], len: usize) -> [f64; 4] {
     let n = len.min(samples.len());
     let mut out = [0.0; 4];
-    if n == 0 {
-        return out;
-    }
+    let mut v = Vec::with_capacity(n);
     for (c, slot) in out.iter_mut().enumerate() {
-        let mut v: Vec<f64> = samples[..n].iter().map(|s| s[c]).collect();
-        v.sort_by(f64::total_cmp);
-        *slot = if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            (v[n / 2 - 1] + v[n / 2]) / 2.0
-        };
+        v.clear();
+        v.extend(samples[..n].iter().map(|s| quantise(s[c])));
+        v.sort_unstable();
+        *slot = twice_median(&v) as f64 / 2.0;
     }
     out
+}
+
+/// Largest value counted "below" a span (`x < (b + lo) / 2`, `b2 = 2b`, `lo2 = 2·lo`).
+#[inline]
+pub(crate) fn below_limit(b2: i64, lo2: i64) -> i64 {
+    (b2 + lo2 - 1).div_euclid(4)
+}
+
+/// Smallest value counted "above" a span (`x > (b + hi) / 2`).
+#[inline]
+pub(crate) fn above_limit(b2: i64, hi2: i64) -> i64 {
+    (b2 + hi2).div_euclid(4) + 1
+}
+
+/// Exact integer statistics of one span of one channel: what both the offline and the streaming
+/// computation produce, and [`SpanStats::push_values`] turns into features.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct SpanStats {
+    pub n: i64,
+    pub sum: i64,
+    pub sum_sq: i64,
+    pub min: i32,
+    pub max: i32,
+    pub first: i32,
+    pub last: i32,
+    /// Samples with `x ≤ below_limit(b2, lo2)`.
+    pub below: i64,
+    /// Samples with `x ≥ above_limit(b2, hi2)`.
+    pub above: i64,
+}
+
+impl SpanStats {
+    /// `(lo2, hi2)`: twice the span's minimum and maximum, the baseline included.
+    #[inline]
+    pub fn extremes2(&self, b2: i64) -> (i64, i64) {
+        (
+            b2.min(2 * i64::from(self.min)),
+            b2.max(2 * i64::from(self.max)),
+        )
+    }
+
+    /// The seven values of a span: mean, standard deviation, minimum, maximum (relative to the
+    /// baseline `b2 / 2`), slope, fraction below and fraction above.
+    #[inline]
+    pub fn values(&self, b2: i64) -> [f32; PER_SCALE] {
+        let n = self.n.max(1);
+        let nf = n as f64;
+        let b = b2 as f64 / 2.0;
+        let (lo2, hi2) = self.extremes2(b2);
+        let num = i128::from(n) * i128::from(self.sum_sq) - i128::from(self.sum).pow(2);
+        let var = num.max(0) as f64 / (nf * nf);
+        [
+            (self.sum as f64 / nf - b) as f32,
+            var.sqrt() as f32,
+            ((lo2 - b2) as f64 / 2.0) as f32,
+            ((hi2 - b2) as f64 / 2.0) as f32,
+            (i64::from(self.last) - i64::from(self.first)) as f32,
+            (self.below as f64 / nf) as f32,
+            (self.above as f64 / nf) as f32,
+        ]
+    }
+}
+
+/// The slide-so-far values: minimum, maximum (relative to the baseline) and range.
+#[inline]
+pub(crate) fn prefix_values(min: i32, max: i32, b2: i64) -> [f32; PER_PREFIX] {
+    let lo2 = b2.min(2 * i64::from(min));
+    let hi2 = b2.max(2 * i64::from(max));
+    [
+        ((lo2 - b2) as f64 / 2.0) as f32,
+        ((hi2 - b2) as f64 / 2.0) as f32,
+        ((hi2 - lo2) as f64 / 2.0) as f32,
+    ]
+}
+
+/// The "current level": the window's mean relative to the baseline.
+#[inline]
+pub(crate) fn level_value(sum: i64, n: i64, b2: i64) -> f32 {
+    (sum as f64 / n.max(1) as f64 - b2 as f64 / 2.0) as f32
 }
 
 /// Length of the longest run of `true`.
@@ -164,7 +278,7 @@ fn longest_run(flags: impl Iterator<Item = bool>) -> usize {
 /// Where a window is: the recording's samples, its slide's first sample, its last sample.
 #[derive(Debug, Clone, Copy)]
 pub struct WindowPlace<'a> {
-    /// Every sample of the recording (`[D1, D2, D3, P]`, after any normalisation).
+    /// Every sample of the recording (`[D1, D2, D3, P]`, after any normalisation; finite).
     pub samples: &'a [[f64; 4]],
     /// Column 6 of every sample.
     pub directions: &'a [u8],
@@ -174,19 +288,51 @@ pub struct WindowPlace<'a> {
     pub end: usize,
 }
 
-/// The context values of the window at `place`, appended to `out`.
+/// Exact statistics of channel `c` over `span`, "below" and "above" counted against the
+/// baseline `b2` (half counts).
+fn span_stats(span: &[[f64; 4]], c: usize, b2: i64) -> SpanStats {
+    let mut s = SpanStats {
+        min: i32::MAX,
+        max: i32::MIN,
+        ..SpanStats::default()
+    };
+    for x in span {
+        let q = quantise(x[c]);
+        s.n += 1;
+        s.sum += i64::from(q);
+        s.sum_sq += i64::from(q) * i64::from(q);
+        s.min = s.min.min(q);
+        s.max = s.max.max(q);
+    }
+    if let (Some(a), Some(z)) = (span.first(), span.last()) {
+        s.first = quantise(a[c]);
+        s.last = quantise(z[c]);
+    }
+    let (lo2, hi2) = s.extremes2(b2);
+    let (below, above) = (below_limit(b2, lo2), above_limit(b2, hi2));
+    for x in span {
+        let q = i64::from(quantise(x[c]));
+        s.below += i64::from(q <= below);
+        s.above += i64::from(q >= above);
+    }
+    s
+}
+
+/// The context values of the window at `place`, appended to `out` (the offline computation; the
+/// streaming one is [`crate::stream::StreamingContext`], equal bit for bit).
 ///
 /// `channels` are the indices of the channels to describe, `window_len` the length of the window
-/// itself (its mean relative to the baseline is the "current level"), `baseline` the slide's
-/// ([`slide_baseline`]). Spans end at `place.end` and start no earlier than the slide's first
-/// sample, or than the recording's first sample with [`ContextConfig::across_slides`]. Appends
-/// exactly [`ContextConfig::n_context`]`(channels.len())` values.
+/// itself (its mean relative to the baseline is the "current level"). The baseline is the median
+/// of the slide's first [`ContextConfig::baseline_len`] samples **up to the window's end**
+/// (causal: a window before the baseline is complete sees the samples so far). Spans end at
+/// `place.end` and start no earlier than the slide's first sample, or than the recording's first
+/// sample with [`ContextConfig::across_slides`]. Samples are seen as whole counts ([`quantise`]).
+/// Appends exactly [`ContextConfig::n_context`]`(channels.len())` values.
 pub fn context_row(
     config: &ContextConfig,
     place: WindowPlace<'_>,
     channels: &[usize],
     window_len: usize,
-    baseline: &[f64; 4],
     out: &mut Vec<f32>,
 ) {
     let samples = place.samples;
@@ -197,52 +343,34 @@ pub fn context_row(
         let start = (end + 1).saturating_sub(len.max(1)).max(floor);
         samples.get(start..=end).unwrap_or(&[])
     };
+    let base_end = (slide_start + config.baseline_len).min(end + 1);
+    let slide_head = samples.get(slide_start..base_end).unwrap_or(&[]);
+    let mut sorted = Vec::with_capacity(slide_head.len());
     for &c in channels {
-        let b = baseline[c];
-        let w = span(window_len);
-        let level = w.iter().map(|s| s[c]).sum::<f64>() / w.len().max(1) as f64;
-        out.push((level - b) as f32);
+        sorted.clear();
+        sorted.extend(slide_head.iter().map(|s| quantise(s[c])));
+        sorted.sort_unstable();
+        let b2 = twice_median(&sorted);
+        let w = span_stats(span(window_len), c, b2);
+        out.push(level_value(w.sum, w.n, b2));
         for &len in &config.scales {
             let s = span(len);
-            let n = s.len().max(1) as f64;
-            let mean = s.iter().map(|x| x[c]).sum::<f64>() / n;
-            let var = s.iter().map(|x| (x[c] - mean).powi(2)).sum::<f64>() / n;
-            let (lo, hi) = s
-                .iter()
-                .fold((b, b), |(l, h), x| (l.min(x[c]), h.max(x[c])));
-            let slope = match (s.first(), s.last()) {
-                (Some(a), Some(z)) => z[c] - a[c],
-                _ => 0.0,
-            };
-            // How long the span stays beyond half its largest departure below / above the
-            // baseline: the dip's (or bump's) duration, independent of where it lies.
-            let (mid_lo, mid_hi) = ((b + lo) / 2.0, (b + hi) / 2.0);
-            let below = s.iter().filter(|x| x[c] < mid_lo).count() as f64 / n;
-            let above = s.iter().filter(|x| x[c] > mid_hi).count() as f64 / n;
+            let stats = span_stats(s, c, b2);
             if config.shape {
+                let (lo2, hi2) = stats.extremes2(b2);
+                let (below, above) = (below_limit(b2, lo2), above_limit(b2, hi2));
                 out.extend_from_slice(&[
-                    longest_run(s.iter().map(|x| x[c] < mid_lo)) as f32,
-                    longest_run(s.iter().map(|x| x[c] > mid_hi)) as f32,
-                    lo as f32,
-                    hi as f32,
+                    longest_run(s.iter().map(|x| i64::from(quantise(x[c])) <= below)) as f32,
+                    longest_run(s.iter().map(|x| i64::from(quantise(x[c])) >= above)) as f32,
+                    (lo2 as f64 / 2.0) as f32,
+                    (hi2 as f64 / 2.0) as f32,
                 ]);
             }
-            out.extend_from_slice(&[
-                (mean - b) as f32,
-                var.sqrt() as f32,
-                (lo - b) as f32,
-                (hi - b) as f32,
-                slope as f32,
-                below as f32,
-                above as f32,
-            ]);
+            out.extend_from_slice(&stats.values(b2));
         }
         if config.prefix {
-            let s = samples.get(slide_start..=end).unwrap_or(&[]);
-            let (lo, hi) = s
-                .iter()
-                .fold((b, b), |(l, h), x| (l.min(x[c]), h.max(x[c])));
-            out.extend_from_slice(&[(lo - b) as f32, (hi - b) as f32, (hi - lo) as f32]);
+            let s = span_stats(samples.get(slide_start..=end).unwrap_or(&[]), c, b2);
+            out.extend_from_slice(&prefix_values(s.min, s.max, b2));
         }
     }
     if config.direction {
@@ -289,7 +417,7 @@ mod tests {
             end,
         };
         let mut row = Vec::new();
-        context_row(&config, place(69), &[0, 3], 10, &b, &mut row);
+        context_row(&config, place(69), &[0, 3], 10, &mut row);
         assert_eq!(row.len(), config.n_context(2));
         assert_eq!(row.len(), 2 * (1 + 7 + 3) + 1);
         // D1 (baseline 4.5): level = mean(60..=69) − 4.5 = 60; over 50..=69: mean 59.5 − 4.5,
@@ -308,26 +436,27 @@ mod tests {
         assert_eq!(row[22], 1.0);
         // The future (the step) is not seen by a window that ends before it.
         let mut early = Vec::new();
-        context_row(&config, place(49), &[3], 10, &b, &mut early);
+        context_row(&config, place(49), &[3], 10, &mut early);
         assert_eq!(early, vec![0.0; 12]);
         // Half of a span that straddles the step lies below the midpoint (400).
         let mut straddle = Vec::new();
-        context_row(&config, place(59), &[3], 10, &b, &mut straddle);
+        context_row(&config, place(59), &[3], 10, &mut straddle);
         assert_eq!(straddle[6], 0.5);
         // Spans are clamped at the slide's start...
         let mut first = Vec::new();
-        context_row(&config, place(0), &[0], 10, &b, &mut first);
+        context_row(&config, place(0), &[0], 10, &mut first);
         assert_eq!(first.len(), config.n_context(1));
-        assert_eq!(first[0], -4.5);
+        assert_eq!(first[0], 0.0, "the baseline so far is the first sample itself");
         // ...unless they may reach into earlier slides of the recording.
         let later = WindowPlace {
             slide_start: 55,
             ..place(59)
         };
         let mut within = Vec::new();
-        context_row(&config, later, &[3], 10, &b, &mut within);
+        context_row(&config, later, &[3], 10, &mut within);
+        // The slide's baseline is its own first samples (300): flat within the slide...
         assert_eq!(
-            within[1], -200.0,
+            within[1], 0.0,
             "the span stops at the slide's start, after the step"
         );
         let across = ContextConfig {
@@ -335,9 +464,9 @@ mod tests {
             ..config.clone()
         };
         let mut reach = Vec::new();
-        context_row(&across, later, &[3], 10, &b, &mut reach);
+        context_row(&across, later, &[3], 10, &mut reach);
         assert_eq!(
-            reach[1], -100.0,
+            reach[1], 100.0,
             "the span sees 10 samples of 500 before the step"
         );
     }
@@ -370,7 +499,6 @@ mod tests {
             across_slides: false,
             shape: true,
         };
-        let b = slide_baseline(&s, 10);
         let mut row = Vec::new();
         let place = WindowPlace {
             samples: &s,
@@ -378,7 +506,7 @@ mod tests {
             slide_start: 0,
             end: 59,
         };
-        context_row(&config, place, &[3], 10, &b, &mut row);
+        context_row(&config, place, &[3], 10, &mut row);
         assert_eq!(row.len(), config.n_context(1));
         assert_eq!(row.len(), 1 + 7 + 4);
         // Midpoint below: (500 + 200) / 2 = 350, so both dips count; the longest lasts 8.

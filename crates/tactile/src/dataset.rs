@@ -10,7 +10,7 @@ use crackbot_dsp::{
 use crackbot_recording::Recording;
 use serde::Serialize;
 
-use crate::context::{context_row, slide_baseline, ContextConfig, WindowPlace};
+use crate::context::{context_row, ContextConfig, WindowPlace};
 use crate::TactileError;
 
 /// Which of the paper's two experiments a set of recordings belongs to: defined with the label column it
@@ -280,6 +280,15 @@ impl Pipeline {
             } else {
                 (Vec::new(), Vec::new())
             };
+            // Context spans reach outside the windows (and across slides): every sample they may
+            // see must be finite, as the streaming form refuses such samples.
+            for (i, s) in all_samples.iter().enumerate() {
+                crackbot_dsp::check_sample(i, s).map_err(|source| TactileError::Features {
+                    path: path.clone(),
+                    slide: rec.rows.get(i).map_or(0, |r| r.slide),
+                    source,
+                })?;
+            }
             for range in rec.slides() {
                 if range.len() < self.min_slide_len.max(1) {
                     continue;
@@ -315,7 +324,6 @@ impl Pipeline {
                 match context {
                     None => set.x.extend_from_slice(&m.data),
                     Some(c) => {
-                        let baseline = slide_baseline(&samples, c.baseline_len);
                         for (k, &end) in m.window_ends.iter().enumerate() {
                             if c.keep_window {
                                 set.x.extend_from_slice(m.row(k).unwrap_or(&[]));
@@ -331,7 +339,6 @@ impl Pipeline {
                                 place,
                                 spec.set.channels(),
                                 self.extractor.window().len,
-                                &baseline,
                                 &mut set.x,
                             );
                         }

@@ -6,7 +6,8 @@
 //!   [`dataset::Pipeline`]);
 //! * [`eval`]: training and testing classifiers, slide verdicts, width regression;
 //! * [`evaluation`]: the whole `crackbot tactile eval` flow as one call returning a `Serialize` report;
-//! * [`metrics`], [`context`].
+//! * [`context`]: causal context features of a window; [`stream`]: the same, sample by sample;
+//! * [`metrics`].
 //!
 //! Cargo features (default off), for research only:
 //!
@@ -26,6 +27,7 @@ pub mod metrics;
 pub mod paper;
 #[cfg(feature = "research")]
 pub mod stats;
+pub mod stream;
 #[cfg(feature = "research")]
 pub mod tradeoff;
 
