@@ -12,6 +12,16 @@
 //!   checked by `tests/linfa_flat_conversion.rs`). linfa's own `predict` and our flat predict then run on
 //!   that same forest and the same windows, one row at a time and as a batch.
 //!
+//! * `onnx_runtime/*`: ONNX Runtime in the same run, on the same forest and windows: the forest file is
+//!   exported to ONNX (`scripts/forest_to_onnx.sh`, a `TreeEnsembleClassifier` / `TreeEnsembleRegressor`)
+//!   and run by ONNX Runtime (`ort`, one intra-op thread) next to our flat predict, one row at a time
+//!   and as one batch. The forest is the 100-tree forest above (trained again, identical), or any forest
+//!   file (classifier or regressor) given by `CRACKBOT_BENCH_FOREST`, with its windows from
+//!   `CRACKBOT_BENCH_WINDOWS` (a CSV: header, then the model's features in the first columns; the real
+//!   windows of repetition 2 when unset and the model has their 3 features); with `CRACKBOT_BENCH_FOREST`
+//!   set, only this group runs. The bench first asserts that ONNX Runtime's probabilities (or values)
+//!   match ours to 1e-6 and its class is ours on every window.
+//!
 //! `taskset -c 1 cargo bench --bench tactile` (medians and ratios: `python3 benches/summary.py`).
 
 use std::hint::black_box;
@@ -23,6 +33,8 @@ use linfa::prelude::Predict;
 
 #[path = "common/linfa_forest.rs"]
 mod linfa_forest;
+#[path = "common/onnx_forest.rs"]
+mod onnx_forest;
 #[path = "common/windows.rs"]
 mod windows;
 
@@ -74,6 +86,10 @@ impl<'a> Stream<'a> {
 }
 
 fn bench(c: &mut Criterion) {
+    if std::env::var_os("CRACKBOT_BENCH_FOREST").is_some() {
+        eprintln!("CRACKBOT_BENCH_FOREST is set: only the onnx_runtime group runs, on that forest");
+        return;
+    }
     let real = windows::load(&windows::data_dir());
     let nf = real.test.n_features;
     let n_test = real.test.n_rows();
@@ -280,10 +296,130 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
+/// Our forest and ONNX Runtime on the same forest file and windows (see the module docs).
+fn onnx_runtime(c: &mut Criterion) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (forest_path, x) = match std::env::var_os("CRACKBOT_BENCH_FOREST") {
+        Some(p) => {
+            let path = std::path::PathBuf::from(p);
+            let ours = onnx_forest::Ours::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            let x = match std::env::var_os("CRACKBOT_BENCH_WINDOWS") {
+                Some(csv) => onnx_forest::read_windows_csv(csv.as_ref(), ours.n_features())
+                    .unwrap_or_else(|e| panic!("CRACKBOT_BENCH_WINDOWS: {e}")),
+                None => {
+                    let real = windows::load(&windows::data_dir());
+                    assert_eq!(
+                        ours.n_features(),
+                        real.test.n_features,
+                        "{} has {} features, the real windows {}: set CRACKBOT_BENCH_WINDOWS to a CSV of its windows",
+                        path.display(),
+                        ours.n_features(),
+                        real.test.n_features
+                    );
+                    real.test.x
+                }
+            };
+            (path, x)
+        }
+        None => {
+            let real = windows::load(&windows::data_dir());
+            let train = crackbot_forest::Dataset::with_classes(
+                real.train.x.clone(),
+                real.train.n_features,
+                real.train.y.clone(),
+                real.train.experiment.n_classes(),
+            )
+            .expect("training set");
+            let forest = RandomForest::fit(
+                &train,
+                &ForestParams::classifier()
+                    .n_trees(N_TREES)
+                    .seed(1)
+                    .quiet(true),
+            )
+            .expect("forest");
+            let path = dir.path().join("tactile.forest");
+            forest.save(&path).expect("save the forest");
+            (path, real.test.x)
+        }
+    };
+    let ours = onnx_forest::Ours::load(&forest_path).unwrap_or_else(|e| panic!("{e}"));
+    let nf = ours.n_features();
+    let n = x.len() / nf;
+    let onnx = dir.path().join("tactile.onnx");
+    onnx_forest::export(&forest_path, &onnx).unwrap_or_else(|e| panic!("{e}"));
+    let mut ort = onnx_forest::OrtForest::load(&onnx, nf, 1).unwrap_or_else(|e| panic!("{e}"));
+    let a = onnx_forest::compare(&ours, &mut ort, &x).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        a.max_diff <= 1e-6 && a.class_differs.is_empty(),
+        "ONNX Runtime differs from ours on {}: max |Δ| {}, class on {} of {n} windows",
+        forest_path.display(),
+        a.max_diff,
+        a.class_differs.len()
+    );
+    eprintln!(
+        "onnx_runtime: {} ({}), {n} windows; ONNX Runtime matches ours (max |Δ| {:.1e}, same class on every window)",
+        forest_path.display(),
+        ours.describe(),
+        a.max_diff
+    );
+
+    let mut g = c.benchmark_group("onnx_runtime");
+    g.throughput(Throughput::Elements(1));
+    let mut i = 0;
+    match &ours {
+        onnx_forest::Ours::Classifier(f) => g.bench_function("ours_row", |b| {
+            b.iter(|| {
+                i = if i + 1 == n { 0 } else { i + 1 };
+                f.predict(black_box(&x[i * nf..(i + 1) * nf]))
+            })
+        }),
+        onnx_forest::Ours::Regressor(f) => g.bench_function("ours_row", |b| {
+            b.iter(|| {
+                i = if i + 1 == n { 0 } else { i + 1 };
+                f.predict(black_box(&x[i * nf..(i + 1) * nf]))
+            })
+        }),
+    };
+    let mut i = 0;
+    g.bench_function("onnxruntime_row", |b| {
+        b.iter(|| {
+            i = if i + 1 == n { 0 } else { i + 1 };
+            ort.run_one(black_box(&x[i * nf..(i + 1) * nf]))
+        })
+    });
+    g.throughput(Throughput::Elements(n as u64));
+    g.sample_size(10);
+    match &ours {
+        onnx_forest::Ours::Classifier(f) => {
+            let mut out = vec![0u32; n];
+            g.bench_function("ours_batch", |b| {
+                b.iter(|| {
+                    f.predict_batch(black_box(&x), nf, &mut out).expect("batch");
+                    black_box(&out);
+                })
+            })
+        }
+        onnx_forest::Ours::Regressor(f) => {
+            let mut out = vec![0f32; n];
+            g.bench_function("ours_batch", |b| {
+                b.iter(|| {
+                    f.predict_batch(black_box(&x), nf, &mut out).expect("batch");
+                    black_box(&out);
+                })
+            })
+        }
+    };
+    g.bench_function("onnxruntime_batch", |b| {
+        b.iter(|| ort.run(black_box(&x)).expect("ONNX Runtime batch"))
+    });
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     // No plots: criterion's plotters backend panics without a system font (FontUnavailable) here.
     config = Criterion::default().without_plots();
-    targets = bench
+    targets = bench, onnx_runtime
 }
 criterion_main!(benches);

@@ -11,13 +11,21 @@ threshold, finite leaf values).
 
 The graph has one input `x` (float32 `[N, n_features]`) and one `ai.onnx.ml` (opset 3) node:
 
-* classifier -> `TreeEnsembleClassifier`, outputs `label` (int64 `[N]`, the class index 0..K-1) and
-  `probabilities` (float32 `[N, K]`). Each leaf carries its class probabilities divided by the number of
-  trees and `post_transform` is `NONE`, so the output is the mean of the leaf probabilities over trees:
-  our `predict_proba` (ours sums in f32 and scales once; the two agree to ~1e-7). Zero probabilities are
-  left out (every class still appears once, so ONNX Runtime never takes the two-class "one score" path).
+* classifier -> `TreeEnsembleClassifier` (`post_transform` `NONE`) whose leaves carry our leaf class
+  probabilities as they are, so its scores are the sums over trees that our `predict` adds (f32, tree order
+  on one thread: the same bits; a zero is left out, adding it changes nothing), then
+  - `probabilities` (float32 `[N, K]`) = scores × f32(1 / n_trees), a `Mul`: our `predict_proba`, bit for
+    bit (ours scales the same sums by the same f32);
+  - `label` (int64 `[N]`) = the class index of the highest score, lowest index on ties: our `predict`. With
+    K > 2 it is the operator's own label (the first highest score); with K = 2 ONNX Runtime's label is
+    "score of class 1 > 0" (a binary-classifier convention), so `label` is an `ArgMax` of the scores
+    instead (first maximum), and both classes get a weight at every leaf, zeros included, else ONNX
+    Runtime rewrites a row without a class-1 score as [s, -s]. One class is refused (ONNX Runtime
+    needs two).
+  The scores are unnormalised on purpose: dividing the weights by n_trees instead would round each
+  term and break exact vote ties differently from ours (seen on 1 of 66 902 real windows).
   Our class labels (f64, e.g. crack widths in mm) are kept in the metadata `crackbot_class_labels`
-  (JSON); ONNX only allows int64 or string labels, so `label` is the class index, as our `predict`.
+  (JSON); ONNX allows only int64 or string labels, so `label` is the class index, as our `predict`.
 * regressor -> `TreeEnsembleRegressor` (`aggregate_function` `AVERAGE`, one target), output `variable`
   (float32 `[N, 1]`): the mean over trees of the leaf means, our `predict`.
 
@@ -185,21 +193,28 @@ def to_onnx(f: Forest, name="crackbot_forest"):
     x = helper.make_tensor_value_info("x", TensorProto.FLOAT, [None, f.n_features])
     if f.kind == KIND_CLASSIFIER:
         k = f.width
+        if k < 2:
+            raise FormatError(f"a classifier with {k} class: ONNX Runtime's TreeEnsembleClassifier needs two or more")
         probs = f.leaf_values[leaf_ids]  # [n_leaf_nodes, k]
-        weights = (probs / np.float32(f.n_trees)).astype(np.float32)
-        keep = probs != 0
-        # Every class at least once (a zero weight), or ONNX Runtime treats 2 classes as one score.
+        keep = probs != 0 if k > 2 else np.ones_like(probs, dtype=bool)
         for c in np.flatnonzero(~keep.any(axis=0)):
-            keep[0, c] = True
+            keep[0, c] = True  # every class at least once
         rows, cls = np.nonzero(keep)
-        node = helper.make_node(
-            "TreeEnsembleClassifier", ["x"], ["label", "probabilities"], domain="ai.onnx.ml", name="forest",
+        tree_label = "label" if k > 2 else "tree_label"
+        nodes = [helper.make_node(
+            "TreeEnsembleClassifier", ["x"], [tree_label, "scores"], domain="ai.onnx.ml", name="forest",
             classlabels_int64s=list(range(k)),
             class_treeids=tree[leaf_nodes][rows].tolist(),
             class_nodeids=local[leaf_nodes][rows].tolist(),
             class_ids=cls.tolist(),
-            class_weights=weights[rows, cls].tolist(),
-            **common)
+            class_weights=probs[rows, cls].astype(np.float32).tolist(),
+            **common)]
+        nodes.append(helper.make_node("Mul", ["scores", "inv_n_trees"], ["probabilities"], name="mean"))
+        if k == 2:
+            nodes.append(helper.make_node("ArgMax", ["scores"], ["label"], name="argmax", axis=1, keepdims=0,
+                                          select_last_index=0))
+        initializers = [helper.make_tensor("inv_n_trees", TensorProto.FLOAT, [],
+                                           [float(np.float32(1.0) / np.float32(f.n_trees))])]
         outputs = [helper.make_tensor_value_info("label", TensorProto.INT64, [None]),
                    helper.make_tensor_value_info("probabilities", TensorProto.FLOAT, [None, k])]
     else:
@@ -213,8 +228,9 @@ def to_onnx(f: Forest, name="crackbot_forest"):
             target_ids=[0] * len(leaf_nodes),
             target_weights=values.astype(np.float32).tolist(),
             **common)
+        nodes, initializers = [node], []
         outputs = [helper.make_tensor_value_info("variable", TensorProto.FLOAT, [None, 1])]
-    graph = helper.make_graph([node], name, [x], outputs)
+    graph = helper.make_graph(nodes, name, [x], outputs, initializer=initializers)
     model = helper.make_model(
         graph, producer_name="crackbot scripts/forest_to_onnx.py",
         opset_imports=[helper.make_opsetid("", 17), helper.make_opsetid("ai.onnx.ml", 3)])
@@ -235,14 +251,14 @@ def main(argv=None):
     p.add_argument("forest", type=Path, help="crackbot forest file (CRKFORST)")
     p.add_argument("onnx", type=Path, help="ONNX file to write")
     a = p.parse_args(argv)
+    import onnx
+
     try:
         forest = parse(a.forest.read_bytes())
+        model = to_onnx(forest)
     except (OSError, FormatError) as e:
         print(f"forest_to_onnx: {a.forest}: {e}", file=sys.stderr)
         return 1
-    import onnx
-
-    model = to_onnx(forest)
     onnx.checker.check_model(model)
     a.onnx.parent.mkdir(parents=True, exist_ok=True)
     tmp = a.onnx.with_name(f".{a.onnx.name}.tmp")

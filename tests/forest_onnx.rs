@@ -35,22 +35,35 @@ fn onnx_runtime_predicts_like_our_forests() {
     let nf = real.train.n_features;
     let dir = tempfile::tempdir().expect("temp dir");
 
-    // Classifier: fully grown trees (probabilities 0/1 mostly) and depth-capped ones (mixed leaves),
-    // class labels that are not 0..K (kept in the ONNX metadata; ONNX's `label` is the class index).
-    let train = crackbot_forest::Dataset::with_classes(
+    // Classifiers: the bench's 100 fully grown trees (probabilities 0/1 mostly; exact vote ties occur),
+    // depth-capped trees (mixed leaves), and two classes (ONNX Runtime's binary conventions), with class
+    // labels that are not 0..K (kept in the ONNX metadata; ONNX's `label` is the class index).
+    let n_classes = real.train.experiment.n_classes();
+    let four = crackbot_forest::Dataset::with_classes(
         real.train.x.clone(),
         nf,
         real.train.y.clone(),
-        real.train.experiment.n_classes(),
+        n_classes,
     )
     .expect("training set");
-    for (name, depth) in [("grown", None), ("depth6", Some(6))] {
+    let two = crackbot_forest::Dataset::with_classes(
+        real.train.x.clone(),
+        nf,
+        real.train.y.iter().map(|&c| u32::from(c != 0)).collect(),
+        2,
+    )
+    .expect("two-class training set");
+    for (name, train, trees, depth) in [
+        ("grown", &four, 100, None),
+        ("depth6", &four, 15, Some(6)),
+        ("binary", &two, 15, Some(10)),
+    ] {
         let forest = RandomForest::fit(
-            &train,
+            train,
             &ForestParams::classifier()
-                .n_trees(15)
+                .n_trees(trees)
                 .max_depth(depth)
-                .seed(3)
+                .seed(1)
                 .quiet(true),
         )
         .expect("forest")
