@@ -6,8 +6,7 @@ windows every 2 samples): repetition 1 trains, repetition 2 is predicted. They a
 example so both sides see the same rows::
 
     cargo run --release -p crackbot-tactile --example export_windows -- benches/out
-    python3 -m venv benches/.venv-bench          # ignored by benches/.gitignore
-    benches/.venv-bench/bin/pip install scikit-learn skl2onnx onnxruntime
+    bash benches/setup_venv.sh                   # benches/.venv-bench (ignored), benches/requirements.txt
     taskset -c 1 benches/.venv-bench/bin/python benches/sklearn_ort.py benches/out
 
 It trains `RandomForestClassifier(n_estimators=100, random_state=1)` (fully grown trees, sqrt(3) = 1

@@ -1,6 +1,9 @@
 #!/usr/bin/env python3
-"""Medians and ratios of `cargo bench --bench tactile` from criterion's estimates, next to the numbers of
-`benches/sklearn_ort.py` when `benches/out/sklearn_ort.json` exists.
+"""Medians and ratios of `cargo bench --bench tactile` from criterion's estimates (including the
+`onnx_runtime` group: ours vs ONNX Runtime on the same forest), next to the numbers of
+`benches/sklearn_ort.py` when `benches/out/sklearn_ort.json` exists, and the training-time comparison
+when `benches/out/ours_fit.json` (example `fit_csv`) and `benches/out/sklearn_fit.json`
+(`benches/sklearn_fit.py`) exist.
 
     python3 benches/summary.py [CRITERION_DIR] [SKLEARN_ORT_JSON]
 
@@ -18,11 +21,54 @@ DEPTH_CAPS = [8, 10, 12]
 
 
 def median_ns(root, group, name):
+    if not (root / group).is_dir():
+        return None
     for d in (root / group).iterdir():
         bench = d / "new" / "benchmark.json"
         if bench.exists() and json.loads(bench.read_text()).get("function_id") == name:
             return json.loads((d / "new" / "estimates.json").read_text())["median"]["point_estimate"]
     return None
+
+
+def throughput(root, group, name):
+    """Elements per iteration of a criterion benchmark, when it set a throughput."""
+    for d in (root / group).iterdir() if (root / group).is_dir() else []:
+        bench = d / "new" / "benchmark.json"
+        if bench.exists():
+            b = json.loads(bench.read_text())
+            if b.get("function_id") == name:
+                return (b.get("throughput") or {}).get("Elements")
+    return None
+
+
+def onnx_runtime(root):
+    """The `onnx_runtime` group: ours vs ONNX Runtime on the same forest and windows, same run."""
+    m = {n: median_ns(root, "onnx_runtime", n) for n in ["ours_row", "onnxruntime_row", "ours_batch", "onnxruntime_batch"]}
+    if not m["ours_row"]:
+        return
+    print("ours vs ONNX Runtime (onnx_runtime group: same forest file and windows, one core, 1 intra-op thread)")
+    if m["onnxruntime_row"]:
+        print(f"  one window: ours {m['ours_row'] / 1e3:.2f} µs, ONNX Runtime {m['onnxruntime_row'] / 1e3:.2f} µs "
+              f"= {m['onnxruntime_row'] / m['ours_row']:.1f}× ours")
+    n = throughput(root, "onnx_runtime", "ours_batch")
+    if n and m["ours_batch"] and m["onnxruntime_batch"]:
+        ours, theirs = n / (m["ours_batch"] / 1e9), n / (m["onnxruntime_batch"] / 1e9)
+        print(f"  batch of {n} windows: ours {ours:.0f} windows/s, ONNX Runtime {theirs:.0f} windows/s "
+              f"(ours {ours / theirs:.1f}×)")
+
+
+def training(out):
+    """Training time, ours (`fit_csv`) vs scikit-learn (`sklearn_fit.py`), from their JSON files."""
+    ours_p, skl_p = out / "ours_fit.json", out / "sklearn_fit.json"
+    if not (ours_p.exists() and skl_p.exists()):
+        return
+    ours, skl = json.loads(ours_p.read_text()), json.loads(skl_p.read_text())
+    print(f"training {ours['trees']} trees on {ours['rows']} windows ({ours['csv']}), median wall time")
+    print(f"  ours {ours['threads']} threads: {ours['fit_median_s']:.2f} s ({ours['nodes']} nodes); "
+          f"scikit-learn {skl['sklearn_version']} n_jobs={skl['n_jobs']}: {skl['fit_median_s']:.2f} s "
+          f"({skl['nodes']} nodes); scikit-learn / ours = {skl['fit_median_s'] / ours['fit_median_s']:.1f}×")
+    if ours["csv"] != skl["csv"] or ours["rows"] != skl["rows"]:
+        print(f"  warning: different inputs ({ours['csv']}, {ours['rows']} rows vs {skl['csv']}, {skl['rows']} rows)")
 
 
 def main():
@@ -40,6 +86,8 @@ def main():
         m[f"depth{d}/stream_push+forest_predict"] = median_ns(
             root, "per_window_depth_capped", f"depth{d}/stream_push+forest_predict")
         m[f"depth{d}/predict_batch"] = median_ns(root, "batch", f"depth{d}/predict_batch")
+    onnx_runtime(root)
+    training(skl.parent)
     ext = json.loads(skl.read_text()) if skl.exists() else {}
     n_test = ext.get("n_test")
 
