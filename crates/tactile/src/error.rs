@@ -196,6 +196,13 @@ pub enum TactileError {
     /// A figure could not be drawn (by the closure the caller passed in).
     #[error(transparent)]
     Figure(Box<dyn std::error::Error + Send + Sync>),
+    /// A slide given to the localiser ([`crate::localise`]) is unusable (no samples, samples and positions of
+    /// different lengths, a non-finite value, no travel) or its settings are invalid.
+    #[error("localisation: {reason}")]
+    Localisation {
+        /// What is wrong.
+        reason: String,
+    },
 }
 
 impl TactileError {

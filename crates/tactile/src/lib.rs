@@ -7,6 +7,7 @@
 //! * [`eval`]: training and testing classifiers, slide verdicts, width regression;
 //! * [`evaluation`]: the whole `crackbot tactile eval` flow as one call returning a `Serialize` report;
 //! * [`context`]: causal context features of a window; [`stream`]: the same, sample by sample;
+//! * [`localise`]: where a crack starts and ends along a slide, from the proximity dip and the position stream;
 //! * [`metrics`].
 //!
 //! Cargo features (default off), for research only:
@@ -22,6 +23,7 @@ pub mod dataset;
 mod error;
 pub mod eval;
 pub mod evaluation;
+pub mod localise;
 pub mod metrics;
 #[cfg(feature = "research")]
 pub mod paper;
