@@ -3,13 +3,13 @@
 //!
 //! ```sh
 //! cargo run --release -p crackbot-forest --example fit_csv -- benches/out/train.csv \
-//!     --threads 2 --repeats 5 --json benches/out/ours_fit.json [--trees 100] [--save model.forest]
+//!     --threads 2 --repeats 5 --json benches/out/ours_fit.json [--trees 100] [--max-depth D] [--save model.forest]
 //! ```
 //!
 //! The CSV has a header line, then one window per line: the features, then the class (an integer
 //! 0..K-1) in the last column (as `crackbot-tactile`'s example `export_windows` writes them). The forest
-//! is ours with the defaults (`ForestParams::classifier()`: fully grown, sqrt(n_features) features per
-//! split, bootstrap), seed 1, trained `--repeats` times; the median wall time is printed and written to
+//! is ours with the defaults (`ForestParams::classifier()`: fully grown unless `--max-depth`,
+//! sqrt(n_features) features per split, bootstrap), seed 1, trained `--repeats` times; the median wall time is printed and written to
 //! `--json` with every run's time.
 
 use std::path::PathBuf;
@@ -22,6 +22,7 @@ struct Args {
     threads: usize,
     repeats: usize,
     trees: usize,
+    max_depth: Option<usize>,
     json: Option<PathBuf>,
     save: Option<PathBuf>,
 }
@@ -33,6 +34,7 @@ fn parse_args() -> Result<Args, String> {
         threads: 2,
         repeats: 5,
         trees: 100,
+        max_depth: None,
         json: None,
         save: None,
     };
@@ -49,6 +51,7 @@ fn parse_args() -> Result<Args, String> {
             "--threads" => a.threads = number("--threads", value("--threads")?)?,
             "--repeats" => a.repeats = number("--repeats", value("--repeats")?)?,
             "--trees" => a.trees = number("--trees", value("--trees")?)?,
+            "--max-depth" => a.max_depth = Some(number("--max-depth", value("--max-depth")?)?),
             "--json" => a.json = Some(value("--json")?.into()),
             "--save" => a.save = Some(value("--save")?.into()),
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
@@ -56,7 +59,7 @@ fn parse_args() -> Result<Args, String> {
             _ => return Err(format!("unexpected argument {arg:?}")),
         }
     }
-    a.csv = csv.ok_or("usage: fit_csv TRAIN.csv [--threads N] [--repeats R] [--trees T] [--json OUT] [--save FOREST]")?;
+    a.csv = csv.ok_or("usage: fit_csv TRAIN.csv [--threads N] [--repeats R] [--trees T] [--max-depth D] [--json OUT] [--save FOREST]")?;
     Ok(a)
 }
 
@@ -103,6 +106,7 @@ fn main() -> Result<(), String> {
     let data = read_csv(&a.csv)?;
     let params = ForestParams::classifier()
         .n_trees(a.trees)
+        .max_depth(a.max_depth)
         .seed(1)
         .n_threads(Some(a.threads))
         .quiet(true);
@@ -139,6 +143,7 @@ fn main() -> Result<(), String> {
             "rows": data.n_rows(),
             "n_features": data.n_features(),
             "trees": a.trees,
+            "max_depth": a.max_depth,
             "threads": a.threads,
             "fit_s": times,
             "fit_median_s": median,
