@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use crackbot_recording::Format;
-use crackbot_sim::calibrate::{calibrate_to_real, calibration_steps};
+use crackbot_sim::calibrate::calibrate_to_real;
 use crackbot_sim::experiment::{generate_dataset, ExperimentConfig};
 use crackbot_sim::recordings::{compare_slides, load_recordings, recordings_of_repetition};
 use crackbot_sim::work_precision::{default_methods, work_precision};
@@ -122,8 +122,13 @@ pub struct DatasetArgs {
     #[arg(long)]
     no_roughness: bool,
     /// Sliding speed, mm/s (the paper states about 3.89; the authors' files move at about 4.6).
-    #[arg(long, default_value_t = 3.89)]
+    #[arg(long, default_value_t = crackbot_sim::experiment::PAPER_SPEED_MM_S)]
     speed_mm_s: f64,
+    /// Simulate with these parameters instead of the calibrated ones: a TOML file with any of
+    /// the tables `[sensor.finger]`, `[sensor.optics]` (fields of `FingerParams`,
+    /// `OpticsParams`) and `[samples]` (fields of `Samples`); what it leaves out stays calibrated.
+    #[arg(long)]
+    params: Option<PathBuf>,
 }
 
 /// `crackbot sim calibrate`.
@@ -139,9 +144,13 @@ pub struct CalibrateArgs {
     /// Use only this repetition (the others stay unseen for checking the transfer).
     #[arg(long, default_value_t = 1)]
     repetition: u32,
-    /// Evaluations per Nelder–Mead run.
+    /// Evaluations per Nelder–Mead run of the optics.
     #[arg(long, default_value_t = 300)]
     evaluations: usize,
+    /// Mechanics candidates (tip radius, lateral stiffness, friction, crack depth, bump radius
+    /// and height) simulated, each with its optics refitted.
+    #[arg(long, default_value_t = 60)]
+    mechanics_evaluations: usize,
     /// Write the report as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -216,6 +225,13 @@ fn dataset(a: DatasetArgs) -> Result<()> {
         );
     }
     config.speed_mm_s = a.speed_mm_s;
+    if let Some(path) = &a.params {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        config
+            .apply_params_toml(&text)
+            .with_context(|| format!("parameters of {}", path.display()))?;
+    }
     let total = config.surfaces().len() * a.recordings as usize;
     let pb = bar(total, "simulating");
     let report = generate_dataset(
@@ -244,10 +260,17 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
         Some(dir) => Some(recordings_of_repetition(dir, a.repetition)?),
         None => None,
     };
-    let pb = bar(calibration_steps(), "fitting geometry and optics");
-    let summary = calibrate_to_real(&real, width_real.as_deref(), a.evaluations, |k, _| {
-        pb.set_position(k as u64)
-    })?;
+    let pb = bar(
+        a.mechanics_evaluations,
+        "fitting mechanics, geometry and optics",
+    );
+    let summary = calibrate_to_real(
+        &real,
+        width_real.as_deref(),
+        a.evaluations,
+        a.mechanics_evaluations,
+        |k, _| pb.set_position(k as u64),
+    )?;
     pb.finish_and_clear();
     let report = &summary.report;
     println!("quantile distance (RMS counts)   D1      D2      D3      P");
@@ -259,10 +282,10 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
         "after                        {:7.2} {:7.2} {:7.2} {:7.2}",
         report.rms_after[0], report.rms_after[1], report.rms_after[2], report.rms_after[3]
     );
-    println!(
-        "geometry: crack depth {} mm, bump radius {} mm, bump height {} mm",
-        report.samples.crack_depth_mm, report.samples.bump_radius_mm, report.samples.bump_height_mm
-    );
+    println!("fitted finger (TOML, [sensor.finger]):");
+    println!("{}", toml::to_string(&report.finger)?);
+    println!("fitted plates (TOML, [samples]):");
+    println!("{}", toml::to_string(&report.samples)?);
     println!("fitted optics (TOML, [sensor.optics]):");
     println!("{}", toml::to_string(&report.optics)?);
     for (name, m) in &summary.mounts {

@@ -1,26 +1,47 @@
 //! Calibration of the simulated sensor against the authors' real recordings.
 //!
-//! The mechanics are physical guesses (the finger's stiffness, friction and geometry are not
-//! published); the optics and electronics are *fitted*: the simulator runs the recognition
-//! experiment once with noise-free electronics, and the channel maps are chosen so that, for
-//! every surface class and sliding direction, the quantiles (5 %, 15 %, …, 95 %) of each
-//! simulated channel match those of the real recordings. That needs no alignment between real
-//! and simulated slides (the real feature positions are unknown), and it matches signal levels
-//! and per-class shapes of the distributions. The deformation channels are linear in their
-//! parameters (rest level and gains for lateral deflection, normal compression and friction
-//! moment) and are fitted one by one; the proximity channel (dark level, peak, peak distance,
-//! fibre height, look-ahead, spot) is fitted jointly. Both by Nelder–Mead. Noise levels come
-//! from the first differences of the real flat recordings.
+//! Fitted on **repetition 1 only** (of `tactile/type` and `tactile/width`); repetitions 2 and 3
+//! are left for measuring the transfer. What is fitted:
 //!
-//! [`calibrated_sensor`] holds the result of `crackbot sim calibrate` on repetition 1 of
-//! `../shared/data/tactile/type` (repetitions 2 and 3 are left for checking the sim→real
-//! transfer).
+//! * **Mechanics and plates** ([`MECHANICS`]): the tip's radius, the finger's lateral stiffness
+//!   (with the haptic device's servo in series: the real position column jumps where the finger
+//!   sticks), the tip–PLA friction, the cracks' depth and wall angle, the bump's radius and
+//!   height. Nelder–Mead in log space; each candidate simulates both experiments
+//!   ([`CALIBRATION_SLIDES`] slides per plate, noise-free) and gets its optics refitted.
+//! * **Optics**: the proximity channel (dark level, peak, peak distance, fibre height,
+//!   look-ahead, spot) jointly, then each deformation channel's gains for lateral deflection,
+//!   normal compression and friction moment, by Nelder–Mead.
+//!
+//! The objective needs no alignment between real and simulated slides (the real feature
+//! positions are unknown): for every plate and sliding direction, the quantiles (5 %, 15 %, …,
+//! 95 %) of each channel, the deformation channels relative to their recording's median (their
+//! levels move with the fibre cables between plates and sessions; the plate mounts,
+//! [`fit_mounts`], take those), the proximity channel as it is. The search minimises
+//! [`weighted_loss`] (D1 and D2, which the classifiers read, weighted most). Noise levels come
+//! from the first differences of the real flat recordings, roughness from the flat plate's
+//! proximity spread ([`fit_roughness`]).
+//!
+//! Fit (`crackbot sim calibrate --real ../shared/data/tactile/type --real-width
+//! ../shared/data/tactile/width --repetition 1 --evaluations 240 --mechanics-evaluations 60`,
+//! about 3 minutes on one core), quantile distance in RMS counts:
+//!
+//! | | D1 | D2 | D3 | P |
+//! |---|---|---|---|---|
+//! | simulator before this fit (10 mm tip, 1 N/mm, μ 0.15, bump r 6 h 1, crack 8 mm deep) | 64.0 | 26.5 | 78.8 | 99.6 |
+//! | fitted ([`calibrated_sensor`], [`calibrated_samples`]) | 4.35 | 2.51 | 5.22 | 43.3 |
+//!
+//! Fitted: tip radius 4.4 mm, lateral stiffness 0.59 N/mm, friction 0.33, cracks 2.5 mm deep
+//! with 73° walls, bump of 3.9 mm base radius and 2.4 mm height. The bump now gives the real
+//! finger's short proximity spike with a jump of the position column (stick-slip), not a broad
+//! rise; the deformation channels' excursions over a crack are the real ones' size.
+//!
+//! Transfer, measured on repetitions 2 and 3 only: see the crate's `docs/calibration.md`.
 
 use crackbot_recording::Recording;
 use serde::Serialize;
 
 use crate::experiment::ExperimentConfig;
-use crate::finger::{FingerModel, Integrator};
+use crate::finger::{FingerModel, FingerParams, Integrator};
 use crate::optics::OpticsParams;
 pub use crate::plates::{calibrated_mounts, calibrated_samples, calibrated_sensor};
 use crate::plates::{Experiment, PlateMount, Samples};
@@ -90,7 +111,7 @@ pub fn fit_mounts(
 pub struct ChannelQuantiles {
     /// Class label.
     pub label: f64,
-    /// Sliding direction (1 = +x).
+    /// Sliding direction (0 towards +x, 1 back: the recordings' column 6).
     pub direction: u8,
     /// Channel index (0 D1, 1 D2, 2 D3, 3 P).
     pub channel: usize,
@@ -115,21 +136,43 @@ fn quantiles(v: Vec<f64>) -> Vec<f64> {
     }
 }
 
+/// The median of each channel of one recording (`None` when it has no rows).
+fn recording_medians(r: &Recording) -> Option<[f64; 4]> {
+    let mut out = [0.0; 4];
+    for (c, o) in out.iter_mut().enumerate() {
+        let v = sorted_finite(r.rows.iter().map(|row| row.channels()[c]).collect())?;
+        *o = v[v.len() / 2];
+    }
+    Some(out)
+}
+
 /// The real targets: channel quantiles per class and direction, from `recordings` (each with
-/// its label in the rows).
+/// its label in the rows). The deformation channels (D1, D2, D3) are taken relative to their
+/// recording's median: their levels shift between plates and sessions with the fibre cables
+/// (that is the plate mounts' business, [`fit_mounts`]), their excursions are the finger's.
+/// The proximity channel is taken as it is.
 pub fn real_quantiles(recordings: &[Recording]) -> Vec<ChannelQuantiles> {
     let mut labels: Vec<f64> = recordings.iter().filter_map(|r| r.label()).collect();
     labels.sort_by(f64::total_cmp);
     labels.dedup();
+    let medians: Vec<[f64; 4]> = recordings
+        .iter()
+        .map(|r| recording_medians(r).unwrap_or_default())
+        .collect();
     let mut out = Vec::new();
     for &label in &labels {
         for direction in [0u8, 1] {
             for channel in 0..4 {
                 let values = recordings
                     .iter()
-                    .flat_map(|r| r.rows.iter())
-                    .filter(|row| row.label == label && row.direction == direction)
-                    .map(|row| row.channels()[channel])
+                    .zip(&medians)
+                    .flat_map(|(r, m)| {
+                        let shift = if channel < 3 { m[channel] } else { 0.0 };
+                        r.rows
+                            .iter()
+                            .filter(move |row| row.label == label && row.direction == direction)
+                            .map(move |row| row.channels()[channel] - shift)
+                    })
                     .collect();
                 out.push(ChannelQuantiles {
                     label,
@@ -167,8 +210,8 @@ pub fn noise_free(sensor: &SensorParams) -> SensorParams {
     s
 }
 
-/// Simulates one recording per surface of `config` (12 slides, noise-free electronics) for
-/// calibration.
+/// Simulates one recording per surface of `config` (`config.slides` slides, noise-free
+/// electronics, the stroke starting 7.5 mm before the feature) for calibration.
 pub fn simulate_traces(config: &ExperimentConfig) -> Result<Vec<Trace>, SimError> {
     let sensor = noise_free(&config.sensor);
     let mut traces = Vec::new();
@@ -202,8 +245,10 @@ pub fn simulate_traces(config: &ExperimentConfig) -> Result<Vec<Trace>, SimError
     Ok(traces)
 }
 
+/// The recordings' direction column of a sample: 0 moving towards +x, 1 back (the authors'
+/// convention).
 fn direction_of(s: &Sample) -> u8 {
-    u8::from(s.arm_velocity_mm_s >= 0.0)
+    u8::from(s.arm_velocity_mm_s < 0.0)
 }
 
 /// The noise-free value of channel `channel` for a sample under `optics`.
@@ -246,12 +291,27 @@ pub fn channel_loss(
             continue;
         };
         // Every second sample: 200 Hz is plenty for quantiles and halves the cost.
-        let values: Vec<f64> = trace
+        let all: Vec<(u8, f64)> = trace
             .samples
             .iter()
             .step_by(2)
-            .filter(|s| direction_of(s) == t.direction)
-            .map(|s| optics.saturate(channel_value(optics, static_mm, trace, s, channel)))
+            .map(|s| {
+                (
+                    direction_of(s),
+                    optics.saturate(channel_value(optics, static_mm, trace, s, channel)),
+                )
+            })
+            .collect();
+        // The deformation channels relative to the recording's median, as the targets.
+        let shift = if channel < 3 {
+            sorted_finite(all.iter().map(|a| a.1).collect()).map_or(0.0, |v| v[v.len() / 2])
+        } else {
+            0.0
+        };
+        let values: Vec<f64> = all
+            .iter()
+            .filter(|a| a.0 == t.direction)
+            .map(|a| a.1 - shift)
             .collect();
         let q = quantiles(values);
         for (a, b) in q.iter().zip(&t.values) {
@@ -346,7 +406,7 @@ pub fn nelder_mead(
 #[derive(Debug, Clone, Serialize)]
 pub struct CalibrationReport {
     /// Quantile distance (RMS, counts) per channel before the fit (D1, D2, D3, P), with the
-    /// starting optics and geometry.
+    /// starting sensor and geometry, over both experiments.
     pub rms_before: [f64; 4],
     /// After the fit.
     pub rms_after: [f64; 4],
@@ -354,24 +414,119 @@ pub struct CalibrationReport {
     pub noise_counts: [f64; 4],
     /// The fitted optics.
     pub optics: OpticsParams,
-    /// The plates' geometry chosen from the grid.
+    /// The fitted finger mechanics.
+    pub finger: FingerParams,
+    /// The plates' fitted geometry.
     pub samples: Samples,
-    /// Proximity distance (RMS counts) of every geometry tried: `(crack depth, bump radius,
-    /// bump height, RMS)`.
-    pub geometry_grid: Vec<(f64, f64, f64, f64)>,
+    /// Every mechanics candidate tried, in [`MECHANICS`] order, with its weighted loss.
+    pub candidates: Vec<(Vec<f64>, f64)>,
 }
 
-/// Geometries tried by [`calibrate`]: crack depths, bump radii and bump heights, mm.
-pub const GEOMETRY_GRID: ([f64; 3], [f64; 4], [f64; 3]) =
-    ([3.0, 5.0, 8.0], [2.0, 3.0, 4.5, 6.0], [1.0, 2.0, 3.5]);
+/// The mechanical and geometric parameters [`calibrate`] fits (with the optics refitted for
+/// each candidate), in the order of [`CalibrationReport::candidates`].
+pub const MECHANICS: [&str; 7] = [
+    "finger.tip_radius_mm",
+    "finger.lateral_stiffness_n_mm",
+    "finger.friction",
+    "samples.crack_depth_mm",
+    "samples.bump_radius_mm",
+    "samples.bump_height_mm",
+    "samples.crack_wall_angle_deg",
+];
+
+/// Slides per simulated recording while fitting (the statistics settle after a few).
+pub const CALIBRATION_SLIDES: u32 = 4;
+
+/// The values of [`MECHANICS`] in `config`.
+pub fn mechanics_of(config: &ExperimentConfig) -> [f64; 7] {
+    let f = &config.sensor.finger;
+    let s = &config.samples;
+    [
+        f.tip_radius_mm,
+        f.lateral_stiffness_n_mm,
+        f.friction,
+        s.crack_depth_mm,
+        s.bump_radius_mm,
+        s.bump_height_mm,
+        s.crack_wall_angle_deg,
+    ]
+}
+
+/// `config` with the [`MECHANICS`] values `m`.
+pub fn with_mechanics(config: &ExperimentConfig, m: &[f64]) -> ExperimentConfig {
+    let mut c = config.clone();
+    c.sensor.finger.tip_radius_mm = m[0];
+    c.sensor.finger.lateral_stiffness_n_mm = m[1];
+    c.sensor.finger.friction = m[2];
+    c.samples.crack_depth_mm = m[3];
+    c.samples.bump_radius_mm = m[4];
+    c.samples.bump_height_mm = m[5];
+    c.samples.crack_wall_angle_deg = m[6].min(90.0);
+    c
+}
+
+/// One experiment's share of a calibration: simulated recordings and the real targets.
+struct Set {
+    traces: Vec<Trace>,
+    targets: Vec<ChannelQuantiles>,
+}
+
+fn sets_loss(o: &OpticsParams, static_mm: f64, sets: &[Set], channel: usize) -> f64 {
+    sets.iter()
+        .map(|s| channel_loss(o, static_mm, &s.traces, &s.targets, channel))
+        .sum::<f64>()
+        / sets.len().max(1) as f64
+}
+
+fn sets_rms(o: &OpticsParams, static_mm: f64, sets: &[Set]) -> [f64; 4] {
+    std::array::from_fn(|c| sets_loss(o, static_mm, sets, c).sqrt())
+}
+
+/// The single number the mechanics search minimises: squared quantile distances, the lateral
+/// channels D1 and D2 (which the classifiers read) weighted 10, D3 3, P 1 (its excursions are
+/// tens of times larger).
+pub fn weighted_loss(rms: &[f64; 4]) -> f64 {
+    10.0 * (rms[0].powi(2) + rms[1].powi(2)) + 3.0 * rms[2].powi(2) + rms[3].powi(2)
+}
+
+/// Fits the deformation gains (lateral, normal, moment) of channel `c` by Nelder–Mead.
+fn fit_deformation(
+    optics: &mut OpticsParams,
+    static_mm: f64,
+    sets: &[Set],
+    c: usize,
+    max_evals: usize,
+) {
+    let x0 = [
+        optics.lateral_gain[c],
+        optics.normal_gain[c],
+        optics.moment_gain[c],
+    ];
+    let (x, _) = nelder_mead(
+        |x| {
+            let mut o = optics.clone();
+            o.lateral_gain[c] = x[0];
+            o.normal_gain[c] = x[1];
+            o.moment_gain[c] = x[2];
+            sets_loss(&o, static_mm, sets, c)
+        },
+        &x0,
+        &[5.0, 5.0, 2.0],
+        max_evals,
+    );
+    optics.lateral_gain[c] = x[0];
+    optics.normal_gain[c] = x[1];
+    optics.moment_gain[c] = x[2];
+}
 
 /// Fits the proximity optics (dark level, peak, peak distance, fibre height, look-ahead, spot)
-/// to the real quantiles from a few starting points; returns the best optics and its RMS.
+/// to the real quantiles from the given `(look-ahead, fibre height)` starts (mm); returns the
+/// best optics and its RMS.
 fn fit_proximity(
     start: &OpticsParams,
     static_mm: f64,
-    traces: &[Trace],
-    targets: &[ChannelQuantiles],
+    sets: &[Set],
+    starts: &[(f64, f64)],
     max_evals: usize,
 ) -> (OpticsParams, f64) {
     let apply = |o: &mut OpticsParams, x: &[f64]| {
@@ -384,7 +539,7 @@ fn fit_proximity(
     };
     let mut best = (start.clone(), f64::INFINITY);
     // Look-ahead behind, under and ahead of the tip; the fibre on either side of the curve's peak.
-    for (offset, height) in [(-1.5, 1.5), (0.0, 1.5), (1.5, 1.5), (0.0, 3.5)] {
+    for &(offset, height) in starts {
         let x0 = [
             start.proximity_dark_counts,
             start.proximity_peak_counts,
@@ -397,7 +552,7 @@ fn fit_proximity(
             |x| {
                 let mut o = start.clone();
                 apply(&mut o, x);
-                channel_loss(&o, static_mm, traces, targets, 3)
+                sets_loss(&o, static_mm, sets, 3)
             },
             &x0,
             &[20.0, 50.0, 0.3, 0.5, 0.5, 0.3],
@@ -412,104 +567,199 @@ fn fit_proximity(
     (best.0, best.1.sqrt())
 }
 
-/// Fits the optics of `config.sensor` and the plates' geometry to `real` recordings of the
-/// recognition experiment (labels 0–3): for every geometry of [`GEOMETRY_GRID`] the proximity
-/// optics are fitted from several starts; the best geometry then gets its deformation channels
-/// fitted. `max_evals` bounds each Nelder–Mead run; `progress(done, total)` is called per
-/// geometry.
+/// Fits the optics to `sets` for fixed mechanics: the proximity channel from `starts`, then
+/// each deformation channel. Returns the optics and the RMS per channel.
+fn fit_optics(
+    start: &OpticsParams,
+    static_mm: f64,
+    sets: &[Set],
+    starts: &[(f64, f64)],
+    max_evals: usize,
+) -> (OpticsParams, [f64; 4]) {
+    let (mut optics, _) = fit_proximity(start, static_mm, sets, starts, max_evals);
+    for c in 0..3 {
+        fit_deformation(&mut optics, static_mm, sets, c, max_evals / 2);
+    }
+    let rms = sets_rms(&optics, static_mm, sets);
+    (optics, rms)
+}
+
+/// Fits the finger's mechanics, the plates' geometry and the optics of `config` to real
+/// recordings of the recognition experiment (`recognition`, labels 0–3) and, when given, of
+/// the width experiment (`width`). Every candidate of [`MECHANICS`] (searched by Nelder–Mead in
+/// log space from `config`'s values, at most `mechanics_evals` candidates) gets its recordings
+/// simulated ([`CALIBRATION_SLIDES`] slides per plate, noise-free) and its optics refitted
+/// from the starting optics (`max_evals / 3` evaluations per Nelder–Mead run); the best one
+/// then gets its optics fitted from several starts with `max_evals`. The deformation channels'
+/// resting levels are set so that the simulated flat plate has the real one's medians.
+/// `progress(done, total)` is called per candidate.
 pub fn calibrate(
     config: &ExperimentConfig,
-    real: &[Recording],
+    recognition: &[Recording],
+    width: Option<&[Recording]>,
     max_evals: usize,
+    mechanics_evals: usize,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<CalibrationReport, SimError> {
-    if config.experiment != Experiment::Recognition {
-        return Err(SimError::Invalid(
-            "calibration uses the recognition experiment (four surfaces)".into(),
-        ));
-    }
-    if real.is_empty() {
+    if recognition.is_empty() {
         return Err(SimError::Invalid(
             "no real recordings to calibrate against".into(),
         ));
     }
-    let targets = real_quantiles(real);
+    let mut experiments = vec![(Experiment::Recognition, real_quantiles(recognition))];
+    if let Some(w) = width.filter(|w| !w.is_empty()) {
+        experiments.push((Experiment::Width, real_quantiles(w)));
+    }
     let static_mm = {
         let s = &config.sensor.finger;
         s.body_mass_g * 1e-3 * 9.81 / (s.normal_stiffness_n_mm * 1e3) * 1e3
     };
-    let rms = |o: &OpticsParams, traces: &[Trace]| -> [f64; 4] {
-        std::array::from_fn(|c| channel_loss(o, static_mm, traces, &targets, c).sqrt())
-    };
     let mut quiet = config.clone();
     quiet.integrator = Integrator::default();
     quiet.mounts.clear();
-    let rms_before = rms(&config.sensor.optics, &simulate_traces(&quiet)?);
-    let (depths, radii, heights) = GEOMETRY_GRID;
-    let total = depths.len() * radii.len() * heights.len();
-    let mut grid = Vec::with_capacity(total);
-    let mut best: Option<(f64, Samples, OpticsParams, Vec<Trace>)> = None;
-    for &depth in &depths {
-        for &radius in &radii {
-            for &height in &heights {
-                let mut trial = quiet.clone();
-                trial.samples.crack_depth_mm = depth;
-                trial.samples.bump_radius_mm = radius;
-                trial.samples.bump_height_mm = height;
-                let traces = simulate_traces(&trial)?;
-                let (optics, p_rms) = fit_proximity(
-                    &config.sensor.optics,
-                    static_mm,
-                    &traces,
-                    &targets,
-                    max_evals,
-                );
-                grid.push((depth, radius, height, p_rms));
-                progress(grid.len(), total);
-                if best.as_ref().is_none_or(|b| p_rms < b.0) {
-                    best = Some((p_rms, trial.samples.clone(), optics, traces));
+    quiet.slides = CALIBRATION_SLIDES;
+    let sets_of = |c: &ExperimentConfig| -> Result<Vec<Set>, SimError> {
+        experiments
+            .iter()
+            .map(|(e, targets)| {
+                let mut c = c.clone();
+                c.experiment = *e;
+                Ok(Set {
+                    traces: simulate_traces(&c)?,
+                    targets: targets.clone(),
+                })
+            })
+            .collect()
+    };
+    let start_sets = sets_of(&quiet)?;
+    let rms_before = sets_rms(&config.sensor.optics, static_mm, &start_sets);
+    let one_start = [(
+        config.sensor.optics.proximity_offset_mm,
+        config.sensor.optics.proximity_height_mm,
+    )];
+    let (start_optics, _) = fit_optics(
+        &config.sensor.optics,
+        static_mm,
+        &start_sets,
+        &one_start,
+        max_evals,
+    );
+    let m0 = mechanics_of(&quiet);
+    let total = mechanics_evals.max(1);
+    let mut candidates: Vec<(Vec<f64>, f64)> = Vec::new();
+    let mut failure: Option<SimError> = None;
+    let (best_log, _) = nelder_mead(
+        |x| {
+            let m: Vec<f64> = x.iter().map(|v| v.exp()).collect();
+            let trial = with_mechanics(&quiet, &m);
+            let loss = match trial.validate().and_then(|()| sets_of(&trial)) {
+                Ok(sets) => {
+                    let (_, rms) =
+                        fit_optics(&start_optics, static_mm, &sets, &one_start, max_evals / 3);
+                    weighted_loss(&rms)
                 }
+                Err(SimError::Invalid(_)) => f64::INFINITY,
+                Err(e) => {
+                    failure.get_or_insert(e);
+                    f64::INFINITY
+                }
+            };
+            candidates.push((m, loss));
+            progress(candidates.len().min(total), total);
+            loss
+        },
+        &m0.map(f64::ln),
+        &[0.3, 0.5, 0.4, 0.3, 0.2, 0.2, 0.15],
+        total,
+    );
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    let best: Vec<f64> = best_log.iter().map(|v| v.exp()).collect();
+    let fitted = with_mechanics(&quiet, &best);
+    let sets = sets_of(&fitted)?;
+    let (mut optics, _) = fit_optics(
+        &start_optics,
+        static_mm,
+        &sets,
+        &[
+            (
+                start_optics.proximity_offset_mm,
+                start_optics.proximity_height_mm,
+            ),
+            (-1.5, 1.5),
+            (0.0, 1.5),
+            (1.5, 1.5),
+            (0.0, 3.5),
+        ],
+        max_evals,
+    );
+    // Resting levels: the simulated flat plate's medians onto the real one's.
+    let real_flat: Vec<Recording> = recognition
+        .iter()
+        .filter(|r| r.label() == Some(0.0))
+        .cloned()
+        .collect();
+    if let (Some(flat), Some(real)) = (
+        sets[0].traces.iter().find(|t| t.label == 0.0),
+        real_flat.first().and_then(recording_medians),
+    ) {
+        for c in 0..3 {
+            let sim = sorted_finite(
+                flat.samples
+                    .iter()
+                    .map(|s| channel_value(&optics, static_mm, flat, s, c))
+                    .collect(),
+            );
+            if let Some(sim) = sim {
+                optics.rest_counts[c] += real[c] - sim[sim.len() / 2];
             }
         }
     }
-    let Some((_, samples, mut optics, traces)) = best else {
-        return Err(SimError::Invalid("empty geometry grid".into()));
-    };
-    for c in 0..3 {
-        let x0 = [
-            optics.rest_counts[c],
-            optics.lateral_gain[c],
-            optics.normal_gain[c],
-            optics.moment_gain[c],
-        ];
-        let (x, _) = nelder_mead(
-            |x| {
-                let mut o = optics.clone();
-                o.rest_counts[c] = x[0];
-                o.lateral_gain[c] = x[1];
-                o.normal_gain[c] = x[2];
-                o.moment_gain[c] = x[3];
-                channel_loss(&o, static_mm, &traces, &targets, c)
-            },
-            &x0,
-            &[5.0, 5.0, 5.0, 5.0],
-            max_evals,
-        );
-        optics.rest_counts[c] = x[0];
-        optics.lateral_gain[c] = x[1];
-        optics.normal_gain[c] = x[2];
-        optics.moment_gain[c] = x[3];
-    }
-    let noise_counts = real_noise(real);
+    let noise_counts = real_noise(recognition);
     optics.noise_counts = noise_counts;
     Ok(CalibrationReport {
         rms_before,
-        rms_after: rms(&optics, &traces),
+        rms_after: sets_rms(&optics, static_mm, &sets),
         noise_counts,
         optics,
-        samples,
-        geometry_grid: grid,
+        finger: fitted.sensor.finger.clone(),
+        samples: fitted.samples.clone(),
+        candidates,
     })
+}
+
+/// The quantile distance (RMS counts per channel, D1, D2, D3, P) between `config`'s sensor and
+/// plates (noise-free, [`CALIBRATION_SLIDES`] slides per plate, neutral mounts) and real
+/// recordings of the recognition experiment and, when given, of the width experiment: the
+/// numbers [`calibrate`] reports as `rms_after`.
+pub fn fit_rms(
+    config: &ExperimentConfig,
+    recognition: &[Recording],
+    width: Option<&[Recording]>,
+) -> Result<[f64; 4], SimError> {
+    let static_mm = {
+        let s = &config.sensor.finger;
+        s.body_mass_g * 1e-3 * 9.81 / (s.normal_stiffness_n_mm * 1e3) * 1e3
+    };
+    let mut quiet = config.clone();
+    quiet.mounts.clear();
+    quiet.slides = CALIBRATION_SLIDES;
+    let mut sets = Vec::new();
+    for (experiment, real) in [
+        (Experiment::Recognition, Some(recognition)),
+        (Experiment::Width, width),
+    ] {
+        let Some(real) = real.filter(|r| !r.is_empty()) else {
+            continue;
+        };
+        quiet.experiment = experiment;
+        sets.push(Set {
+            traces: simulate_traces(&quiet)?,
+            targets: real_quantiles(real),
+        });
+    }
+    Ok(sets_rms(&config.sensor.optics, static_mm, &sets))
 }
 
 /// The roughness (height rms, mm) that gives the real flat plate's proximity spread: the
@@ -580,36 +830,39 @@ pub struct CalibrationSummary {
     pub mounts: Vec<(String, Vec<PlateMount>)>,
 }
 
-/// Where a calibration starts: the paper's recognition experiment (seed 7) with first-guess
-/// optics, the default plate geometry and neutral mounts.
+/// Where a calibration starts: the paper's recognition experiment (seed 7) with the calibrated
+/// sensor and geometry and neutral mounts (a refit moves from the last fit).
 pub fn starting_config() -> ExperimentConfig {
     let mut config = ExperimentConfig::paper(Experiment::Recognition, 7);
-    config.sensor.optics = OpticsParams::first_guess();
-    config.samples = Samples::default();
     config.mounts.clear();
     config
 }
 
-/// Number of steps [`calibrate`] reports progress over (the geometries of [`GEOMETRY_GRID`]).
-pub fn calibration_steps() -> usize {
-    let (d, r, h) = GEOMETRY_GRID;
-    d.len() * r.len() * h.len()
-}
-
 /// Calibrates the simulated sensor on real recordings: [`calibrate`] from [`starting_config`] on
-/// the `recognition` recordings (at most `evaluations` per Nelder–Mead run, `progress` as
-/// [`calibrate`] calls it), then the plate mounts of the recognition experiment and, given
-/// `width` recordings, of the width experiment, with the fitted optics and geometry.
+/// the `recognition` and (when given) `width` recordings (at most `evaluations` per
+/// Nelder–Mead run of the optics and `mechanics_evaluations` mechanics candidates, `progress`
+/// as [`calibrate`] calls it), the roughness of the flat plate ([`fit_roughness`]), then the
+/// plate mounts of both experiments with the fitted sensor and geometry.
 pub fn calibrate_to_real(
     recognition: &[Recording],
     width: Option<&[Recording]>,
     evaluations: usize,
+    mechanics_evaluations: usize,
     progress: impl FnMut(usize, usize),
 ) -> Result<CalibrationSummary, SimError> {
     let config = starting_config();
-    let report = calibrate(&config, recognition, evaluations, progress)?;
+    let mut report = calibrate(
+        &config,
+        recognition,
+        width,
+        evaluations,
+        mechanics_evaluations,
+        progress,
+    )?;
+    report.samples.roughness_rms_mm = fit_roughness(&report.optics, recognition);
     let mut calibrated = config;
     calibrated.sensor.optics = report.optics.clone();
+    calibrated.sensor.finger = report.finger.clone();
     calibrated.samples = report.samples.clone();
     let mut mounts = vec![(
         "recognition".to_string(),

@@ -24,6 +24,10 @@ use crate::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crate::surface::{Feature, Surface};
 use crate::{SensorParams, SimError};
 
+/// Sliding speed of the authors' recordings, mm/s: their 16 mm strokes take about 1,395 samples
+/// at 400 Hz (repetition 1 of every plate, from the position column).
+pub const PAPER_SPEED_MM_S: f64 = 4.6;
+
 /// Settings of a simulated experiment.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExperimentConfig {
@@ -63,7 +67,9 @@ impl ExperimentConfig {
             recordings: 5,
             slides: 12,
             stroke_mm: 16.0,
-            speed_mm_s: 3.89,
+            // The authors' files: 16 mm strokes of about 1,395 samples (repetition 1), 4.6 mm/s
+            // (the paper's text says 3.89 mm/s on average).
+            speed_mm_s: PAPER_SPEED_MM_S,
             start_range_mm: (5.0, 10.0),
             position_rate_hz: 80.0,
             samples: calibrated_samples(),
@@ -72,6 +78,35 @@ impl ExperimentConfig {
             integrator: Integrator::default(),
             seed,
         }
+    }
+
+    /// Replaces the parameters that a TOML text names: any of the tables `[sensor.finger]`,
+    /// `[sensor.optics]` (fields of [`FingerParams`](crate::FingerParams),
+    /// [`OpticsParams`](crate::OpticsParams)) and `[samples]` (fields of [`Samples`]); the
+    /// fields it leaves out keep their values. Validates the result.
+    pub fn apply_params_toml(&mut self, text: &str) -> Result<(), SimError> {
+        let invalid = |m: String| SimError::Invalid(m);
+        let mut params: toml::Table = toml::from_str(text).map_err(|e| invalid(e.to_string()))?;
+        let mut sensor = match params.remove("sensor") {
+            Some(toml::Value::Table(t)) => t,
+            Some(_) => return Err(invalid("[sensor] must be a table".into())),
+            None => toml::Table::new(),
+        };
+        self.sensor.finger = overlay(
+            &self.sensor.finger,
+            sensor.remove("finger"),
+            "sensor.finger",
+        )?;
+        self.sensor.optics = overlay(
+            &self.sensor.optics,
+            sensor.remove("optics"),
+            "sensor.optics",
+        )?;
+        self.samples = overlay(&self.samples, params.remove("samples"), "samples")?;
+        if let Some(k) = sensor.keys().chain(params.keys()).next() {
+            return Err(invalid(format!("unknown parameter table {k}")));
+        }
+        self.validate()
     }
 
     /// Checks the settings.
@@ -184,6 +219,22 @@ impl ExperimentConfig {
     }
 }
 
+/// `base` with the fields of the TOML table `over` replaced.
+fn overlay<T: Serialize + serde::de::DeserializeOwned>(
+    base: &T,
+    over: Option<toml::Value>,
+    what: &str,
+) -> Result<T, SimError> {
+    let invalid = |e: &dyn std::fmt::Display| SimError::Invalid(format!("{what}: {e}"));
+    let mut merged = toml::Value::try_from(base).map_err(|e| invalid(&e))?;
+    match (merged.as_table_mut(), over) {
+        (_, None) => {}
+        (Some(table), Some(toml::Value::Table(over))) => table.extend(over),
+        _ => return Err(invalid(&"must be a table")),
+    }
+    merged.try_into().map_err(|e| invalid(&e))
+}
+
 fn fmt_width(w: f64) -> String {
     if w.fract() == 0.0 {
         format!("{}", w as i64)
@@ -240,16 +291,19 @@ pub fn simulate_recording(
     let hold = (SAMPLE_RATE_HZ / config.position_rate_hz).round().max(1.0) as usize;
     let mut rows = Vec::with_capacity(n);
     let mut x_col = position_offset_mm;
-    let mut last_dir = 1u8;
+    let mut last_dir = 0u8;
     for k in 0..n {
         let s = sim.next_sample()?;
+        // The device's encoder reads where the sensor is, which lags the commanded path where
+        // the finger sticks (the bump's stick-slip shows as a jump of the real position).
         if k % hold == 0 {
-            x_col = position_offset_mm + s.arm_mm;
+            x_col = position_offset_mm + s.tip_x_mm;
         }
+        // The authors' convention (paper, and their files): 0 moving towards +x, 1 back.
         let direction = if s.arm_velocity_mm_s > 1e-9 {
-            1
-        } else if s.arm_velocity_mm_s < -1e-9 {
             0
+        } else if s.arm_velocity_mm_s < -1e-9 {
+            1
         } else {
             last_dir
         };

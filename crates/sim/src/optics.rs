@@ -69,16 +69,16 @@ pub struct OpticsParams {
 impl Default for OpticsParams {
     fn default() -> Self {
         OpticsParams {
-            rest_counts: [658.191, 435.003, 710.766],
-            lateral_gain: [29.908, 12.844, -37.068],
-            normal_gain: [10.039, -4.457, -18.996],
-            moment_gain: [-1.815, -1.112, 2.785],
-            proximity_spot_mm: 1.560,
-            proximity_dark_counts: 198.56,
-            proximity_peak_counts: 574.17,
-            proximity_peak_mm: 2.208,
-            proximity_height_mm: 1.237,
-            proximity_offset_mm: 1.352,
+            rest_counts: [656.064, 429.676, 705.952],
+            lateral_gain: [2.460, 1.599, -2.810],
+            normal_gain: [33.473, -0.768, -34.357],
+            moment_gain: [-3.732, -1.584, 3.934],
+            proximity_spot_mm: 1.128,
+            proximity_dark_counts: 284.73,
+            proximity_peak_counts: 595.04,
+            proximity_peak_mm: 0.454,
+            proximity_height_mm: 1.026,
+            proximity_offset_mm: 1.799,
             saturation_counts: 1000.0,
             noise_counts: [1.384, 2.781, 5.189, 0.418],
             // Spread between repetitions of one plate (medians of repetitions 1-3: about a

@@ -91,11 +91,12 @@ pub fn calibrated_sensor() -> SensorParams {
 /// only the crack widths and the wave).
 pub fn calibrated_samples() -> Samples {
     Samples {
-        crack_depth_mm: 8.0,
-        bump_radius_mm: 6.0,
-        bump_height_mm: 1.0,
+        crack_depth_mm: 2.530,
+        crack_wall_angle_deg: 73.1,
+        bump_radius_mm: 3.850,
+        bump_height_mm: 2.446,
         // `fit_roughness` on the flat plate, repetition 1.
-        roughness_rms_mm: 0.0087,
+        roughness_rms_mm: 0.0094,
         ..Samples::default()
     }
 }
@@ -107,19 +108,19 @@ pub fn calibrated_mounts(experiment: Experiment) -> Vec<PlateMount> {
     let table: &[([f64; 3], f64)] = match experiment {
         // Flat, crack, bump, wavy.
         Experiment::Recognition => &[
-            ([-1.06, -4.99, -5.88], 0.9896),
-            ([-0.14, 0.01, 1.18], 0.9958),
-            ([8.30, 3.51, 1.49], 1.0051),
-            ([2.82, 1.56, 2.47], 0.9939),
+            ([0.63, 0.22, -0.63], 1.0268),
+            ([1.71, 5.30, 6.29], 1.0356),
+            ([7.04, 8.18, 9.02], 1.0465),
+            ([5.58, 7.15, 6.45], 1.0242),
         ],
         // 0, 1, 2, 5, 8, 10 mm (another session: the cables sat differently).
         Experiment::Width => &[
-            ([8.94, 7.01, 6.12], 1.0051),
-            ([8.88, 8.01, 6.16], 0.9927),
-            ([8.87, 2.01, 0.19], 1.0112),
-            ([8.86, 8.01, 7.18], 1.0112),
-            ([8.03, 8.14, 8.89], 1.0020),
-            ([6.31, 7.49, 10.97], 0.9649),
+            ([10.63, 12.22, 11.37], 1.0487),
+            ([10.89, 13.26, 11.15], 1.0312),
+            ([10.82, 7.27, 5.19], 1.0575),
+            ([10.71, 13.30, 12.29], 1.0575),
+            ([8.92, 10.28, 15.78], 1.0450),
+            ([9.35, 10.28, 16.64], 0.9918),
         ],
     };
     table

@@ -46,16 +46,16 @@ pub struct FingerParams {
 impl Default for FingerParams {
     fn default() -> Self {
         FingerParams {
-            tip_radius_mm: 10.0,
+            tip_radius_mm: 4.435,
             tip_mass_g: 2.0,
             body_mass_g: 200.0,
-            lateral_stiffness_n_mm: 1.0,
+            lateral_stiffness_n_mm: 0.586,
             normal_stiffness_n_mm: 2.0,
             lateral_damping_ratio: 0.7,
             normal_damping_ratio: 0.7,
             contact_stiffness_n_m: 2e5,
             contact_damping_ratio: 0.3,
-            friction: 0.15,
+            friction: 0.330,
             friction_velocity_mm_s: 0.5,
             arm_damping_n_s_m: 8.0,
         }
