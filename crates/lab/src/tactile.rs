@@ -38,6 +38,32 @@ pub enum TactileCommand {
     /// Random forest: accuracy against size, training time and single-window latency, for tree
     /// counts × depth limits. Writes tradeoff.md, tradeoff.json and tradeoff.png.
     Tradeoff(TradeoffArgs),
+    /// Train the deployed models (recognition and/or width) on every recording given and write
+    /// them (`recognition.ctm`, `width.ctm`) with a JSON summary each.
+    Train(TrainArgs),
+}
+
+/// Arguments of `crackbot tactile train`.
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// Recordings of the surface-type experiment (files or folders).
+    #[arg(long, num_args = 1..)]
+    recognition: Vec<PathBuf>,
+    /// Recordings of the crack-width experiment (files or folders).
+    #[arg(long, num_args = 1..)]
+    width: Vec<PathBuf>,
+    /// Output folder.
+    #[arg(long, default_value = "models/tactile")]
+    out: PathBuf,
+    /// Trees of each forest.
+    #[arg(long, default_value_t = 100)]
+    trees: usize,
+    /// Depth limit of every tree (default: fully grown).
+    #[arg(long)]
+    max_depth: Option<usize>,
+    /// Seed of the forests.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 /// Arguments of `crackbot tactile tradeoff`.
@@ -136,8 +162,12 @@ pub struct PaperArgs {
 #[derive(Debug, Args)]
 pub struct EvalArgs {
     /// Training recordings (.mat or .csv files, or folders of them).
-    #[arg(long, required = true, num_args = 1..)]
+    #[arg(long, required_unless_present = "model", conflicts_with = "model", num_args = 1..)]
     train: Vec<PathBuf>,
+    /// Evaluate a deployed model file (`crackbot tactile train`) instead of training one; its own
+    /// pipeline is used and the pipeline options are ignored.
+    #[arg(long)]
+    model: Option<PathBuf>,
     /// Test recordings (.mat or .csv files, or folders of them).
     #[arg(long, required = true, num_args = 1..)]
     test: Vec<PathBuf>,
@@ -278,6 +308,7 @@ pub fn run(cmd: TactileCommand) -> Result<()> {
         TactileCommand::Eval(args) => eval(args),
         TactileCommand::Paper(args) => paper(args),
         TactileCommand::Tradeoff(args) => tradeoff(args),
+        TactileCommand::Train(args) => train(args),
     }
 }
 
@@ -380,10 +411,18 @@ fn eval(args: EvalArgs) -> Result<()> {
             SlideVoteArg::Context => SlideVote::Context,
         },
     };
-    let mut tree = tree_bars(!args.json);
-    let report = evaluate(&config, &args.train, &args.test, |_, done, total| {
-        tree(done, total)
-    })?;
+    let report = match &args.model {
+        Some(path) => {
+            let model = crackbot_tactile::model::TactileModel::load(path)?;
+            crackbot_tactile::evaluation::evaluate_model(&model, &args.test)?
+        }
+        None => {
+            let mut tree = tree_bars(!args.json);
+            evaluate(&config, &args.train, &args.test, |_, done, total| {
+                tree(done, total)
+            })?
+        }
+    };
     if args.json {
         // Through a `Value`: its maps sort their keys, at every level, as this output always has.
         println!("{}", serde_json::to_value(&report)?);
@@ -645,5 +684,74 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
         report.json_path.display(),
         report.png_path.display()
     );
+    Ok(())
+}
+
+fn train(args: TrainArgs) -> Result<()> {
+    use crackbot_tactile::dataset::Experiment;
+    use crackbot_tactile::model::{TactileModel, TrainConfig};
+    if args.recognition.is_empty() && args.width.is_empty() {
+        bail!("nothing to train: give --recognition and/or --width recordings");
+    }
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| anyhow::anyhow!("creating {}: {e}", args.out.display()))?;
+    let config = TrainConfig {
+        n_trees: args.trees,
+        max_depth: args.max_depth,
+        seed: args.seed,
+    };
+    for (experiment, paths) in [
+        (Experiment::Recognition, &args.recognition),
+        (Experiment::Width, &args.width),
+    ] {
+        if paths.is_empty() {
+            continue;
+        }
+        let recordings = collect_recordings(paths)?;
+        eprintln!(
+            "{}: {} recordings, training the context forest, the window forest{} ({} trees each)",
+            experiment.name(),
+            recordings.len(),
+            if experiment == Experiment::Width {
+                " and the width regressor"
+            } else {
+                ""
+            },
+            args.trees
+        );
+        let mut bar = tree_bars(true);
+        let model = TactileModel::train(
+            &recordings,
+            Some(experiment),
+            &config,
+            &mut |_, done, total| bar(done, total),
+        )?;
+        let path = args.out.join(format!("{}.ctm", experiment.name()));
+        model.save(&path)?;
+        let summary = args.out.join(format!("{}.json", experiment.name()));
+        let bytes = std::fs::read(&path)?;
+        let json = serde_json::json!({
+            "file": path.file_name().map(|f| f.to_string_lossy().to_string()),
+            "bytes": bytes.len(),
+            "format_version": crackbot_tactile::model::FORMAT_VERSION,
+            "experiment": experiment.name(),
+            "classes": model.header.classes,
+            "training": model.header.training,
+            "pipeline": model.header.pipeline,
+            "context_forest_nodes": model.context_forest.n_nodes(),
+            "window_forest_nodes": model.window_forest.n_nodes(),
+            "width_regressor_nodes": model.width.as_ref().map(|w| w.n_nodes()),
+        });
+        std::fs::write(&summary, serde_json::to_string_pretty(&json)? + "\n")?;
+        println!(
+            "wrote {} ({} bytes, {} windows of {} slides, {:.1} s) and {}",
+            path.display(),
+            bytes.len(),
+            model.header.training.windows,
+            model.header.training.slides,
+            model.header.training.seconds,
+            summary.display()
+        );
+    }
     Ok(())
 }

@@ -4,10 +4,10 @@
 //! surface-type experiment and a crack width in millimetres in the width experiment. This is the one place
 //! that says which values exist, in which class order, and what they are called.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Which of the paper's two experiments a set of recordings belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Experiment {
     /// Surface type: 0 flat (no crack), 1 crack, 2 bump, 3 wavy pattern.
     Recognition,

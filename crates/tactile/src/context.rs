@@ -45,12 +45,12 @@
 //! (`across_slides: false`) were worse than the paper's features at the window level (the start of
 //! a slide has not met the crack yet).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::TactileError;
 
 /// Which context features are appended to (or replace) the window's own features.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ContextConfig {
     /// Causal context lengths in samples (each ≥ 1); default `[200, 1200, 2000]` (0.5 s, 3 s, 5 s).
     pub scales: Vec<usize>,
@@ -158,7 +158,8 @@ pub fn quantise(x: f64) -> i32 {
     if x.is_nan() {
         return 0;
     }
-    x.round().clamp(f64::from(SAMPLE_MIN), f64::from(SAMPLE_MAX)) as i32
+    x.round()
+        .clamp(f64::from(SAMPLE_MIN), f64::from(SAMPLE_MAX)) as i32
 }
 
 /// Twice the median of `sorted` (ascending): the median in half counts, exact for an even count.
@@ -446,7 +447,10 @@ mod tests {
         let mut first = Vec::new();
         context_row(&config, place(0), &[0], 10, &mut first);
         assert_eq!(first.len(), config.n_context(1));
-        assert_eq!(first[0], 0.0, "the baseline so far is the first sample itself");
+        assert_eq!(
+            first[0], 0.0,
+            "the baseline so far is the first sample itself"
+        );
         // ...unless they may reach into earlier slides of the recording.
         let later = WindowPlace {
             slide_start: 55,

@@ -8,7 +8,7 @@ use crackbot_dsp::{
     FeatureExtractor, FeatureSpec, Segment, SegmentationMethod, Segmenter, WindowConfig,
 };
 use crackbot_recording::Recording;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::context::{context_row, ContextConfig, WindowPlace};
 use crate::TactileError;
@@ -18,7 +18,7 @@ use crate::TactileError;
 pub use crackbot_recording::{Experiment, ExperimentError};
 
 /// How slides are cut before windowing.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum Segmentation {
     /// Keep the whole slide.
     None,
@@ -38,7 +38,7 @@ impl Segmentation {
 
 /// Per-recording correction of the slow offsets that the fibres' position and twist put on the
 /// signals (the paper found them to change between recordings).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Normalisation {
     /// Raw ADC counts, as the paper.
     None,
@@ -47,7 +47,7 @@ pub enum Normalisation {
 }
 
 /// How recordings become feature windows.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PipelineConfig {
     /// Slide segmentation.
     pub segmentation: Segmentation,

@@ -98,6 +98,25 @@ pub enum TactileError {
         /// Features of the window set.
         set_features: usize,
     },
+    /// A deployed tactile model file that cannot be used: not one, truncated, corrupt, another
+    /// format version, or parts that do not fit together.
+    #[error("{}: {reason}", path.display())]
+    Model {
+        /// The model file (or `<memory>`).
+        path: PathBuf,
+        /// What is wrong, in words.
+        reason: String,
+    },
+    /// Recordings of one experiment given to a model of the other.
+    #[error(
+        "the model classifies the {model} experiment, the recordings are of the {data} experiment"
+    )]
+    ExperimentMismatch {
+        /// The model's experiment.
+        model: &'static str,
+        /// The recordings' experiment.
+        data: &'static str,
+    },
     /// A slide voter's windows do not cut the test recordings as the test set does.
     #[error("slide voter {voter}: {detail}")]
     SlideVoter {

@@ -226,15 +226,9 @@ fn outcome(
                 crackbot_forest::argmax(&window_proba[i * k..(i + 1) * k]),
             )?;
         }
-        let n = slide.windows.len() as f64;
-        let mut mean = vec![0f64; k];
-        for proba in slide_proba {
-            for i in slide.windows.clone() {
-                for (m, &v) in mean.iter_mut().zip(&proba[i * k..(i + 1) * k]) {
-                    *m += f64::from(v) / n;
-                }
-            }
-        }
+        let r = slide.windows.start * k..slide.windows.end * k;
+        let tables: Vec<&[f32]> = slide_proba.iter().map(|p| &p[r.clone()]).collect();
+        let mean = crate::online::slide_means(&tables, slide.windows.len(), k);
         let mean32: Vec<f32> = mean.iter().map(|&m| m as f32).collect();
         slides.add(slide.class, crackbot_forest::argmax(&mean32))?;
     }
@@ -282,6 +276,14 @@ pub fn width_regression_tuned(
     let data = RegressionDataset::new(train.x.clone(), train.n_features, y)?;
     let params = tuning.apply(ForestParams::regressor().n_trees(n_trees).seed(seed));
     let model = RandomForestRegressor::fit_with_progress(&data, &params, progress)?;
+    width_outcome(&model, test)
+}
+
+/// Measures a trained width regressor on `test` (labels in mm): window and slide (median) errors.
+pub fn width_outcome(
+    model: &RandomForestRegressor,
+    test: &WindowSet,
+) -> Result<WidthOutcome, TactileError> {
     let mut estimates = vec![0f32; test.n_rows()];
     model.predict_batch(&test.x, test.n_features, &mut estimates)?;
     let window_est: Vec<f64> = estimates.iter().map(|&e| f64::from(e)).collect();

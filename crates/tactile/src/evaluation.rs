@@ -22,6 +22,7 @@ use crate::eval::{
     check_n_trees, test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
     width_regression_tuned, ClassifierKind, ForestTuning,
 };
+use crate::model::TactileModel;
 use crate::TactileError;
 
 /// Who decides a slide's verdict when the windows carry context features.
@@ -256,6 +257,85 @@ fn evaluate_checked(
         train_recordings: train.len(),
         train_seconds,
         train_windows: train_set.n_rows(),
+        width_mae_mm: width.as_ref().map(|x| x.window_mae_mm),
+        window: p.window,
+        window_accuracy: w.accuracy(),
+        window_confusion: w.rows(),
+        window_precision: w.weighted_precision(),
+        window_recall: w.weighted_recall(),
+    })
+}
+
+/// Evaluates a deployed model ([`TactileModel`]) on the recordings named by `test`, without
+/// training: the same report as [`evaluate`], the training fields taken from the model's header
+/// (`train_recordings`, `train_windows`, `train_seconds`).
+pub fn evaluate_model(model: &TactileModel, test: &[PathBuf]) -> Result<EvalReport, TactileError> {
+    let test = collect_recordings(test)?;
+    evaluate_model_recordings(model, &test)
+}
+
+/// [`evaluate_model`] on recordings already read.
+pub fn evaluate_model_recordings(
+    model: &TactileModel,
+    test: &[(PathBuf, Recording)],
+) -> Result<EvalReport, TactileError> {
+    let experiment = crate::dataset::detect_experiment(test).or_else(|e| {
+        // Labels of both experiments (0, 1, 2 only) are read as the model's.
+        match e {
+            TactileError::Experiment(crackbot_recording::ExperimentError::Ambiguous { .. }) => {
+                Ok(model.experiment())
+            }
+            other => Err(other),
+        }
+    })?;
+    if experiment != model.experiment() {
+        return Err(TactileError::ExperimentMismatch {
+            model: model.experiment().name(),
+            data: experiment.name(),
+        });
+    }
+    let pipeline = model.pipeline()?;
+    let test_set = pipeline.build_windows(test, experiment)?;
+    let vote_test = pipeline.without_context().build_windows(test, experiment)?;
+    let outcome = test_classifier_with_slide_voters(
+        &model.context_forest,
+        &test_set,
+        &[(&model.window_forest, &vote_test)],
+    )?;
+    let width = match &model.width {
+        Some(w) => Some(crate::eval::width_outcome(w, &test_set)?),
+        None => None,
+    };
+    let h = &model.header;
+    let p = &h.pipeline;
+    let (w, s) = (&outcome.windows, &outcome.slides);
+    Ok(EvalReport {
+        classes: h.classes.clone(),
+        classifier: "RF".to_string(),
+        context: p.context.clone(),
+        experiment: experiment.name().to_string(),
+        feature: p.spec.feature_name(),
+        forest_tuning: ForestTuning {
+            max_features_fraction: None,
+            max_depth: h.training.config.max_depth,
+            min_samples_leaf: None,
+        },
+        n_features: test_set.n_features,
+        normalisation: format!("{:?}", p.normalisation),
+        segmentation: p.segmentation.name().to_string(),
+        set: p.spec.set.name().to_string(),
+        slide_accuracy: s.accuracy(),
+        slide_confusion: s.rows(),
+        slide_precision: s.weighted_precision(),
+        slide_recall: s.weighted_recall(),
+        slide_vote: "context+paper".to_string(),
+        slide_width_mae_mm: width.as_ref().map(|x| x.slide_mae_mm),
+        test_recordings: test.len(),
+        test_slides: s.total(),
+        test_windows: test_set.n_rows(),
+        train_recordings: h.training.recordings.len(),
+        train_seconds: h.training.seconds,
+        train_windows: h.training.windows,
         width_mae_mm: width.as_ref().map(|x| x.window_mae_mm),
         window: p.window,
         window_accuracy: w.accuracy(),

@@ -25,6 +25,8 @@ pub mod eval;
 pub mod evaluation;
 pub mod localise;
 pub mod metrics;
+pub mod model;
+pub mod online;
 #[cfg(feature = "research")]
 pub mod paper;
 #[cfg(feature = "research")]

@@ -1,0 +1,392 @@
+//! Online classification with a deployed [`TactileModel`]: samples in, verdicts out.
+//!
+//! [`OnlineClassifier::push`] takes one sample (and the arm's position along the slide) at a time:
+//! it updates the context features ([`StreamingContext`]) and the paper's window features
+//! ([`StreamingFeatures`]), keeps both rows of every sample of the slide in buffers reused from
+//! slide to slide (nothing is allocated per window once the longest slide has been seen), and
+//! every `step` samples classifies the newest window with both forests into a **running verdict**.
+//! [`OnlineClassifier::end_slide`] segments the slide (the paper's eq. 2 on P, as offline), takes
+//! the windows of the segment — the very windows `crackbot tactile eval` takes — and returns the
+//! **slide verdict**: the class of the largest summed slide mean of the two forests (the offline
+//! arithmetic, so the verdict and its probabilities equal the offline ones bit for bit; a test
+//! checks it on real recordings), its confidence, the width (regressor, median of the windows,
+//! with a robust spread) and, when the surface or the signals are unlike training, a [`Doubt`].
+
+use crackbot_dsp::{Segmenter, StreamingFeatures, WindowConfig};
+use crackbot_forest::Classifier;
+use crackbot_recording::Recording;
+use serde::Serialize;
+
+use crate::dataset::Segmentation;
+use crate::model::{Doubt, TactileModel};
+use crate::stream::StreamingContext;
+use crate::TactileError;
+
+/// The verdict so far during a slide.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunningVerdict {
+    /// Class index of the largest mean vote so far.
+    pub class: u32,
+    /// Its vote (mean of both forests' mean probabilities), 0–1.
+    pub confidence: f64,
+    /// Windows classified so far in this slide.
+    pub windows: usize,
+}
+
+/// A width in mm with its uncertainty.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct WidthEstimate {
+    /// Median of the window estimates, mm.
+    pub mm: f64,
+    /// 1.4826 × the median absolute deviation of the window estimates (a robust standard
+    /// deviation), mm.
+    pub spread_mm: f64,
+}
+
+/// The verdict at the end of a slide.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SlideVerdict {
+    /// Class index.
+    pub class: u32,
+    /// Class name.
+    pub name: String,
+    /// Class label (class id, or crack width in mm).
+    pub label: f64,
+    /// The winning class's vote: the mean of the two forests' slide means, 0–1.
+    pub confidence: f64,
+    /// Summed slide means of both forests, per class (0–2), as offline.
+    pub votes: Vec<f64>,
+    /// Width experiment: the regressor's estimate.
+    pub width: Option<WidthEstimate>,
+    /// Windows that made the verdict.
+    pub windows: usize,
+    /// Whether they are the segment's (`false`: the segmentation found nothing, every window of the
+    /// slide was used).
+    pub segmented: bool,
+    /// First and last sample of the segment in the slide (half-open).
+    pub segment: (usize, usize),
+    /// Fraction of the windows unlike any training window.
+    pub novel_fraction: f64,
+    /// Why not to trust it, if anything.
+    pub doubt: Option<Doubt>,
+    /// Samples of the slide.
+    pub samples: usize,
+}
+
+impl SlideVerdict {
+    /// Whether the surface came out as unknown (dead or saturated channel, novel surface).
+    pub fn is_unknown(&self) -> bool {
+        self.doubt.as_ref().is_some_and(Doubt::is_unknown)
+    }
+}
+
+/// Online classification with a deployed model (see the [module docs](self)).
+#[derive(Debug)]
+pub struct OnlineClassifier<'m> {
+    model: &'m TactileModel,
+    segmenter: Option<Segmenter>,
+    channels: Vec<usize>,
+    context: StreamingContext,
+    window: StreamingFeatures,
+    window_cfg: WindowConfig,
+    n_ctx: usize,
+    n_win: usize,
+    k: usize,
+    min_slide_len: usize,
+    samples: Vec<[f64; 4]>,
+    positions: Vec<f64>,
+    p: Vec<f64>,
+    ctx_rows: Vec<f32>,
+    win_rows: Vec<f32>,
+    proba: Vec<f32>,
+    running: Vec<f64>,
+    running_windows: usize,
+    ends: Vec<usize>,
+    slide_proba: Vec<f32>,
+    estimates: Vec<f64>,
+}
+
+impl<'m> OnlineClassifier<'m> {
+    /// A classifier for `model`'s slides.
+    pub fn new(model: &'m TactileModel) -> Result<Self, TactileError> {
+        let pipeline = &model.header.pipeline;
+        let segmenter = match &pipeline.segmentation {
+            Segmentation::None => None,
+            Segmentation::Method(m) => Some(m.check().map_err(TactileError::Pipeline)?),
+        };
+        let channels = pipeline.spec.set.channels().to_vec();
+        let context = StreamingContext::new(model.context(), &channels, pipeline.window.len)?;
+        let window_cfg = pipeline.window;
+        let window = StreamingFeatures::new(
+            pipeline.spec.clone(),
+            WindowConfig {
+                len: window_cfg.len,
+                step: 1,
+            },
+        )
+        .map_err(TactileError::Pipeline)?;
+        let k = model.experiment().n_classes();
+        Ok(OnlineClassifier {
+            n_ctx: context.n_values(),
+            n_win: window.n_features(),
+            model,
+            segmenter,
+            channels,
+            context,
+            window,
+            window_cfg,
+            k,
+            min_slide_len: pipeline.min_slide_len.max(1),
+            samples: Vec::new(),
+            positions: Vec::new(),
+            p: Vec::new(),
+            ctx_rows: Vec::new(),
+            win_rows: Vec::new(),
+            proba: vec![0.0; k],
+            running: vec![0.0; k],
+            running_windows: 0,
+            ends: Vec::new(),
+            slide_proba: Vec::new(),
+            estimates: Vec::new(),
+        })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &TactileModel {
+        self.model
+    }
+
+    /// Forgets every earlier slide (the context spans stop reaching back).
+    pub fn reset(&mut self) {
+        self.context.reset();
+        self.begin_slide();
+    }
+
+    /// The next sample starts a new slide.
+    pub fn begin_slide(&mut self) {
+        self.context.begin_slide();
+        self.window.reset();
+        self.samples.clear();
+        self.positions.clear();
+        self.p.clear();
+        self.ctx_rows.clear();
+        self.win_rows.clear();
+        self.running.fill(0.0);
+        self.running_windows = 0;
+    }
+
+    /// Adds one sample `[D1, D2, D3, P]` (ADC counts), its sliding direction (column 6) and the
+    /// finger's position along the slide (mm). Every `step` samples once a window is complete,
+    /// returns the running verdict. A non-finite sample is refused with an error and changes
+    /// nothing.
+    pub fn push(
+        &mut self,
+        sample: [f64; 4],
+        direction: u8,
+        position_mm: f64,
+    ) -> Result<Option<RunningVerdict>, TactileError> {
+        self.context.push(sample, direction)?;
+        let win = self.window.push(sample).map_err(TactileError::Pipeline)?;
+        let i = self.samples.len();
+        self.samples.push(sample);
+        self.positions.push(position_mm);
+        self.p.push(sample[3]);
+        let len = self.window_cfg.len;
+        match win {
+            Some(row) => self.win_rows.extend_from_slice(row),
+            None => self.win_rows.extend(std::iter::repeat_n(0.0, self.n_win)),
+        }
+        let at = self.ctx_rows.len();
+        self.ctx_rows.resize(at + self.n_ctx, 0.0);
+        self.context.row_into(&mut self.ctx_rows[at..])?;
+        if i + 1 < len || !(i + 1 - len).is_multiple_of(self.window_cfg.step) {
+            return Ok(None);
+        }
+        // The running verdict: both forests on the newest window.
+        let k = self.k;
+        let ctx = &self.ctx_rows[at..at + self.n_ctx];
+        let win = &self.win_rows[i * self.n_win..(i + 1) * self.n_win];
+        self.model
+            .context_forest
+            .predict_proba_into(ctx, &mut self.proba);
+        for (r, &p) in self.running.iter_mut().zip(&self.proba[..k]) {
+            *r += f64::from(p);
+        }
+        self.model
+            .window_forest
+            .predict_proba_into(win, &mut self.proba);
+        for (r, &p) in self.running.iter_mut().zip(&self.proba[..k]) {
+            *r += f64::from(p);
+        }
+        self.running_windows += 1;
+        let n = self.running_windows as f64;
+        let (class, best) =
+            self.running
+                .iter()
+                .enumerate()
+                .fold(
+                    (0, f64::NEG_INFINITY),
+                    |(c, b), (j, &v)| {
+                        if v > b {
+                            (j, v)
+                        } else {
+                            (c, b)
+                        }
+                    },
+                );
+        Ok(Some(RunningVerdict {
+            class: class as u32,
+            confidence: best / (2.0 * n),
+            windows: self.running_windows,
+        }))
+    }
+
+    /// Samples of the current slide.
+    pub fn slide_samples(&self) -> &[[f64; 4]] {
+        &self.samples
+    }
+
+    /// Positions (mm) of the current slide's samples.
+    pub fn slide_positions(&self) -> &[f64] {
+        &self.positions
+    }
+
+    /// Ends the slide: its verdict, or `None` when it is shorter than the pipeline's minimum slide
+    /// (as offline, such slides are not classified) or has no complete window.
+    pub fn end_slide(&mut self) -> Result<Option<SlideVerdict>, TactileError> {
+        let n = self.samples.len();
+        if n < self.min_slide_len {
+            return Ok(None);
+        }
+        let w = self.window_cfg;
+        self.ends.clear();
+        let mut segment = (0, 0);
+        if let Some(segmenter) = &self.segmenter {
+            let seg = segmenter.segment(&self.p).map_err(TactileError::Pipeline)?;
+            for r in &seg.ranges {
+                for k in 0..w.n_windows(r.len()) {
+                    self.ends.push(r.start + k * w.step + w.len - 1);
+                }
+            }
+            let span = seg.span();
+            segment = (span.start, span.end);
+        }
+        let segmented = !self.ends.is_empty();
+        if !segmented {
+            for k in 0..w.n_windows(n) {
+                self.ends.push(k * w.step + w.len - 1);
+            }
+            segment = (0, n);
+        }
+        if self.ends.is_empty() {
+            return Ok(None);
+        }
+        // Window probabilities of both forests, then the slide means in the offline order.
+        let k = self.k;
+        let m = self.ends.len();
+        self.slide_proba.clear();
+        self.slide_proba.resize(2 * m * k, 0.0);
+        let (ctx_part, win_part) = self.slide_proba.split_at_mut(m * k);
+        let mut novel = 0usize;
+        for (j, &e) in self.ends.iter().enumerate() {
+            let ctx = &self.ctx_rows[e * self.n_ctx..(e + 1) * self.n_ctx];
+            self.model
+                .context_forest
+                .predict_proba_into(ctx, &mut ctx_part[j * k..(j + 1) * k]);
+            let win = &self.win_rows[e * self.n_win..(e + 1) * self.n_win];
+            self.model
+                .window_forest
+                .predict_proba_into(win, &mut win_part[j * k..(j + 1) * k]);
+            novel += usize::from(self.model.header.gate.is_novel(ctx));
+        }
+        let votes = slide_means(&[ctx_part, win_part], m, k);
+        let votes32: Vec<f32> = votes.iter().map(|&v| v as f32).collect();
+        let class = crackbot_forest::argmax(&votes32);
+        let confidence = votes.get(class as usize).copied().unwrap_or(0.0) / 2.0;
+        let width = match &self.model.width {
+            None => None,
+            Some(reg) => {
+                self.estimates.clear();
+                for &e in &self.ends {
+                    let ctx = &self.ctx_rows[e * self.n_ctx..(e + 1) * self.n_ctx];
+                    self.estimates.push(f64::from(reg.predict(ctx)));
+                }
+                let mm = median(&mut self.estimates);
+                for v in self.estimates.iter_mut() {
+                    *v = (*v - mm).abs();
+                }
+                let mad = median(&mut self.estimates);
+                Some(WidthEstimate {
+                    mm,
+                    spread_mm: 1.4826 * mad,
+                })
+            }
+        };
+        let novel_fraction = novel as f64 / m as f64;
+        let doubt =
+            self.model
+                .header
+                .gate
+                .judge(&self.samples, &self.channels, novel_fraction, confidence);
+        let h = &self.model.header;
+        Ok(Some(SlideVerdict {
+            class,
+            name: h.classes.get(class as usize).cloned().unwrap_or_default(),
+            label: h.labels.get(class as usize).copied().unwrap_or(f64::NAN),
+            confidence,
+            votes,
+            width,
+            windows: m,
+            segmented,
+            segment,
+            novel_fraction,
+            doubt,
+            samples: n,
+        }))
+    }
+}
+
+/// Summed per-class means over `m` windows of each `k`-column probability table, in the order of
+/// `crate::eval`'s slide verdicts (table by table, window by window, `f32` → `f64` / m).
+pub(crate) fn slide_means(tables: &[&[f32]], m: usize, k: usize) -> Vec<f64> {
+    let n = m as f64;
+    let mut mean = vec![0f64; k];
+    for table in tables {
+        for j in 0..m {
+            for (s, &v) in mean.iter_mut().zip(&table[j * k..(j + 1) * k]) {
+                *s += f64::from(v) / n;
+            }
+        }
+    }
+    mean
+}
+
+/// Median (sorts `v`; mean of the two middle values for an even count; 0 when empty).
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => v[n / 2],
+        _ => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+    }
+}
+
+/// Classifies every slide of a recording online, sample by sample (positions from column 1).
+/// One entry per slide of the recording, `None` where the slide is not classified.
+pub fn classify_recording(
+    model: &TactileModel,
+    recording: &Recording,
+) -> Result<Vec<Option<SlideVerdict>>, TactileError> {
+    let mut online = OnlineClassifier::new(model)?;
+    online.reset();
+    let mut out = Vec::new();
+    for range in recording.slides() {
+        online.begin_slide();
+        for r in &recording.rows[range] {
+            online.push(r.channels(), r.direction, r.x_mm)?;
+        }
+        out.push(online.end_slide()?);
+    }
+    Ok(out)
+}

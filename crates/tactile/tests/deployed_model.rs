@@ -1,0 +1,207 @@
+//! The deployed model: trained, written, read back; corrupt, truncated and mismatched files are
+//! refused with a clear error; online classification (sample by sample) gives the offline slide
+//! verdicts bit for bit on real recordings, under random chunking of the stream too.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use crackbot_recording::{collect_recordings, Recording};
+use crackbot_tactile::dataset::Experiment;
+use crackbot_tactile::eval::test_classifier_with_slide_voters;
+use crackbot_tactile::evaluation::evaluate_model_recordings;
+use crackbot_tactile::model::{TactileModel, TrainConfig, FORMAT_VERSION, MAGIC};
+use crackbot_tactile::online::{classify_recording, OnlineClassifier};
+use crackbot_tactile::TactileError;
+use proptest::prelude::*;
+
+fn type_recordings(rep: u32) -> Vec<(PathBuf, Recording)> {
+    let dir = crackbot_datasets::require(crackbot_datasets::TACTILE_TYPE);
+    collect_recordings(&[dir])
+        .unwrap()
+        .into_iter()
+        .filter(|(p, _)| p.to_string_lossy().ends_with(&format!("_{rep}.mat")))
+        .collect()
+}
+
+/// A small recognition model trained on repetition 1 (shared by the tests).
+fn model() -> &'static TactileModel {
+    static MODEL: OnceLock<TactileModel> = OnceLock::new();
+    MODEL.get_or_init(|| {
+        let config = TrainConfig {
+            n_trees: 12,
+            max_depth: Some(10),
+            seed: 3,
+        };
+        TactileModel::train(
+            &type_recordings(1),
+            Some(Experiment::Recognition),
+            &config,
+            &mut |_, _, _| {},
+        )
+        .unwrap()
+    })
+}
+
+#[test]
+fn a_model_round_trips_and_bad_files_are_refused_by_name() {
+    let m = model();
+    let bytes = m.to_bytes().unwrap();
+    assert_eq!(&bytes[..8], &MAGIC);
+    let back = TactileModel::from_bytes(&bytes, Path::new("m.ctm")).unwrap();
+    assert_eq!(back.header, {
+        let mut h = m.header.clone();
+        h.sections = back.header.sections.clone();
+        h
+    });
+    assert_eq!(back.context_forest, m.context_forest);
+    assert_eq!(back.window_forest, m.window_forest);
+    let err = |b: &[u8]| {
+        TactileModel::from_bytes(b, Path::new("bad.ctm"))
+            .unwrap_err()
+            .to_string()
+    };
+    let e = err(b"CRKFORST whatever");
+    assert!(
+        e.starts_with("bad.ctm: not a crackbot tactile model"),
+        "{e}"
+    );
+    let e = err(&bytes[..bytes.len() / 2]);
+    assert!(e.contains("truncated"), "{e}");
+    let e = err(&bytes[..12]);
+    assert!(e.contains("truncated"), "{e}");
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(err(&longer).contains("trailing"));
+    // A flipped byte in a forest (after the header) and one in the header.
+    let mut flipped = bytes.clone();
+    let at = bytes.len() - 100;
+    flipped[at] ^= 0x40;
+    let e = err(&flipped);
+    assert!(e.contains("corrupt") && e.contains("checksum"), "{e}");
+    let mut version = bytes.clone();
+    version[8..12].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes());
+    let e = err(&version);
+    assert!(e.contains("format version 2"), "{e}");
+    // Parts that do not fit: a window forest where the context forest belongs.
+    let mut swapped = m.clone();
+    swapped.context_forest = m.window_forest.clone();
+    let e = err(&swapped.to_bytes().unwrap());
+    assert!(e.contains("context forest takes 3 features"), "{e}");
+    // A recognition model given width recordings.
+    let width_dir = crackbot_datasets::require(crackbot_datasets::TACTILE_WIDTH);
+    let width: Vec<_> = collect_recordings(&[width_dir])
+        .unwrap()
+        .into_iter()
+        .filter(|(p, _)| p.to_string_lossy().contains("mm10"))
+        .collect();
+    let e = evaluate_model_recordings(m, &width).unwrap_err();
+    assert!(matches!(e, TactileError::ExperimentMismatch { .. }), "{e}");
+    // Missing file.
+    let e = TactileModel::load(Path::new("/nonexistent/model.ctm"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("/nonexistent/model.ctm"), "{e}");
+}
+
+#[test]
+fn online_slide_verdicts_equal_the_offline_ones_bit_for_bit() {
+    let m = model();
+    let test = type_recordings(2);
+    let pipeline = m.pipeline().unwrap();
+    let ctx = pipeline
+        .build_windows(&test, Experiment::Recognition)
+        .unwrap();
+    let win = pipeline
+        .without_context()
+        .build_windows(&test, Experiment::Recognition)
+        .unwrap();
+    let offline =
+        test_classifier_with_slide_voters(&m.context_forest, &ctx, &[(&m.window_forest, &win)])
+            .unwrap();
+    let report = evaluate_model_recordings(m, &test).unwrap();
+    assert_eq!(report.slide_confusion, offline.slides.rows());
+    // Online: every classified slide's verdict is the offline one.
+    let mut online_confusion = vec![vec![0u64; 4]; 4];
+    let mut compared = 0;
+    for (ri, (_, rec)) in test.iter().enumerate() {
+        let verdicts = classify_recording(m, rec).unwrap();
+        let slides: Vec<_> = ctx.slides.iter().filter(|s| s.recording == ri).collect();
+        let classified: Vec<_> = verdicts.iter().flatten().filter(|v| v.segmented).collect();
+        assert_eq!(
+            classified.len(),
+            slides.iter().filter(|s| !s.windows.is_empty()).count()
+        );
+        for (v, s) in classified
+            .iter()
+            .zip(slides.iter().filter(|s| !s.windows.is_empty()))
+        {
+            assert_eq!(v.windows, s.windows.len(), "slide {}", s.slide);
+            online_confusion[s.class as usize][v.class as usize] += 1;
+            compared += 1;
+        }
+    }
+    assert_eq!(online_confusion, offline.slides.rows());
+    assert!(compared >= 40, "{compared}");
+}
+
+#[test]
+fn running_verdicts_come_every_step_and_bad_samples_are_refused() {
+    let m = model();
+    let test = type_recordings(3);
+    let (_, rec) = test
+        .iter()
+        .find(|(p, _)| p.to_string_lossy().contains("crack_crack"))
+        .unwrap();
+    let slide = rec.slides()[2].clone();
+    let mut online = OnlineClassifier::new(m).unwrap();
+    online.begin_slide();
+    let mut running = 0;
+    for (i, r) in rec.rows[slide.clone()].iter().enumerate() {
+        let v = online.push(r.channels(), r.direction, r.x_mm).unwrap();
+        assert_eq!(v.is_some(), i >= 9 && (i - 9) % 2 == 0, "sample {i}");
+        if let Some(v) = v {
+            assert!((0.0..=1.0).contains(&v.confidence));
+            running += 1;
+        }
+    }
+    assert_eq!(running, (slide.len() - 10) / 2 + 1);
+    let err = online
+        .push([f64::INFINITY, 400.0, 700.0, 500.0], 0, 10.0)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("D1"), "{err}");
+    let v = online.end_slide().unwrap().unwrap();
+    assert_eq!(v.samples, slide.len(), "the refused sample was not kept");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(8))]
+
+    /// Chunks of random sizes (as the acquisition delivers them) give the same verdicts as one
+    /// sample at a time.
+    #[test]
+    fn random_chunking_gives_the_same_verdicts(chunks in prop::collection::vec(1usize..700, 1..40)) {
+        let m = model();
+        let test = type_recordings(2);
+        let (_, rec) = &test[0];
+        let whole = classify_recording(m, rec).unwrap();
+        let mut online = OnlineClassifier::new(m).unwrap();
+        let mut got = Vec::new();
+        for range in rec.slides() {
+            online.begin_slide();
+            let rows = &rec.rows[range];
+            let mut at = 0;
+            let mut c = 0;
+            while at < rows.len() {
+                let n = chunks[c % chunks.len()].min(rows.len() - at);
+                for r in &rows[at..at + n] {
+                    online.push(r.channels(), r.direction, r.x_mm).unwrap();
+                }
+                at += n;
+                c += 1;
+            }
+            got.push(online.end_slide().unwrap());
+        }
+        prop_assert_eq!(got, whole);
+    }
+}
