@@ -18,8 +18,10 @@
 //!   and as one batch. The forest is the 100-tree forest above (trained again, identical), or any forest
 //!   file (classifier or regressor) given by `CRACKBOT_BENCH_FOREST`, with its windows from
 //!   `CRACKBOT_BENCH_WINDOWS` (a CSV: header, then the model's features in the first columns; the real
-//!   windows of repetition 2 when unset and the model has their 3 features); with `CRACKBOT_BENCH_FOREST`
-//!   set, only this group runs. The bench first asserts that ONNX Runtime's probabilities (or values)
+//!   windows of repetition 2 when unset and the model has their 3 features). A deployed tactile model
+//!   (`CRKTACTL`, e.g. `models/tactile/recognition.ctm`) is read too: the forest of section
+//!   `CRACKBOT_BENCH_SECTION` (default `context_forest`; `window_forest` takes the real windows). With
+//!   `CRACKBOT_BENCH_FOREST` set, only this group runs. The bench first asserts that ONNX Runtime's probabilities (or values)
 //!   match ours to 1e-6 and its class is ours on every window.
 //!
 //! `taskset -c 1 cargo bench --bench tactile` (medians and ratios: `python3 benches/summary.py`).
@@ -299,9 +301,22 @@ fn bench(c: &mut Criterion) {
 /// Our forest and ONNX Runtime on the same forest file and windows (see the module docs).
 fn onnx_runtime(c: &mut Criterion) {
     let dir = tempfile::tempdir().expect("temp dir");
+    let onnx = dir.path().join("tactile.onnx");
+    let mut exported = false;
     let (forest_path, x) = match std::env::var_os("CRACKBOT_BENCH_FOREST") {
         Some(p) => {
-            let path = std::path::PathBuf::from(p);
+            let mut path = std::path::PathBuf::from(p);
+            if onnx_forest::is_tactile_model(&path) {
+                // A deployed model: one of its forests, as a plain forest file for our side.
+                let section = std::env::var("CRACKBOT_BENCH_SECTION")
+                    .unwrap_or_else(|_| "context_forest".into());
+                let forest = dir.path().join(format!("{section}.forest"));
+                onnx_forest::export_section(&path, &section, &onnx, &forest)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                eprintln!("onnx_runtime: section {section} of {}", path.display());
+                path = forest;
+                exported = true;
+            }
             let ours = onnx_forest::Ours::load(&path).unwrap_or_else(|e| panic!("{e}"));
             let x = match std::env::var_os("CRACKBOT_BENCH_WINDOWS") {
                 Some(csv) => onnx_forest::read_windows_csv(csv.as_ref(), ours.n_features())
@@ -346,8 +361,9 @@ fn onnx_runtime(c: &mut Criterion) {
     let ours = onnx_forest::Ours::load(&forest_path).unwrap_or_else(|e| panic!("{e}"));
     let nf = ours.n_features();
     let n = x.len() / nf;
-    let onnx = dir.path().join("tactile.onnx");
-    onnx_forest::export(&forest_path, &onnx).unwrap_or_else(|e| panic!("{e}"));
+    if !exported {
+        onnx_forest::export(&forest_path, &onnx).unwrap_or_else(|e| panic!("{e}"));
+    }
     let mut ort = onnx_forest::OrtForest::load(&onnx, nf, 1).unwrap_or_else(|e| panic!("{e}"));
     let a = onnx_forest::compare(&ours, &mut ort, &x).unwrap_or_else(|e| panic!("{e}"));
     assert!(

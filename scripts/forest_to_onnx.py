@@ -3,6 +3,14 @@
 
     bash scripts/forest_to_onnx.sh MODEL.forest MODEL.onnx        # makes its venv on first use
     python scripts/forest_to_onnx.py MODEL.forest MODEL.onnx      # with numpy and onnx installed
+    bash scripts/forest_to_onnx.sh models/tactile/recognition.ctm context.onnx \
+        --section context_forest [--save-forest context.forest]
+
+A deployed tactile model (`CRKTACTL`, crates/tactile/src/model.rs: magic, version 1, header length, JSON
+header listing its sections, each a `CRKFORST` forest, CRC-32 of everything before) is read too: its
+length and checksum are checked and the forest of `--section` (default `context_forest`; also
+`window_forest`, `width_regressor`) is exported; `--save-forest` writes that section as a plain forest
+file (for our side of a comparison).
 
 The file is parsed here, independently of the Rust loader, with the same checks in the same order: magic,
 format version, kind, exact length, CRC-32 (ISO-HDLC, as zlib), then every structural invariant (tree
@@ -74,6 +82,39 @@ class Forest:
     @property
     def kind_name(self):
         return "classifier" if self.kind == KIND_CLASSIFIER else "regressor"
+
+
+TACTILE_MAGIC = b"CRKTACTL"
+TACTILE_VERSIONS = (1,)
+
+
+def tactile_section(data: bytes, name: str) -> bytes:
+    """The `CRKFORST` bytes of section `name` of a deployed tactile model (`CRKTACTL`)."""
+    if len(data) < 20:
+        raise FormatError(f"truncated tactile model: {len(data)} bytes")
+    version, header_len = np.frombuffer(data, dtype="<u4", count=2, offset=8).tolist()
+    if version not in TACTILE_VERSIONS:
+        raise FormatError(f"tactile model format version {version} not supported ({TACTILE_VERSIONS})")
+    if 16 + header_len + 4 > len(data):
+        raise FormatError(f"truncated tactile model: a {header_len}-byte header in {len(data)} bytes")
+    try:
+        header = json.loads(data[16:16 + header_len])
+        sections = [(str(s["name"]), int(s["bytes"])) for s in header["sections"]]
+    except (ValueError, KeyError, TypeError) as e:
+        raise FormatError(f"tactile model header: {e}") from e
+    expected = 16 + header_len + sum(n for _, n in sections) + 4
+    if len(data) != expected:
+        raise FormatError(f"tactile model of {len(data)} bytes, its header announces {expected}")
+    stored = int(np.frombuffer(data, dtype="<u4", count=1, offset=len(data) - 4)[0])
+    computed = zlib.crc32(data[:-4]) & 0xFFFFFFFF
+    if stored != computed:
+        raise FormatError(f"tactile model checksum mismatch: stored {stored:#010x}, computed {computed:#010x}")
+    at = 16 + header_len
+    for section, n in sections:
+        if section == name:
+            return data[at:at + n]
+        at += n
+    raise FormatError(f"no section {name!r} in this tactile model (it has {[s for s, _ in sections]})")
 
 
 def parse(data: bytes) -> Forest:
@@ -248,14 +289,22 @@ def to_onnx(f: Forest, name="crackbot_forest"):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("forest", type=Path, help="crackbot forest file (CRKFORST)")
+    p.add_argument("forest", type=Path, help="crackbot forest file (CRKFORST) or deployed tactile model (CRKTACTL)")
     p.add_argument("onnx", type=Path, help="ONNX file to write")
+    p.add_argument("--section", default="context_forest",
+                   help="the forest of a deployed tactile model (CRKTACTL) to export (default: context_forest)")
+    p.add_argument("--save-forest", type=Path, help="also write the exported forest as a plain CRKFORST file")
     a = p.parse_args(argv)
     import onnx
 
     try:
-        forest = parse(a.forest.read_bytes())
+        data = a.forest.read_bytes()
+        if data[:8] == TACTILE_MAGIC:
+            data = tactile_section(data, a.section)
+        forest = parse(data)
         model = to_onnx(forest)
+        if a.save_forest:
+            a.save_forest.write_bytes(data)
     except (OSError, FormatError) as e:
         print(f"forest_to_onnx: {a.forest}: {e}", file=sys.stderr)
         return 1

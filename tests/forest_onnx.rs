@@ -179,3 +179,80 @@ fn the_exporter_refuses_corrupted_forest_files() {
     std::fs::write(&path, &good).expect("write");
     export(&path, &dir.path().join("good.onnx")).unwrap_or_else(|e| panic!("{e}"));
 }
+
+/// CRC-32 (ISO-HDLC, as zlib), bit by bit: enough for a test file.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+#[test]
+fn the_exporter_takes_a_section_of_a_deployed_tactile_model() {
+    let data = crackbot_forest::synthetic::blobs(400, 5, 3, 30.0, 2).expect("data");
+    let forest = RandomForest::fit(
+        &data,
+        &ForestParams::classifier().n_trees(4).seed(2).quiet(true),
+    )
+    .expect("forest");
+    let window = RandomForest::fit(
+        &data,
+        &ForestParams::classifier().n_trees(2).seed(3).quiet(true),
+    )
+    .expect("forest");
+    let (a, b) = (forest.to_bytes(), window.to_bytes());
+    // The CRKTACTL layout of crates/tactile/src/model.rs: magic, version, header length, JSON header
+    // listing the sections, the sections, CRC-32 of all before.
+    let header = format!(
+        r#"{{"format_version":1,"sections":[{{"name":"context_forest","bytes":{}}},{{"name":"window_forest","bytes":{}}}]}}"#,
+        a.len(),
+        b.len()
+    );
+    let mut file = b"CRKTACTL".to_vec();
+    file.extend_from_slice(&1u32.to_le_bytes());
+    file.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    file.extend_from_slice(header.as_bytes());
+    file.extend_from_slice(&a);
+    file.extend_from_slice(&b);
+    let crc = crc32(&file);
+    file.extend_from_slice(&crc.to_le_bytes());
+    let dir = tempfile::tempdir().expect("temp dir");
+    let model = dir.path().join("model.ctm");
+    std::fs::write(&model, &file).expect("write");
+    assert!(onnx_forest::is_tactile_model(&model));
+    for (section, bytes) in [("context_forest", &a), ("window_forest", &b)] {
+        let onnx = dir.path().join(format!("{section}.onnx"));
+        let out = dir.path().join(format!("{section}.forest"));
+        or_fail(onnx_forest::export_section(&model, section, &onnx, &out));
+        assert_eq!(&std::fs::read(&out).expect("read"), bytes, "{section}");
+        assert!(onnx.is_file());
+    }
+    let err = onnx_forest::export_section(
+        &model,
+        "width_regressor",
+        &dir.path().join("w.onnx"),
+        &dir.path().join("w.forest"),
+    )
+    .expect_err("no such section");
+    assert!(err.contains("no section 'width_regressor'"), "{err}");
+    let n = file.len();
+    file[n - 10] ^= 1;
+    std::fs::write(&model, &file).expect("write");
+    let err = onnx_forest::export_section(
+        &model,
+        "context_forest",
+        &dir.path().join("c.onnx"),
+        &dir.path().join("c.forest"),
+    )
+    .expect_err("corrupt");
+    assert!(err.contains("checksum mismatch"), "{err}");
+}

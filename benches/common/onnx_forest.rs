@@ -20,11 +20,44 @@ pub fn workspace_root() -> PathBuf {
 
 /// Runs `scripts/forest_to_onnx.sh FOREST ONNX` (which makes its venv on first use).
 pub fn export(forest: &Path, onnx: &Path) -> Result<(), String> {
+    export_with(forest, onnx, &[])
+}
+
+/// Whether `path` is a deployed tactile model (`CRKTACTL`, crates/tactile/src/model.rs), whose forests
+/// are sections.
+pub fn is_tactile_model(path: &Path) -> bool {
+    use std::io::Read;
+    let mut magic = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut magic))
+        .is_ok()
+        && &magic == b"CRKTACTL"
+}
+
+/// Exports section `section` of a deployed tactile model to `onnx`, and writes that forest to
+/// `forest_out` as a plain forest file.
+pub fn export_section(
+    model: &Path,
+    section: &str,
+    onnx: &Path,
+    forest_out: &Path,
+) -> Result<(), String> {
+    let out = forest_out.to_string_lossy();
+    export_with(
+        model,
+        onnx,
+        &["--section", section, "--save-forest", out.as_ref()],
+    )
+}
+
+/// [`export`] with further arguments for the script.
+fn export_with(forest: &Path, onnx: &Path, extra: &[&str]) -> Result<(), String> {
     let script = workspace_root().join("scripts/forest_to_onnx.sh");
     let out = std::process::Command::new("bash")
         .arg(&script)
         .arg(forest)
         .arg(onnx)
+        .args(extra)
         .output()
         .map_err(|e| format!("running {}: {e}", script.display()))?;
     if !out.status.success() {
