@@ -9,8 +9,8 @@
 //! the windows of the segment — the very windows `crackbot tactile eval` takes — and returns the
 //! **slide verdict**: the class of the largest summed slide mean of the two forests (the offline
 //! arithmetic, so the verdict and its probabilities equal the offline ones bit for bit; a test
-//! checks it on real recordings), its confidence, the width (regressor, median of the windows,
-//! with a robust spread) and, when the surface or the signals are unlike training, a [`Doubt`].
+//! checks it on real recordings), its confidence, the width (the vote's posterior mean and
+//! standard deviation over the classes' widths, and the regressor's median with a robust spread) and, when the surface or the signals are unlike training, a [`Doubt`].
 
 use crackbot_dsp::{Segmenter, StreamingFeatures, WindowConfig};
 use crackbot_forest::Classifier;
@@ -36,11 +36,16 @@ pub struct RunningVerdict {
 /// A width in mm with its uncertainty.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct WidthEstimate {
-    /// Median of the window estimates, mm.
+    /// The posterior mean width: the classes' widths weighted by the slide vote (both forests'
+    /// slide means, normalised), mm.
     pub mm: f64,
-    /// 1.4826 × the median absolute deviation of the window estimates (a robust standard
-    /// deviation), mm.
-    pub spread_mm: f64,
+    /// The posterior standard deviation of the width under the same weights, mm.
+    pub std_mm: f64,
+    /// The width regressor's estimate: median of its window estimates, mm.
+    pub regressor_mm: f64,
+    /// 1.4826 × the median absolute deviation of the regressor's window estimates (a robust
+    /// standard deviation), mm.
+    pub regressor_spread_mm: f64,
 }
 
 /// The verdict at the end of a slide.
@@ -316,9 +321,23 @@ impl<'m> OnlineClassifier<'m> {
                     *v = (*v - mm).abs();
                 }
                 let mad = median(&mut self.estimates);
+                let total: f64 = votes.iter().sum();
+                let labels = &self.model.header.labels;
+                let mean = votes
+                    .iter()
+                    .zip(labels)
+                    .map(|(v, w)| v / total * w)
+                    .sum::<f64>();
+                let var = votes
+                    .iter()
+                    .zip(labels)
+                    .map(|(v, w)| v / total * (w - mean).powi(2))
+                    .sum::<f64>();
                 Some(WidthEstimate {
-                    mm,
-                    spread_mm: 1.4826 * mad,
+                    mm: mean,
+                    std_mm: var.sqrt(),
+                    regressor_mm: mm,
+                    regressor_spread_mm: 1.4826 * mad,
                 })
             }
         };

@@ -205,3 +205,43 @@ proptest! {
         prop_assert_eq!(got, whole);
     }
 }
+
+/// Width on a repetition the model never saw (trained on 1 and 2, tested on 3): the slide's
+/// posterior mean width and the regressor's, against the plate's width.
+#[test]
+fn width_of_an_unseen_repetition_is_measured_with_a_covering_uncertainty() {
+    let dir = crackbot_datasets::require(crackbot_datasets::TACTILE_WIDTH);
+    let all = collect_recordings(&[dir]).unwrap();
+    let (train, test): (Vec<_>, Vec<_>) = all
+        .into_iter()
+        .filter(|(p, _)| !p.to_string_lossy().ends_with("_4.mat"))
+        .partition(|(p, _)| !p.to_string_lossy().ends_with("_3.mat"));
+    let config = TrainConfig {
+        n_trees: 32,
+        max_depth: Some(10),
+        seed: 1,
+    };
+    let m =
+        TactileModel::train(&train, Some(Experiment::Width), &config, &mut |_, _, _| {}).unwrap();
+    let (mut n, mut posterior, mut regressor, mut covered) = (0usize, 0.0, 0.0, 0usize);
+    for (_, rec) in &test {
+        let truth = rec.label().unwrap();
+        for v in classify_recording(&m, rec).unwrap().into_iter().flatten() {
+            let w = v.width.unwrap();
+            n += 1;
+            posterior += (w.mm - truth).abs();
+            regressor += (w.regressor_mm - truth).abs();
+            covered += usize::from((w.mm - truth).abs() <= 2.0 * w.std_mm + 0.25);
+        }
+    }
+    let (posterior, regressor) = (posterior / n as f64, regressor / n as f64);
+    println!(
+        "width, repetition 3 ({n} slides): posterior mean MAE {posterior:.3} mm, regressor MAE {regressor:.3} mm, within 2 std (+0.25 mm) {covered}/{n}"
+    );
+    // Measured 2026-11-24: posterior 1.34 mm, regressor 1.00 mm, 72/72 covered. The goal
+    // (0.3 mm) is not met; these bounds keep it from getting worse.
+    assert!(n >= 60, "{n}");
+    assert!(posterior <= 1.5, "posterior MAE {posterior}");
+    assert!(regressor <= 1.2, "regressor MAE {regressor}");
+    assert!(covered * 10 >= n * 9, "{covered}/{n} within 2 std");
+}
