@@ -704,7 +704,7 @@ pub fn calibrate(
         sets[0].traces.iter().find(|t| t.label == 0.0),
         real_flat.first().and_then(recording_medians),
     ) {
-        for c in 0..3 {
+        for (c, real_median) in real.iter().take(3).enumerate() {
             let sim = sorted_finite(
                 flat.samples
                     .iter()
@@ -712,7 +712,7 @@ pub fn calibrate(
                     .collect(),
             );
             if let Some(sim) = sim {
-                optics.rest_counts[c] += real[c] - sim[sim.len() / 2];
+                optics.rest_counts[c] += real_median - sim[sim.len() / 2];
             }
         }
     }
