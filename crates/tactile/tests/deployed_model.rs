@@ -2,6 +2,9 @@
 //! refused with a clear error; online classification (sample by sample) gives the offline slide
 //! verdicts bit for bit on real recordings, under random chunking of the stream too.
 
+// Helpers shared by the tests unwrap too: a failure there is a failed test.
+#![allow(clippy::unwrap_used)]
+
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 

@@ -2,6 +2,9 @@
 //! (every sample of every slide, spans reaching across slides), through the window pipeline, and
 //! on random signals with random slides, configurations and extreme values (proptest).
 
+// Helpers shared by the tests unwrap too: a failure there is a failed test.
+#![allow(clippy::unwrap_used)]
+
 use std::path::PathBuf;
 
 use crackbot_recording::{collect_recordings, Recording};
