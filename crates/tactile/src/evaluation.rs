@@ -20,7 +20,7 @@ use crate::context::ContextConfig;
 use crate::dataset::{choose_experiment, Experiment, PipelineConfig};
 use crate::eval::{
     check_n_trees, test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
-    width_regression_tuned, ClassifierKind, ForestTuning,
+    width_regression_tuned, ClassificationOutcome, ClassifierKind, ForestTuning, WidthOutcome,
 };
 use crate::model::TactileModel;
 use crate::TactileError;
@@ -222,48 +222,35 @@ fn evaluate_checked(
         Experiment::Recognition => None,
     };
     let p = &config.pipeline;
-    let (w, s) = (&outcome.windows, &outcome.slides);
-    Ok(EvalReport {
-        classes: experiment
-            .class_names()
-            .iter()
-            .map(|c| c.to_string())
-            .collect(),
-        classifier: kind.name().to_string(),
-        context: p.context.clone(),
-        experiment: experiment.name().to_string(),
-        feature: p.spec.feature_name(),
-        forest_tuning: tuning,
-        n_features: train_set.n_features,
-        normalisation: format!("{:?}", p.normalisation),
-        segmentation: p.segmentation.name().to_string(),
-        set: p.spec.set.name().to_string(),
-        slide_accuracy: s.accuracy(),
-        slide_confusion: s.rows(),
-        slide_precision: s.weighted_precision(),
-        slide_recall: s.weighted_recall(),
-        slide_vote: if voter.is_some() {
-            "context+paper"
-        } else if p.context.is_some() {
-            "context"
-        } else {
-            "paper"
-        }
-        .to_string(),
-        slide_width_mae_mm: width.as_ref().map(|x| x.slide_mae_mm),
-        test_recordings: test.len(),
-        test_slides: s.total(),
-        test_windows: test_set.n_rows(),
-        train_recordings: train.len(),
-        train_seconds,
-        train_windows: train_set.n_rows(),
-        width_mae_mm: width.as_ref().map(|x| x.window_mae_mm),
-        window: p.window,
-        window_accuracy: w.accuracy(),
-        window_confusion: w.rows(),
-        window_precision: w.weighted_precision(),
-        window_recall: w.weighted_recall(),
-    })
+    let slide_vote = if voter.is_some() {
+        "context+paper"
+    } else if p.context.is_some() {
+        "context"
+    } else {
+        "paper"
+    };
+    Ok(report(
+        p,
+        experiment,
+        &outcome,
+        width.as_ref(),
+        ReportFacts {
+            classes: experiment
+                .class_names()
+                .iter()
+                .map(|c| c.to_string())
+                .collect(),
+            classifier: kind.name(),
+            forest_tuning: tuning,
+            n_features: train_set.n_features,
+            slide_vote,
+            test_recordings: test.len(),
+            test_windows: test_set.n_rows(),
+            train_recordings: train.len(),
+            train_seconds,
+            train_windows: train_set.n_rows(),
+        },
+    ))
 }
 
 /// Evaluates a deployed model ([`TactileModel`]) on the recordings named by `test`, without
@@ -308,19 +295,62 @@ pub fn evaluate_model_recordings(
     };
     let h = &model.header;
     let p = &h.pipeline;
+    Ok(report(
+        p,
+        experiment,
+        &outcome,
+        width.as_ref(),
+        ReportFacts {
+            classes: h.classes.clone(),
+            classifier: "RF",
+            forest_tuning: ForestTuning {
+                max_features_fraction: None,
+                max_depth: h.training.config.max_depth,
+                min_samples_leaf: None,
+            },
+            n_features: test_set.n_features,
+            slide_vote: "context+paper",
+            test_recordings: test.len(),
+            test_windows: test_set.n_rows(),
+            train_recordings: h.training.recordings.len(),
+            train_seconds: h.training.seconds,
+            train_windows: h.training.windows,
+        },
+    ))
+}
+
+/// What a report says beyond the pipeline and the outcome.
+struct ReportFacts {
+    classes: Vec<String>,
+    classifier: &'static str,
+    forest_tuning: ForestTuning,
+    n_features: usize,
+    slide_vote: &'static str,
+    test_recordings: usize,
+    test_windows: usize,
+    train_recordings: usize,
+    train_seconds: f64,
+    train_windows: usize,
+}
+
+/// The report of `outcome` (and `width`) under pipeline `p`: one place for the metric fields of
+/// [`evaluate`] and [`evaluate_model`].
+fn report(
+    p: &PipelineConfig,
+    experiment: Experiment,
+    outcome: &ClassificationOutcome,
+    width: Option<&WidthOutcome>,
+    facts: ReportFacts,
+) -> EvalReport {
     let (w, s) = (&outcome.windows, &outcome.slides);
-    Ok(EvalReport {
-        classes: h.classes.clone(),
-        classifier: "RF".to_string(),
+    EvalReport {
+        classes: facts.classes,
+        classifier: facts.classifier.to_string(),
         context: p.context.clone(),
         experiment: experiment.name().to_string(),
         feature: p.spec.feature_name(),
-        forest_tuning: ForestTuning {
-            max_features_fraction: None,
-            max_depth: h.training.config.max_depth,
-            min_samples_leaf: None,
-        },
-        n_features: test_set.n_features,
+        forest_tuning: facts.forest_tuning,
+        n_features: facts.n_features,
         normalisation: format!("{:?}", p.normalisation),
         segmentation: p.segmentation.name().to_string(),
         set: p.spec.set.name().to_string(),
@@ -328,21 +358,21 @@ pub fn evaluate_model_recordings(
         slide_confusion: s.rows(),
         slide_precision: s.weighted_precision(),
         slide_recall: s.weighted_recall(),
-        slide_vote: "context+paper".to_string(),
-        slide_width_mae_mm: width.as_ref().map(|x| x.slide_mae_mm),
-        test_recordings: test.len(),
+        slide_vote: facts.slide_vote.to_string(),
+        slide_width_mae_mm: width.map(|x| x.slide_mae_mm),
+        test_recordings: facts.test_recordings,
         test_slides: s.total(),
-        test_windows: test_set.n_rows(),
-        train_recordings: h.training.recordings.len(),
-        train_seconds: h.training.seconds,
-        train_windows: h.training.windows,
-        width_mae_mm: width.as_ref().map(|x| x.window_mae_mm),
+        test_windows: facts.test_windows,
+        train_recordings: facts.train_recordings,
+        train_seconds: facts.train_seconds,
+        train_windows: facts.train_windows,
+        width_mae_mm: width.map(|x| x.window_mae_mm),
         window: p.window,
         window_accuracy: w.accuracy(),
         window_confusion: w.rows(),
         window_precision: w.weighted_precision(),
         window_recall: w.weighted_recall(),
-    })
+    }
 }
 
 #[cfg(test)]
