@@ -20,8 +20,8 @@ use serde_json::Value;
 /// be placed here (the test fails until it is).
 const LAYERS: &[(&str, &[&str])] = &[
     (
-        "foundations: wire format, data location",
-        &["crackbot-protocol", "crackbot-datasets"],
+        "foundations: wire formats (sensor, manipulator link), data location",
+        &["crackbot-protocol", "crackbot-datasets", "crackbot-link"],
     ),
     (
         "data: firmware, recordings, image geometry and annotations",
@@ -32,13 +32,14 @@ const LAYERS: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "components: sensor link, signals, classifiers, camera, simulator",
+        "components: sensor link, signals, classifiers, camera, simulator, planner",
         &[
             "crackbot-acquisition",
             "crackbot-dsp",
             "crackbot-forest",
             "crackbot-vision",
             "crackbot-sim",
+            "crackbot-planner",
         ],
     ),
     (
@@ -56,7 +57,7 @@ const LAYERS: &[(&str, &[&str])] = &[
 ];
 
 /// Crates that must stay `no_std` (the firmware runs on the microcontroller).
-const NO_STD: &[&str] = &["crackbot-protocol", "crackbot-firmware"];
+const NO_STD: &[&str] = &["crackbot-protocol", "crackbot-firmware", "crackbot-link"];
 
 /// What a `no_std` crate may pull in (all `no_std` themselves).
 const NO_STD_ALLOWED: &[&str] = &[

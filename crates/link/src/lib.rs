@@ -1,0 +1,2 @@
+//! The authenticated link to the manipulator controller. Work in progress (issue 13).
+#![no_std]
