@@ -1,0 +1,2 @@
+//! Placeholder: the link benchmarks land with issue 13.
+fn main() {}
