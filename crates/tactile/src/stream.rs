@@ -45,7 +45,42 @@ impl ValueCounts {
 
     #[inline]
     fn add(&mut self, q: i32, delta: i32) {
-        let mut i = (q - SAMPLE_MIN) as usize + 1;
+        self.add_from((q - SAMPLE_MIN) as usize + 1, delta);
+    }
+
+    /// One value `old` becomes `new`: both update paths walked together, stopping where they
+    /// merge (above it, the −1 and +1 cancel), so nearby values cost a few steps.
+    #[inline]
+    fn replace(&mut self, old: i32, new: i32) {
+        let n = self.tree.len();
+        let mut i = (old - SAMPLE_MIN) as usize + 1;
+        let mut j = (new - SAMPLE_MIN) as usize + 1;
+        while i != j {
+            if i < j {
+                if let Some(slot) = self.tree.get_mut(i) {
+                    *slot = slot.wrapping_sub(1);
+                }
+                i += i & i.wrapping_neg();
+                if i >= n {
+                    // The old path has left the tree; finish the new one alone.
+                    self.add_from(j, 1);
+                    return;
+                }
+            } else {
+                if let Some(slot) = self.tree.get_mut(j) {
+                    *slot = slot.wrapping_add(1);
+                }
+                j += j & j.wrapping_neg();
+                if j >= n {
+                    self.add_from(i, -1);
+                    return;
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn add_from(&mut self, mut i: usize, delta: i32) {
         while let Some(slot) = self.tree.get_mut(i) {
             *slot = slot.wrapping_add_signed(delta);
             i += i & i.wrapping_neg();
@@ -70,23 +105,21 @@ impl ValueCounts {
 
 /// Sliding-window minimum (or maximum with `max`) over the last `len` samples.
 #[derive(Debug, Clone)]
-struct MonoQueue {
+struct MonoQueue<const MAX: bool> {
     items: VecDeque<(u64, i32)>,
-    max: bool,
 }
 
-impl MonoQueue {
-    fn new(len: usize, max: bool) -> Self {
+impl<const MAX: bool> MonoQueue<MAX> {
+    fn new(len: usize) -> Self {
         MonoQueue {
             items: VecDeque::with_capacity(len + 1),
-            max,
         }
     }
 
     #[inline]
     fn push(&mut self, t: u64, q: i32, oldest: u64) {
         while let Some(&(_, v)) = self.items.back() {
-            let dominated = if self.max { v <= q } else { v >= q };
+            let dominated = if MAX { v <= q } else { v >= q };
             if !dominated {
                 break;
             }
@@ -117,8 +150,8 @@ struct Span {
     n: usize,
     sum: i64,
     sum_sq: i64,
-    min: MonoQueue,
-    max: MonoQueue,
+    min: MonoQueue<false>,
+    max: MonoQueue<true>,
     counts: ValueCounts,
 }
 
@@ -129,8 +162,8 @@ impl Span {
             n: 0,
             sum: 0,
             sum_sq: 0,
-            min: MonoQueue::new(len, false),
-            max: MonoQueue::new(len, true),
+            min: MonoQueue::new(len),
+            max: MonoQueue::new(len),
             counts: ValueCounts::new(),
         }
     }
@@ -145,13 +178,22 @@ impl Span {
     }
 }
 
+/// The window's own span: only its sum is read (the "current level").
+#[derive(Debug, Clone, Default)]
+struct WindowSum {
+    len: usize,
+    n: usize,
+    sum: i64,
+}
+
 /// One channel's state.
 #[derive(Debug, Clone)]
 struct ChannelState {
-    /// The last `ring_len` samples (oldest overwritten), indexed by stream time modulo `ring_len`.
+    /// The last `ring_len` samples (oldest overwritten), indexed by stream time modulo `ring_len`
+    /// (a power of two: the index is a mask).
     ring: Vec<i32>,
     /// The window's own span (the "current level"), then one per scale.
-    window: Span,
+    window: WindowSum,
     spans: Vec<Span>,
     /// The slide's first samples so far, sorted (its baseline is their median).
     head: Vec<i32>,
@@ -205,12 +247,16 @@ impl StreamingContext {
             .copied()
             .chain([window_len])
             .max()
-            .unwrap_or(window_len);
+            .unwrap_or(window_len)
+            .next_power_of_two();
         let states = channels
             .iter()
             .map(|_| ChannelState {
                 ring: vec![0; ring_len],
-                window: Span::new(window_len),
+                window: WindowSum {
+                    len: window_len,
+                    ..WindowSum::default()
+                },
                 spans: config.scales.iter().map(|&l| Span::new(l)).collect(),
                 head: Vec::with_capacity(config.baseline_len),
                 slide_min: 0,
@@ -250,7 +296,10 @@ impl StreamingContext {
         self.slide_start = 0;
         self.slide_len = 0;
         for s in &mut self.states {
-            s.window.clear();
+            s.window = WindowSum {
+                len: s.window.len,
+                ..WindowSum::default()
+            };
             for span in &mut s.spans {
                 span.clear();
             }
@@ -267,7 +316,10 @@ impl StreamingContext {
         for s in &mut self.states {
             s.head.clear();
             if !across {
-                s.window.clear();
+                s.window = WindowSum {
+                    len: s.window.len,
+                    ..WindowSum::default()
+                };
                 for span in &mut s.spans {
                     span.clear();
                 }
@@ -286,24 +338,41 @@ impl StreamingContext {
         } else {
             self.slide_start
         };
-        let slot = (t % self.ring_len as u64) as usize;
+        let mask = self.ring_len as u64 - 1;
+        let slot = (t & mask) as usize;
         for (state, &c) in self.states.iter_mut().zip(&self.channels) {
             let q = quantise(sample[c]);
             // The sample leaving each span is still in the ring (every span ≤ ring length).
             let ring = &state.ring;
-            for span in std::iter::once(&mut state.window).chain(state.spans.iter_mut()) {
+            let leaving = |len: usize| {
+                let len = len as u64;
+                (t >= len && t - len >= floor).then(|| ring[((t - len) & mask) as usize])
+            };
+            let w = &mut state.window;
+            if let Some(old) = leaving(w.len) {
+                w.sum -= i64::from(old);
+                w.n -= 1;
+            }
+            w.n += 1;
+            w.sum += i64::from(q);
+            for span in state.spans.iter_mut() {
                 let len = span.len as u64;
-                if t >= len && t - len >= floor {
-                    let old = ring[((t - len) % ring.len() as u64) as usize];
-                    span.sum -= i64::from(old);
-                    span.sum_sq -= i64::from(old) * i64::from(old);
-                    span.counts.add(old, -1);
-                    span.n -= 1;
+                match leaving(span.len) {
+                    // The same value leaves and enters: the counts are unchanged.
+                    Some(old) if old == q => {}
+                    Some(old) => {
+                        span.sum += i64::from(q) - i64::from(old);
+                        span.sum_sq +=
+                            i64::from(q) * i64::from(q) - i64::from(old) * i64::from(old);
+                        span.counts.replace(old, q);
+                    }
+                    None => {
+                        span.n += 1;
+                        span.sum += i64::from(q);
+                        span.sum_sq += i64::from(q) * i64::from(q);
+                        span.counts.add(q, 1);
+                    }
                 }
-                span.n += 1;
-                span.sum += i64::from(q);
-                span.sum_sq += i64::from(q) * i64::from(q);
-                span.counts.add(q, 1);
                 let oldest = (t + 1).saturating_sub(len).max(floor);
                 span.min.push(t, q, oldest);
                 span.max.push(t, q, oldest);
@@ -349,7 +418,7 @@ impl StreamingContext {
                 k += 1;
             }
         };
-        let ring_len = self.ring_len as u64;
+        let mask = self.ring_len as u64 - 1;
         let last_t = self.t - 1;
         for state in &self.states {
             let b2 = twice_median(&state.head);
@@ -363,8 +432,8 @@ impl StreamingContext {
                     sum_sq: span.sum_sq,
                     min: span.min.value(),
                     max: span.max.value(),
-                    first: state.ring[(first_t % ring_len) as usize],
-                    last: state.ring[(last_t % ring_len) as usize],
+                    first: state.ring[(first_t & mask) as usize],
+                    last: state.ring[(last_t & mask) as usize],
                     below: 0,
                     above: 0,
                 };
