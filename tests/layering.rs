@@ -43,8 +43,8 @@ const LAYERS: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "pipelines: the emulated sensor, the tactile pipeline",
-        &["crackbot-emulator", "crackbot-tactile"],
+        "pipelines: the emulated sensor, the tactile pipeline, the simulated controller",
+        &["crackbot-emulator", "crackbot-tactile", "crackbot-controller"],
     ),
     (
         "services: missions, figures",

@@ -1,0 +1,544 @@
+//! The simulated arm and finger over a scene, advanced one sensor sample (1/400 s) at a time.
+//!
+//! The world is stepped by the emulated sensor's 400 Hz ticks ([`crate::sensor`]), so every
+//! sensor sample and the arm pose of the same tick are simulated together: the ground truth
+//! that the robot's clock synchronisation is tested against.
+//!
+//! Commands are checked against the [`Limits`] whoever sends them: a point outside the
+//! workspace or a speed above the limits is refused ([`Refusal`]) and nothing moves.
+
+use crackbot_sim::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
+use crackbot_sim::{Integrator, Scene, SensorParams, SimError, Surface};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use serde::Serialize;
+
+/// Height of the finger above the plate while it travels between slides, mm.
+pub const TRAVEL_HEIGHT_MM: f64 = 5.0;
+
+/// What the controller refuses to do.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Refusal {
+    /// A point lies outside the workspace.
+    #[error("{what} ({x:.2}, {y:.2}) mm is outside the workspace [{x0}, {x1}] × [{y0}, {y1}] mm")]
+    OutsideWorkspace {
+        /// Which point.
+        what: &'static str,
+        /// x, mm.
+        x: f64,
+        /// y, mm.
+        y: f64,
+        /// Workspace x range, mm.
+        x0: f64,
+        /// Workspace x range, mm.
+        x1: f64,
+        /// Workspace y range, mm.
+        y0: f64,
+        /// Workspace y range, mm.
+        y1: f64,
+    },
+    /// A speed is above its limit (or not a positive number).
+    #[error("{what} speed {speed} mm/s is not in (0, {limit}] mm/s")]
+    OverSpeed {
+        /// Travel or slide.
+        what: &'static str,
+        /// Asked speed, mm/s.
+        speed: f64,
+        /// The limit, mm/s.
+        limit: f64,
+    },
+    /// A slide of no length, or longer than the simulator takes.
+    #[error("invalid slide: {0}")]
+    Invalid(String),
+    /// The controller is stopped or faulted: it needs a new command after `Stop` is cleared.
+    #[error("the controller is faulted: {0}")]
+    Faulted(String),
+}
+
+/// The workspace and speed limits (from the scene's manipulator, see [`Limits::of_scene`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Limits {
+    /// Lower corner of the reachable box, mm `[x, y]` in the plate frame.
+    pub min_mm: [f64; 2],
+    /// Upper corner, mm.
+    pub max_mm: [f64; 2],
+    /// Fastest travel between slides, mm/s.
+    pub max_travel_speed_mm_s: f64,
+    /// Fastest slide, mm/s.
+    pub max_slide_speed_mm_s: f64,
+}
+
+impl Limits {
+    /// The scene's workspace; travel up to twice the scene's travel speed, slides up to four
+    /// times the scene's slide speed (the finger's contact is not rated for more).
+    pub fn of_scene(scene: &Scene) -> Self {
+        let m = &scene.manipulator;
+        Limits {
+            min_mm: [m.workspace_min_mm[0], m.workspace_min_mm[1]],
+            max_mm: [m.workspace_max_mm[0], m.workspace_max_mm[1]],
+            max_travel_speed_mm_s: 2.0 * m.travel_speed_mm_s,
+            max_slide_speed_mm_s: 4.0 * m.slide_speed_mm_s,
+        }
+    }
+
+    fn check_point(&self, what: &'static str, p: [f64; 2]) -> Result<(), Refusal> {
+        let inside = p.iter().all(|v| v.is_finite())
+            && (self.min_mm[0]..=self.max_mm[0]).contains(&p[0])
+            && (self.min_mm[1]..=self.max_mm[1]).contains(&p[1]);
+        if inside {
+            Ok(())
+        } else {
+            Err(Refusal::OutsideWorkspace {
+                what,
+                x: p[0],
+                y: p[1],
+                x0: self.min_mm[0],
+                x1: self.max_mm[0],
+                y0: self.min_mm[1],
+                y1: self.max_mm[1],
+            })
+        }
+    }
+
+    fn check_speed(what: &'static str, speed: f64, limit: f64) -> Result<(), Refusal> {
+        if speed.is_finite() && speed > 0.0 && speed <= limit {
+            Ok(())
+        } else {
+            Err(Refusal::OverSpeed { what, speed, limit })
+        }
+    }
+}
+
+/// What the arm is doing (the link's mode, with the world's details).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Mode {
+    /// Standing still, ready.
+    Idle,
+    /// Travelling (finger lifted).
+    Moving,
+    /// Sliding the finger along slide `id`.
+    Sliding(u32),
+    /// Stopped by a `Stop`; the next command clears it.
+    Stopped,
+}
+
+/// One tick's output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tick {
+    /// The world's tick (1/400 s each) after this step.
+    pub tick: u64,
+    /// Channel values for the ADC (D1, D2, D3, P), counts.
+    pub counts: [f64; 4],
+    /// Arm pose, mm `[x, y, z]` in the plate frame (z: height of the finger above the plate).
+    pub pose: [f64; 3],
+    /// Arm velocity, mm/s.
+    pub velocity: [f64; 3],
+    /// What the arm is doing.
+    pub mode: Mode,
+    /// Fraction of the current slide done, 0–1.
+    pub progress: f64,
+    /// A slide that ended at this tick.
+    pub finished: Option<u32>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct PendingSlide {
+    id: u32,
+    start: [f64; 2],
+    end: [f64; 2],
+    speed: f64,
+}
+
+#[derive(Debug)]
+enum Activity {
+    Idle,
+    Stopped,
+    Moving {
+        from: [f64; 2],
+        to: [f64; 2],
+        ticks: u64,
+        done: u64,
+        then: Option<PendingSlide>,
+    },
+    Sliding {
+        id: u32,
+        start: [f64; 2],
+        dir: [f64; 2],
+        sim: Box<SlideSim>,
+        done: u64,
+        ticks: u64,
+    },
+}
+
+/// The simulated arm, finger and sensor over one scene.
+#[derive(Debug)]
+pub struct World {
+    surface: Surface,
+    reflectivity: f64,
+    sensor: SensorParams,
+    limits: Limits,
+    travel_speed: f64,
+    pose: [f64; 3],
+    velocity: [f64; 3],
+    tick: u64,
+    activity: Activity,
+    /// Channel values with the finger lifted (travel, idle), counts.
+    lifted: [f64; 4],
+    noise: Normal<f64>,
+    rng: ChaCha8Rng,
+    seed: u64,
+    slides: u32,
+}
+
+impl World {
+    /// The arm over `scene`, parked at the workspace's lower corner, noise drawn from `seed`.
+    pub fn new(scene: &Scene, seed: u64) -> Result<Self, SimError> {
+        scene.validate()?;
+        let limits = Limits::of_scene(scene);
+        let surface = scene.surface();
+        let reflectivity = scene.plate.material.reflectivity;
+        // The lifted finger: what a slide's first sample reads (at rest, before it moves), on a
+        // clean spot of the plate. The proximity channel then sees the plate from the travel
+        // height; the rest value is close enough for the robot, which classifies slides only.
+        let probe = SlideSim::new(
+            &Surface::flat([200.0, 100.0]),
+            reflectivity,
+            &SlideLine {
+                start: [0.0, 0.0],
+                direction: [1.0, 0.0],
+                stroke_mm: 10.0,
+                speed_mm_s: 1.0,
+            },
+            &scene.sensor,
+            Integrator::default(),
+            seed,
+        )?
+        .next_sample()?;
+        Ok(World {
+            surface,
+            reflectivity,
+            sensor: scene.sensor.clone(),
+            limits,
+            travel_speed: scene.manipulator.travel_speed_mm_s,
+            pose: [limits.min_mm[0], limits.min_mm[1], TRAVEL_HEIGHT_MM],
+            velocity: [0.0; 3],
+            tick: 0,
+            activity: Activity::Idle,
+            lifted: probe.counts,
+            noise: Normal::new(0.0, 0.6).map_err(|e| SimError::Invalid(e.to_string()))?,
+            rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5eed),
+            seed,
+            slides: 0,
+        })
+    }
+
+    /// The limits every command is checked against.
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Current pose, mm.
+    pub fn pose(&self) -> [f64; 3] {
+        self.pose
+    }
+
+    /// Ticks simulated so far.
+    pub fn tick_count(&self) -> u64 {
+        self.tick
+    }
+
+    /// The current mode.
+    pub fn mode(&self) -> Mode {
+        match &self.activity {
+            Activity::Idle => Mode::Idle,
+            Activity::Stopped => Mode::Stopped,
+            Activity::Moving { then: Some(p), .. } => Mode::Sliding(p.id),
+            Activity::Moving { .. } => Mode::Moving,
+            Activity::Sliding { id, .. } => Mode::Sliding(*id),
+        }
+    }
+
+    /// Whether the arm is busy with a command.
+    pub fn is_busy(&self) -> bool {
+        matches!(
+            self.activity,
+            Activity::Moving { .. } | Activity::Sliding { .. }
+        )
+    }
+
+    /// Travel to `to` at `speed` (finger lifted). Replaces what the arm was doing.
+    pub fn move_to(&mut self, to: [f64; 2], speed: f64) -> Result<(), Refusal> {
+        self.limits.check_point("target", to)?;
+        Limits::check_speed("travel", speed, self.limits.max_travel_speed_mm_s)?;
+        self.start_move(to, speed, None);
+        Ok(())
+    }
+
+    /// Slide `id` from `start` to `end` at `speed`, travelling to `start` first (at the scene's
+    /// travel speed). Replaces what the arm was doing.
+    pub fn slide(
+        &mut self,
+        id: u32,
+        start: [f64; 2],
+        end: [f64; 2],
+        speed: f64,
+    ) -> Result<(), Refusal> {
+        self.limits.check_point("slide start", start)?;
+        self.limits.check_point("slide end", end)?;
+        Limits::check_speed("slide", speed, self.limits.max_slide_speed_mm_s)?;
+        let len = (end[0] - start[0]).hypot(end[1] - start[1]);
+        if !(len >= 0.5 && len <= crackbot_sim::run::MAX_STROKE_MM) {
+            return Err(Refusal::Invalid(format!(
+                "slide {id} is {len:.2} mm long (0.5 to {} mm)",
+                crackbot_sim::run::MAX_STROKE_MM
+            )));
+        }
+        let pending = PendingSlide {
+            id,
+            start,
+            end,
+            speed,
+        };
+        let speed = self.travel_speed.min(self.limits.max_travel_speed_mm_s);
+        self.start_move(start, speed, Some(pending));
+        Ok(())
+    }
+
+    /// Stops where it is; the next command starts from here.
+    pub fn stop(&mut self) {
+        self.activity = Activity::Stopped;
+        self.pose[2] = TRAVEL_HEIGHT_MM;
+        self.velocity = [0.0; 3];
+    }
+
+    fn start_move(&mut self, to: [f64; 2], speed: f64, then: Option<PendingSlide>) {
+        let from = [self.pose[0], self.pose[1]];
+        let dist = (to[0] - from[0]).hypot(to[1] - from[1]);
+        let ticks = (dist / speed * SAMPLE_RATE_HZ).ceil() as u64;
+        self.pose[2] = TRAVEL_HEIGHT_MM;
+        self.activity = Activity::Moving {
+            from,
+            to,
+            ticks,
+            done: 0,
+            then,
+        };
+    }
+
+    fn begin_slide(&mut self, p: PendingSlide) -> Result<(), SimError> {
+        let d = [p.end[0] - p.start[0], p.end[1] - p.start[1]];
+        let len = d[0].hypot(d[1]);
+        let dir = [d[0] / len, d[1] / len];
+        self.slides += 1;
+        let sim = SlideSim::new(
+            &self.surface,
+            self.reflectivity,
+            &SlideLine {
+                start: p.start,
+                direction: dir,
+                stroke_mm: len,
+                speed_mm_s: p.speed,
+            },
+            &self.sensor,
+            Integrator::default(),
+            self.seed.wrapping_add(u64::from(self.slides)),
+        )?;
+        // One stroke, there only (`slide_time` is forth and back).
+        let ticks = (sim.slide_time() / 2.0 * SAMPLE_RATE_HZ).ceil() as u64;
+        self.activity = Activity::Sliding {
+            id: p.id,
+            start: p.start,
+            dir,
+            sim: Box::new(sim),
+            done: 0,
+            ticks,
+        };
+        Ok(())
+    }
+
+    fn lifted_counts(&mut self) -> [f64; 4] {
+        let mut c = self.lifted;
+        for v in &mut c {
+            *v += self.noise.sample(&mut self.rng);
+        }
+        c
+    }
+
+    /// Advances one sensor sample (1/400 s). A simulation failure stops the arm and is returned
+    /// (the caller reports it as a fault).
+    pub fn step(&mut self) -> Result<Tick, SimError> {
+        self.tick += 1;
+        let mut finished = None;
+        let mut progress = 0.0;
+        let counts;
+        match &mut self.activity {
+            Activity::Idle | Activity::Stopped => {
+                self.velocity = [0.0; 3];
+                counts = self.lifted_counts();
+            }
+            Activity::Moving {
+                from,
+                to,
+                ticks,
+                done,
+                then,
+            } => {
+                *done += 1;
+                let f = if *ticks == 0 {
+                    1.0
+                } else {
+                    (*done as f64 / *ticks as f64).min(1.0)
+                };
+                let (from, to, then, arrived) = (*from, *to, *then, *done >= *ticks);
+                let next = [
+                    from[0] + f * (to[0] - from[0]),
+                    from[1] + f * (to[1] - from[1]),
+                ];
+                self.velocity = [
+                    (next[0] - self.pose[0]) * SAMPLE_RATE_HZ,
+                    (next[1] - self.pose[1]) * SAMPLE_RATE_HZ,
+                    0.0,
+                ];
+                self.pose = [next[0], next[1], TRAVEL_HEIGHT_MM];
+                counts = self.lifted_counts();
+                if arrived {
+                    match then {
+                        Some(p) => {
+                            if let Err(e) = self.begin_slide(p) {
+                                self.stop();
+                                return Err(e);
+                            }
+                        }
+                        None => self.activity = Activity::Idle,
+                    }
+                }
+            }
+            Activity::Sliding {
+                id,
+                start,
+                dir,
+                sim,
+                done,
+                ticks,
+            } => {
+                let s = match sim.next_sample() {
+                    Ok(s) => s,
+                    Err(e) => {
+                        self.stop();
+                        return Err(e);
+                    }
+                };
+                *done += 1;
+                progress = (*done as f64 / (*ticks).max(1) as f64).min(1.0);
+                let x = s.arm_mm;
+                self.pose = [start[0] + x * dir[0], start[1] + x * dir[1], 0.0];
+                let v = s.arm_velocity_mm_s;
+                self.velocity = [v * dir[0], v * dir[1], 0.0];
+                counts = s.counts;
+                if *done >= *ticks {
+                    finished = Some(*id);
+                    self.activity = Activity::Idle;
+                    self.pose[2] = TRAVEL_HEIGHT_MM;
+                }
+            }
+        }
+        Ok(Tick {
+            tick: self.tick,
+            counts,
+            pose: self.pose,
+            velocity: self.velocity,
+            mode: self.mode(),
+            progress,
+            finished,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn world() -> World {
+        World::new(&Scene::builtin_default(), 3).expect("default scene")
+    }
+
+    #[test]
+    fn motion_outside_the_workspace_or_over_the_limits_is_refused_and_nothing_moves() {
+        let mut w = world();
+        let before = w.pose();
+        let err = w.move_to([250.0, 50.0], 10.0).unwrap_err();
+        assert!(matches!(err, Refusal::OutsideWorkspace { .. }), "{err}");
+        assert!(err.to_string().contains("250.00"), "{err}");
+        let err = w.move_to([50.0, 50.0], 1e6).unwrap_err();
+        assert!(matches!(err, Refusal::OverSpeed { .. }), "{err}");
+        assert!(w.move_to([50.0, 50.0], f64::NAN).is_err());
+        assert!(w.move_to([f64::NAN, 50.0], 10.0).is_err());
+        let err = w.slide(1, [10.0, 10.0], [10.0, 150.0], 3.89).unwrap_err();
+        assert!(err.to_string().contains("slide end"), "{err}");
+        let err = w.slide(1, [10.0, 10.0], [20.0, 10.0], 100.0).unwrap_err();
+        assert!(matches!(err, Refusal::OverSpeed { .. }), "{err}");
+        let err = w.slide(1, [10.0, 10.0], [10.1, 10.0], 3.89).unwrap_err();
+        assert!(matches!(err, Refusal::Invalid(_)), "{err}");
+        for _ in 0..10 {
+            w.step().expect("step");
+        }
+        assert_eq!(w.pose(), before);
+        assert_eq!(w.mode(), Mode::Idle);
+    }
+
+    #[test]
+    fn a_slide_travels_to_its_start_then_slides_to_its_end_in_the_expected_time() {
+        let mut w = world();
+        let (start, end, speed) = ([30.0, 20.0], [30.0, 36.0], 4.0);
+        w.slide(7, start, end, speed).expect("slide");
+        let mut sliding_ticks = 0u64;
+        let mut finished = None;
+        let mut last = w.pose();
+        for _ in 0..40_000 {
+            let t = w.step().expect("step");
+            for v in t.counts {
+                assert!(v.is_finite());
+            }
+            // Never outside the workspace, never faster than the limits.
+            let step = (t.pose[0] - last[0]).hypot(t.pose[1] - last[1]) * SAMPLE_RATE_HZ;
+            assert!(step <= w.limits().max_travel_speed_mm_s + 1e-6, "{step}");
+            last = t.pose;
+            if t.mode == Mode::Sliding(7) && t.pose[2] == 0.0 {
+                sliding_ticks += 1;
+                if t.finished.is_none() {
+                    assert!((t.pose[0] - 30.0).abs() < 1e-9);
+                }
+            }
+            if let Some(id) = t.finished {
+                finished = Some(id);
+                break;
+            }
+        }
+        assert_eq!(finished, Some(7));
+        let expected = 16.0 / speed * SAMPLE_RATE_HZ;
+        assert!(
+            (sliding_ticks as f64 - expected).abs() < 0.1 * expected,
+            "{sliding_ticks} ticks, expected about {expected}"
+        );
+        assert!((w.pose()[1] - 36.0).abs() < 0.5, "{:?}", w.pose());
+        assert_eq!(w.mode(), Mode::Idle);
+    }
+
+    #[test]
+    fn stop_halts_the_arm_where_it_is() {
+        let mut w = world();
+        w.move_to([150.0, 80.0], 50.0).expect("move");
+        for _ in 0..100 {
+            w.step().expect("step");
+        }
+        w.stop();
+        let here = w.pose();
+        for _ in 0..100 {
+            let t = w.step().expect("step");
+            assert_eq!(t.mode, Mode::Stopped);
+        }
+        assert_eq!(w.pose(), here);
+        assert!(here[0] > 0.0 && here[0] < 150.0);
+    }
+}
