@@ -16,6 +16,7 @@
 //! detection in camera frames is `crackbot-vision`'s.
 
 pub mod demo;
+pub mod sync;
 
 pub use demo::{run_demo, DemoConfig, DemoReport, DemoSurface};
 
