@@ -139,6 +139,7 @@ pub struct SensorStream {
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
     path: String,
+    opened_at: Instant,
 }
 
 impl SensorStream {
@@ -170,7 +171,9 @@ impl SensorStream {
         let (tx, rx) = mpsc::channel(8192);
         let stats = Arc::new(Mutex::new(LinkStats::default()));
         let stop = Arc::new(AtomicBool::new(false));
+        let opened_at = Instant::now();
         let reader = Reader {
+            start: opened_at,
             port,
             path: config.path.clone(),
             tx,
@@ -187,7 +190,14 @@ impl SensorStream {
             stop,
             thread: Some(thread),
             path: config.path.clone(),
+            opened_at,
         })
+    }
+
+    /// The host instant [`Sample::host_time`] counts from (to put the samples on the same
+    /// clock as other streams, e.g. the arm's positions).
+    pub fn opened_at(&self) -> Instant {
+        self.opened_at
     }
 
     /// The device path.
@@ -228,6 +238,7 @@ impl Drop for SensorStream {
 }
 
 struct Reader {
+    start: Instant,
     port: Box<dyn serialport::SerialPort>,
     path: String,
     tx: mpsc::Sender<Result<Sample, AcquisitionError>>,
@@ -237,7 +248,7 @@ struct Reader {
 
 impl Reader {
     fn run(mut self) {
-        let start = Instant::now();
+        let start = self.start;
         let mut decoder = Decoder::new();
         let mut tracker = SequenceTracker::new();
         let mut buf = [0u8; 4096];
