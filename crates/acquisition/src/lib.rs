@@ -27,7 +27,7 @@ pub mod summary;
 pub use record::{RecordMeta, SampleRecorder};
 pub use replay::{samples_of, Replay, ReplaySpeed};
 pub use session::{record_stream, RecordEnd, RecordOutcome, RecordReport, RecordSession};
-pub use stream::{LinkStats, PortConfig, Sample, SensorStream, SequenceTracker};
+pub use stream::{LinkStats, PortConfig, Sample, SensorStream, SequenceTracker, TryNext};
 pub use summary::{StreamReport, StreamSummary};
 
 /// Errors of the acquisition library.

@@ -127,6 +127,17 @@ impl PortConfig {
     }
 }
 
+/// What [`SensorStream::try_next`] found.
+#[derive(Debug)]
+pub enum TryNext {
+    /// A sample (or the error that ends the stream).
+    Ready(Result<Sample, AcquisitionError>),
+    /// Nothing waiting now.
+    Empty,
+    /// The stream has ended.
+    Ended,
+}
+
 /// A live stream of samples from a serial port, read by a background thread.
 ///
 /// The thread decodes everything it reads and hands the samples over in order; when the port
@@ -208,6 +219,15 @@ impl SensorStream {
     /// Next sample; `None` once the stream has ended (after an error or [`Self::stop`]).
     pub async fn next(&mut self) -> Option<Result<Sample, AcquisitionError>> {
         self.rx.recv().await
+    }
+
+    /// The next sample if one has arrived, without waiting.
+    pub fn try_next(&mut self) -> TryNext {
+        match self.rx.try_recv() {
+            Ok(s) => TryNext::Ready(s),
+            Err(mpsc::error::TryRecvError::Empty) => TryNext::Empty,
+            Err(mpsc::error::TryRecvError::Disconnected) => TryNext::Ended,
+        }
     }
 
     /// Next sample, blocking the calling (non-async) thread.
