@@ -32,6 +32,7 @@ use crackbot_protocol::SAMPLE_RATE_HZ;
 use indicatif::{ProgressBar, ProgressStyle};
 
 mod lab;
+mod run;
 mod vision;
 
 /// crackbot: find surface cracks with a camera and a fibre-optic tactile finger.
@@ -44,6 +45,9 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Inspection mission: look, touch, report (fused by default, on the built-in default
+    /// scene); the headless robot `crackbot-robot` with the same flags.
+    Run(run::RunArgs),
     /// Acquisition demo on the built-in default scene: simulated finger → emulated sensor →
     /// pseudo-terminal → acquisition → CSV → summary.
     Demo(DemoArgs),
@@ -161,6 +165,7 @@ fn main() -> Result<()> {
         .enable_all()
         .build()?;
     match cli.command {
+        Command::Run(args) => run::run(args),
         Command::Demo(args) => runtime.block_on(demo(args)),
         Command::Record(args) => runtime.block_on(record(args)),
         Command::Replay(args) => runtime.block_on(replay(args)),

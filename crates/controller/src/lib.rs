@@ -5,14 +5,18 @@
 //!   at a time, refusing any motion outside its workspace or speed limits whoever asks.
 //! * [`sensor`]: the simulated sensor behind the real firmware code, streaming 400 Hz frames into
 //!   a pseudo-terminal, so the robot reads it exactly as it reads the board.
+//! * [`server`]: the link side: commands, refusals, the 100 Hz state stream, a watchdog, and
+//!   fault injection (packet loss/delay/reordering/duplication, sensor stalls, restarts).
 //!
 //! The binary `crackbot-sim-controller` runs it as its own process; the mission library starts
 //! it in-process for the no-argument mission.
 
 pub mod sensor;
+pub mod server;
 pub mod world;
 
 pub use sensor::{Shared, SharedWorld, SimSensor};
+pub use server::{ControllerError, Faults, SensorStall, ServerConfig, ServerReport, SimController};
 pub use world::{Limits, Mode, Refusal, Tick, World};
 
 /// The controller's clock as its state stream reports it: the world's ticks (1/400 s of

@@ -5,7 +5,9 @@
 //! this crate, call it, and display the typed, `Serialize` reports it returns. Progress and live
 //! data reach them through callbacks; stopping goes in as a future.
 //!
-//! Today:
+//! * [`inspect`]: the inspection mission (tactile, vision or fused) over the authenticated link,
+//!   with the simulated controller started in-process on a simulated scene.
+//! * [`sync`]: passive clock synchronisation of the sensor's and the controller's clocks.
 //! * [`demo`]: the acquisition demo on a simulated scene: the simulated finger slides across a
 //!   crack, the real sensor firmware samples it on this host and streams 400 Hz frames into a new
 //!   pseudo-terminal, the acquisition reads them back over the real serial path, records them to
@@ -16,9 +18,11 @@
 //! detection in camera frames is `crackbot-vision`'s.
 
 pub mod demo;
+pub mod inspect;
 pub mod sync;
 
 pub use demo::{run_demo, DemoConfig, DemoReport, DemoSurface};
+pub use inspect::{run_inspection, InspectConfig, InspectMode, InspectReport, Progress};
 
 /// Errors of a mission.
 #[derive(Debug, thiserror::Error)]
@@ -45,4 +49,59 @@ pub enum MissionError {
         /// The serial device that stayed silent.
         port: String,
     },
+    /// The sensor's port went away mid-mission.
+    #[error("the sensor's port {port} vanished")]
+    SensorLost {
+        /// The device.
+        port: String,
+    },
+    /// The sensor stream stopped mid-slide (retried once).
+    #[error("the sensor stream over {port} stalled mid-slide")]
+    SensorStalled {
+        /// The device.
+        port: String,
+    },
+    /// The controller does not answer.
+    #[error("the manipulator controller at {addr} is unreachable (no state for 2 s or no acknowledgement): the arm was told to stop")]
+    ControllerUnreachable {
+        /// Its address.
+        addr: String,
+    },
+    /// The controller restarted mid-slide (retried once).
+    #[error("the manipulator controller restarted mid-slide")]
+    ControllerRestarted,
+    /// The controller refused a command.
+    #[error("the controller refused {what}: {reason}")]
+    Refused {
+        /// Which command.
+        what: String,
+        /// Its reason.
+        reason: String,
+    },
+    /// Something took far longer than planned.
+    #[error("{what} did not finish within {seconds:.1} s: the arm was told to stop")]
+    Timeout {
+        /// What.
+        what: String,
+        /// The budget, s.
+        seconds: f64,
+    },
+    /// The link failed.
+    #[error("link: {0}")]
+    Link(String),
+    /// Stopped by the operator (the arm was stopped first).
+    #[error("interrupted: the arm was stopped")]
+    Interrupted,
+    /// A tactile model failed to load or classify.
+    #[error(transparent)]
+    Tactile(#[from] crackbot_tactile::TactileError),
+    /// Planning failed.
+    #[error(transparent)]
+    Plan(#[from] crackbot_planner::PlanError),
+    /// Detection failed.
+    #[error(transparent)]
+    Vision(#[from] crackbot_vision::VisionError),
+    /// The simulated controller failed.
+    #[error(transparent)]
+    Controller(#[from] crackbot_controller::ControllerError),
 }

@@ -1,0 +1,196 @@
+//! `crackbot run` and `crackbot-robot`: the inspection mission (one set of flags for both).
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use crackbot_mission::inspect::{
+    run_inspection, InspectConfig, InspectMode, InspectReport, Progress,
+};
+use crackbot_sim::Scene;
+
+/// Flags of the mission.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Scene file (default: the built-in default scene).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// tactile (scan rows, no camera), vision (camera only) or fused (camera proposes, finger
+    /// confirms).
+    #[arg(long, default_value = "fused")]
+    pub mode: InspectMode,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Folder for the report and every recording of the mission.
+    #[arg(long, default_value = "out/mission")]
+    pub out: PathBuf,
+    /// Run the simulation this many times faster than real time.
+    #[arg(long, default_value_t = 1.0)]
+    pub speedup: f64,
+    /// Seed of the simulated sensor and camera.
+    #[arg(long, default_value_t = 7)]
+    pub seed: u64,
+    /// Slides across each candidate (back and forth).
+    #[arg(long, default_value_t = 4)]
+    pub passes: u32,
+    /// γ of the tactile-only scan (the paper's eq. 2), in (0, 1).
+    #[arg(long, default_value_t = 0.5)]
+    pub gamma: f64,
+    /// Deployed recognition model.
+    #[arg(long)]
+    pub recognition_model: Option<PathBuf>,
+    /// Deployed width model.
+    #[arg(long)]
+    pub width_model: Option<PathBuf>,
+    /// ONNX detector (default: models/detector/crack-detector-320.onnx).
+    #[arg(long)]
+    pub detector: Option<PathBuf>,
+    /// Simulated controller: clock offset, µs (the robot synchronises to it).
+    #[arg(long, default_value_t = 0.0)]
+    pub clock_offset_us: f64,
+    /// Simulated controller: clock drift, ppm.
+    #[arg(long, default_value_t = 0.0)]
+    pub clock_drift_ppm: f64,
+    /// Fault injection: probability that a link packet is lost (both directions).
+    #[arg(long, default_value_t = 0.0)]
+    pub loss: f64,
+    /// Fault injection: probability that a link packet is reordered.
+    #[arg(long, default_value_t = 0.0)]
+    pub reorder: f64,
+    /// Fault injection: probability that a link packet is duplicated.
+    #[arg(long, default_value_t = 0.0)]
+    pub duplicate: f64,
+    /// Fault injection: the sensor stream stalls for 1 s during this slide (1-based).
+    #[arg(long)]
+    pub stall_slide: Option<u32>,
+    /// Fault injection: the controller restarts this many seconds after it started.
+    #[arg(long)]
+    pub restart_after_s: Option<f64>,
+}
+
+/// Runs the mission and prints the report.
+pub fn run(args: RunArgs) -> Result<()> {
+    let scene = Scene::load_or_default(args.scene.as_deref())?;
+    let mut config = InspectConfig::new(scene, &args.out);
+    config.mode = args.mode;
+    config.speedup = args.speedup;
+    config.seed = args.seed;
+    config.gamma = args.gamma;
+    config.planner.passes = args.passes;
+    if let Some(p) = args.recognition_model {
+        config.recognition_model = p;
+    }
+    if let Some(p) = args.width_model {
+        config.width_model = p;
+    }
+    config.detector_model = args.detector;
+    config.clock.offset_us = args.clock_offset_us;
+    config.clock.drift_ppm = args.clock_drift_ppm;
+    if args.loss > 0.0 || args.reorder > 0.0 || args.duplicate > 0.0 {
+        let faults = crackbot_link::FaultConfig {
+            drop: args.loss,
+            reorder: args.reorder,
+            duplicate: args.duplicate,
+            ..Default::default()
+        };
+        config.faults.link = Some(faults.clone());
+        config.host_link_faults = Some(crackbot_link::FaultConfig { seed: 2, ..faults });
+    }
+    config.faults.stall = args
+        .stall_slide
+        .map(|slide| crackbot_controller::SensorStall {
+            slide,
+            duration: Duration::from_secs(1),
+        });
+    config.faults.restart_after = args.restart_after_s.map(Duration::from_secs_f64);
+
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // Ctrl-C: the mission stops the arm first, then ends with what it has recorded.
+        ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
+            .context("installing the Ctrl-C handler")?;
+    }
+    let bar = indicatif::ProgressBar::new(0);
+    if args.json {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let report = run_inspection(&config, &stop, |p| match p {
+        Progress::Starting => bar.set_message("starting the controller, the sensor and the models"),
+        Progress::Perceived { candidates } => {
+            bar.set_message(format!("{candidates} candidates in the frame"))
+        }
+        Progress::Planned {
+            slides,
+            estimated_s,
+        } => {
+            bar.set_length(*slides as u64);
+            bar.set_message(format!("{slides} slides planned, about {estimated_s:.0} s"));
+        }
+        Progress::Slid { done, class, .. } => {
+            bar.set_position(*done as u64);
+            bar.set_message(format!("last pass: {class}"));
+        }
+    })
+    .with_context(|| {
+        format!(
+            "mission failed (recordings so far are in {})",
+            args.out.display()
+        )
+    })?;
+    bar.finish_and_clear();
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        print_summary(&report);
+    }
+    Ok(())
+}
+
+fn print_summary(r: &InspectReport) {
+    println!(
+        "mission ({:?}) on {}: {:.1} s wall, exploration {:.1} s (robot time)",
+        r.mode, r.scene, r.elapsed_s, r.exploration_s
+    );
+    println!(
+        "{} candidates from the camera, {} slide passes",
+        r.candidates.len(),
+        r.passes.len()
+    );
+    println!("confirmed cracks: {}", r.cracks.len());
+    for c in &r.cracks {
+        let width = c.width_mm.map_or("–".to_string(), |w| {
+            format!("{w:.1} ± {:.1} mm", c.width_std_mm.unwrap_or(0.0))
+        });
+        println!(
+            "  at ({:.1}, {:.1}) mm  width {width}  confidence {:.2}  slides {:?}{}",
+            c.position_mm[0],
+            c.position_mm[1],
+            c.confidence,
+            c.evidence.slides,
+            if c.evidence.doubts.is_empty() {
+                ""
+            } else {
+                "  (doubts: see the JSON report)"
+            }
+        );
+    }
+    println!("rejected by the finger: {}", r.rejected.len());
+    for c in &r.rejected {
+        println!(
+            "  candidate {} at ({:.1}, {:.1}) mm felt {}",
+            c.candidate, c.position_mm[0], c.position_mm[1], c.felt
+        );
+    }
+    println!("report and recordings: {}", r.out_dir);
+}

@@ -1,0 +1,1248 @@
+//! The inspection mission: look, decide where to touch, slide the finger, classify online,
+//! confirm or reject each candidate, report.
+//!
+//! ```text
+//! frame ─▶ detector ─▶ homography (px → mm) ─▶ planner ─▶ link: Slide ─▶ controller ─▶ finger
+//!                                                               │
+//!   report ◀─ confirm/reject ◀─ deployed tactile model ◀─ samples + positions (clock sync)
+//!                                 (online, streaming)          ▲ sensor: serial / PTY
+//! ```
+//!
+//! The same code runs on hardware (a serial port, a controller address, a camera image) and on
+//! a simulated scene, where [`run_inspection`] starts the simulated controller
+//! (`crackbot-controller`) in this process: real UDP sockets on loopback, the real firmware
+//! code writing into a pseudo-terminal, the real acquisition reading it.
+//!
+//! * **Modes.** `fused` (the default): the detector proposes, the finger confirms. `vision`:
+//!   the detector's candidates are the report (nothing is touched). `tactile`: boustrophedon
+//!   rows over the whole workspace (the paper's N_s rows for γ), each row classified piece by
+//!   piece; the detector is never loaded.
+//! * **Synchronisation.** Sensor samples carry the board's clock, the arm's states the
+//!   controller's; both are mapped to the host's clock ([`crate::sync::ClockSync`]) and the arm's
+//!   position is interpolated at every sample.
+//! * **Faults.** Unacknowledged commands are retried by the link; a slide whose sensor stream
+//!   stalled or whose controller restarted is slid again once; a controller that stays
+//!   unreachable, or a sensor that stays silent, stops the arm and ends the mission with an
+//!   error that says which. Everything recorded up to then is on disk.
+
+use std::collections::VecDeque;
+use std::net::{SocketAddr, UdpSocket};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use crackbot_acquisition::{PortConfig, SensorStream, TryNext};
+use crackbot_controller::{ControllerClock, Faults, ServerConfig, SimController};
+use crackbot_link::{
+    Contact, EpochSource, Key, LinkConfig, LinkEndpoint, Message, Point2, Security, State,
+};
+use crackbot_planner::{Candidate, Limits, Plan, Planner, Settings, Workspace};
+use crackbot_sim::Scene;
+use crackbot_tactile::model::{Doubt, TactileModel};
+use crackbot_tactile::online::{OnlineClassifier, SlideVerdict};
+use serde::Serialize;
+
+use crate::sync::{ClockFit, ClockSync};
+use crate::MissionError;
+
+/// What the mission uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InspectMode {
+    /// Touch only: scan rows over the whole workspace.
+    Tactile,
+    /// Look only: the detector's candidates are the result.
+    Vision,
+    /// Look, then touch every candidate (the papers' method).
+    Fused,
+}
+
+impl std::str::FromStr for InspectMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "tactile" => Ok(InspectMode::Tactile),
+            "vision" => Ok(InspectMode::Vision),
+            "fused" => Ok(InspectMode::Fused),
+            _ => Err(format!("unknown mode {s:?}: tactile, vision or fused")),
+        }
+    }
+}
+
+/// Settings of a mission.
+#[derive(Debug, Clone)]
+pub struct InspectConfig {
+    /// The scene (simulated), or the workspace and manipulator description (hardware).
+    pub scene: Scene,
+    /// Tactile, vision or fused.
+    pub mode: InspectMode,
+    /// Where the report and every recording go.
+    pub out_dir: PathBuf,
+    /// The deployed recognition model.
+    pub recognition_model: PathBuf,
+    /// The deployed width model.
+    pub width_model: PathBuf,
+    /// The ONNX detector (fused and vision modes).
+    pub detector_model: Option<PathBuf>,
+    /// Detections below this score are not candidates.
+    pub min_score: f32,
+    /// Simulation speed-up (1: real time).
+    pub speedup: f64,
+    /// Seed of the simulated sensor and camera.
+    pub seed: u64,
+    /// The planner's settings (slide speed, margins, passes…).
+    pub planner: Settings,
+    /// γ of the tactile-only scan (the paper's eq. 2).
+    pub gamma: f64,
+    /// Mean crack length of the tactile-only scan, mm (the paper's eq. 1 on real masks).
+    pub mean_crack_length_mm: f64,
+    /// The simulated controller's clock (offset, drift injected).
+    pub clock: ControllerClock,
+    /// Faults injected into the simulated controller.
+    pub faults: Faults,
+    /// Link packet faults injected on the host's side.
+    pub host_link_faults: Option<crackbot_link::FaultConfig>,
+}
+
+impl InspectConfig {
+    /// A fused mission over `scene` with the committed models, writing into `out_dir`.
+    pub fn new(scene: Scene, out_dir: impl Into<PathBuf>) -> Self {
+        let settings = Settings {
+            slide_speed_mm_s: scene.manipulator.slide_speed_mm_s,
+            travel_speed_mm_s: scene.manipulator.travel_speed_mm_s,
+            // The paper's protocol: strokes of 16 mm back and forth across the crack.
+            passes: 4,
+            margin_mm: 2.0,
+            min_margin_mm: 2.0,
+            assumed_width_mm: 2.0,
+            min_stroke_mm: scene.manipulator.stroke_mm,
+            settle_s: 0.1,
+            ..Settings::default()
+        };
+        InspectConfig {
+            scene,
+            mode: InspectMode::Fused,
+            out_dir: out_dir.into(),
+            recognition_model: repo_path("models/tactile/recognition.ctm"),
+            width_model: repo_path("models/tactile/width.ctm"),
+            detector_model: None,
+            min_score: 0.3,
+            speedup: 1.0,
+            seed: 7,
+            planner: settings,
+            gamma: 0.5,
+            mean_crack_length_mm: crackbot_planner::paper_mean_length_mm(148.06, 480.0, 100.0),
+            clock: ControllerClock::default(),
+            faults: Faults::default(),
+            host_link_faults: None,
+        }
+    }
+}
+
+/// A path of this repository: under the working directory when it is there, else under the
+/// repository this crate was built from.
+pub fn repo_path(rel: &str) -> PathBuf {
+    let here = PathBuf::from(rel);
+    if here.exists() {
+        return here;
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel)
+}
+
+/// Progress of a mission, for a front end to show.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "stage", rename_all = "snake_case")]
+pub enum Progress {
+    /// Setting up (controller, sensor, models).
+    Starting,
+    /// Candidates found in the frame.
+    Perceived {
+        /// How many.
+        candidates: usize,
+    },
+    /// The plan is made.
+    Planned {
+        /// Slides to do.
+        slides: usize,
+        /// The planner's time estimate, s.
+        estimated_s: f64,
+    },
+    /// A slide is done.
+    Slid {
+        /// Slides done.
+        done: usize,
+        /// Of how many.
+        of: usize,
+        /// Its verdict's class name.
+        class: String,
+    },
+}
+
+/// What the finger found for one slide pass.
+#[derive(Debug, Clone, Serialize)]
+pub struct PassRecord {
+    /// Slide number (link id).
+    pub id: u32,
+    /// Candidate it checked, if any.
+    pub candidate: Option<u64>,
+    /// Start and end, mm on the plate.
+    pub start_mm: [f64; 2],
+    /// End, mm.
+    pub end_mm: [f64; 2],
+    /// Samples classified.
+    pub samples: usize,
+    /// The recognition verdict (class name), `None` when the slide was too short.
+    pub class: Option<String>,
+    /// Its vote, 0–1.
+    pub confidence: f64,
+    /// The width model's class, mm.
+    pub width_mm: Option<f64>,
+    /// The doubt, if any (unknown surface, low confidence).
+    pub doubt: Option<String>,
+    /// The crack the proximity channel's dip locates on this pass: centre along the pass (mm
+    /// from its start), width (mm) and the dip's clarity (0–1).
+    pub dip: Option<Dip>,
+    /// The recording of this pass.
+    pub recording: String,
+    /// Attempts needed (a stalled sensor or a restarted controller make a second).
+    pub attempts: u32,
+}
+
+/// A crack located along a pass by the proximity channel's dip ([`crackbot_tactile::localise`]).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Dip {
+    /// Centre, mm along the pass from its start.
+    pub centre_mm: f64,
+    /// Width, mm.
+    pub width_mm: f64,
+    /// Clarity of the dip, 0–1.
+    pub confidence: f64,
+}
+
+/// A crack the mission reports.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReportedCrack {
+    /// The candidate (detection) it came from, if any.
+    pub candidate: Option<u64>,
+    /// Where, mm on the plate (the crack's crossing of the slide; the detection's centre in
+    /// vision mode).
+    pub position_mm: [f64; 2],
+    /// Along the slide, where the crack starts and ends, mm on the plate (tactile evidence).
+    pub extent_mm: Option<[[f64; 2]; 2]>,
+    /// `crack`.
+    pub class: String,
+    /// Width, mm (the width model's class; `None` in vision mode).
+    pub width_mm: Option<f64>,
+    /// Posterior standard deviation of the width, mm.
+    pub width_std_mm: Option<f64>,
+    /// Confidence 0–1: the tactile vote (the detector's score in vision mode).
+    pub confidence: f64,
+    /// Evidence: `vision`, `tactile` or both, with the slide ids.
+    pub evidence: Evidence,
+}
+
+/// What a report entry rests on.
+#[derive(Debug, Clone, Serialize)]
+pub struct Evidence {
+    /// The detector's score, when the camera saw it.
+    pub detector_score: Option<f64>,
+    /// The slides that felt it.
+    pub slides: Vec<u32>,
+    /// Recognition votes per class (summed over the slides).
+    pub votes: Vec<f64>,
+    /// Doubts raised.
+    pub doubts: Vec<String>,
+}
+
+/// A candidate the finger rejected.
+#[derive(Debug, Clone, Serialize)]
+pub struct RejectedCandidate {
+    /// The candidate.
+    pub candidate: u64,
+    /// Its centre, mm.
+    pub position_mm: [f64; 2],
+    /// What the finger felt instead (`no crack`, `bump`, `wavy`, or `unknown`).
+    pub felt: String,
+    /// The detector's score.
+    pub detector_score: f64,
+    /// The slides.
+    pub slides: Vec<u32>,
+}
+
+/// Wall time per stage, s.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct StageTimes {
+    /// Start-up: controller, sensor, models.
+    pub setup_s: f64,
+    /// Frame and detection.
+    pub perceive_s: f64,
+    /// Planning.
+    pub plan_s: f64,
+    /// Moving and sliding (the exploration).
+    pub explore_s: f64,
+}
+
+/// The mission's report.
+#[derive(Debug, Clone, Serialize)]
+pub struct InspectReport {
+    /// The mode.
+    pub mode: InspectMode,
+    /// The scene's name.
+    pub scene: String,
+    /// Confirmed cracks.
+    pub cracks: Vec<ReportedCrack>,
+    /// Candidates the finger rejected.
+    pub rejected: Vec<RejectedCandidate>,
+    /// Candidates from the camera.
+    pub candidates: Vec<Candidate>,
+    /// Every slide pass.
+    pub passes: Vec<PassRecord>,
+    /// The plan.
+    pub plan: Option<Plan>,
+    /// Wall time, s.
+    pub elapsed_s: f64,
+    /// Exploration time in the robot's time (wall time × speed-up), s: what the papers report.
+    pub exploration_s: f64,
+    /// Wall time per stage.
+    pub stages: StageTimes,
+    /// Sensor clock → host clock fit.
+    pub sensor_clock: Option<ClockFit>,
+    /// Controller clock → host clock fit.
+    pub controller_clock: Option<ClockFit>,
+    /// Link counters (host side).
+    pub link: LinkCounters,
+    /// The report's folder.
+    pub out_dir: String,
+}
+
+/// The host's link counters.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct LinkCounters {
+    /// Packets sent.
+    pub sent: u64,
+    /// Retries of unacknowledged commands.
+    pub retries: u64,
+    /// Packets refused (bad tag, replay, unsigned, other link…).
+    pub rejected: u64,
+    /// Duplicates dropped.
+    pub duplicates: u64,
+}
+
+// ---------------------------------------------------------------------------------------------
+// The arm, through the link.
+
+/// One arm state (its controller time maps to the host's clock through the fit).
+#[derive(Debug, Clone, Copy)]
+struct ArmSample {
+    state: State,
+}
+
+struct Arm {
+    ep: LinkEndpoint,
+    sync: ClockSync,
+    t0: Instant,
+    states: VecDeque<ArmSample>,
+    done: Vec<u32>,
+    errors: Vec<crackbot_link::ErrorReport>,
+    last_heartbeat: Instant,
+    last_state_at: Option<Instant>,
+    epoch: Option<u32>,
+    restarted: bool,
+}
+
+impl Arm {
+    fn host_us(&self, at: Instant) -> f64 {
+        at.saturating_duration_since(self.t0).as_secs_f64() * 1e6
+    }
+
+    /// Takes what has arrived (waiting up to `wait`), sends a heartbeat every 200 ms.
+    fn pump(&mut self, wait: Duration) -> Result<(), MissionError> {
+        if self.last_heartbeat.elapsed() > Duration::from_millis(200) {
+            self.ep
+                .send_unreliable(&Message::Heartbeat)
+                .map_err(link_err)?;
+            self.last_heartbeat = Instant::now();
+        }
+        let mut wait = wait;
+        while let Some(r) = self.ep.recv(wait).map_err(link_err)? {
+            wait = Duration::ZERO;
+            if let Some(e) = self.epoch {
+                if e != r.peer_epoch {
+                    self.restarted = true;
+                }
+            }
+            self.epoch = Some(r.peer_epoch);
+            match r.message {
+                Message::State(s) => {
+                    let host = self.host_us(r.at);
+                    self.sync.add(s.controller_time_us as f64, host);
+                    self.last_state_at = Some(r.at);
+                    self.states.push_back(ArmSample { state: s });
+                    while self.states.len() > 100_000 {
+                        self.states.pop_front();
+                    }
+                }
+                Message::Done { slide_id } => self.done.push(slide_id),
+                Message::Error(e) => self.errors.push(e),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn command(&mut self, m: &Message) -> Result<u32, MissionError> {
+        self.ep.send_reliable(m).map_err(link_err)
+    }
+
+    fn stop(&mut self) {
+        // Best effort: the link retries; a dead controller's watchdog stops it anyway.
+        let _ = self.ep.send_reliable(&Message::Stop);
+    }
+}
+
+/// The arm's states on the host's clock, oldest first (mapped with the current clock fit).
+fn mapped_states(arm: &mut Arm) -> Vec<(f64, State)> {
+    let states: Vec<State> = arm.states.iter().map(|s| s.state).collect();
+    states
+        .into_iter()
+        .filter_map(|s| {
+            arm.sync
+                .to_host(s.controller_time_us as f64)
+                .map(|h| (h, s))
+        })
+        .collect()
+}
+
+/// The arm's pose and mode at host time `host_us`, interpolated between the two states around it.
+fn position_at(mapped: &[(f64, State)], host_us: f64) -> Option<([f64; 3], crackbot_link::Mode)> {
+    let idx = mapped.partition_point(|(h, _)| *h <= host_us);
+    let (first, last) = (mapped.first()?, mapped.last()?);
+    if idx == 0 {
+        return Some((pose(&first.1), first.1.mode));
+    }
+    if idx >= mapped.len() {
+        return Some((pose(&last.1), last.1.mode));
+    }
+    let (h0, s0) = mapped[idx - 1];
+    let (h1, s1) = mapped[idx];
+    let f = if h1 > h0 {
+        (host_us - h0) / (h1 - h0)
+    } else {
+        0.0
+    };
+    let (p0, p1) = (pose(&s0), pose(&s1));
+    Some((
+        [
+            p0[0] + f * (p1[0] - p0[0]),
+            p0[1] + f * (p1[1] - p0[1]),
+            p0[2] + f * (p1[2] - p0[2]),
+        ],
+        if f < 0.5 { s0.mode } else { s1.mode },
+    ))
+}
+
+fn pose(s: &State) -> [f64; 3] {
+    [
+        f64::from(s.pose.x_mm),
+        f64::from(s.pose.y_mm),
+        f64::from(s.pose.z_mm),
+    ]
+}
+
+fn link_err(e: crackbot_link::LinkError) -> MissionError {
+    MissionError::Link(e.to_string())
+}
+
+// ---------------------------------------------------------------------------------------------
+// The sensor.
+
+/// One sensor sample on the host's clock.
+#[derive(Debug, Clone, Copy)]
+struct TimedSample {
+    device_us: f64,
+    host_us: f64,
+    raw: [u16; 4],
+}
+
+struct Sensor {
+    stream: SensorStream,
+    sync: ClockSync,
+    offset_us: f64,
+    samples: Vec<TimedSample>,
+    last_at: Instant,
+    path: String,
+}
+
+impl Sensor {
+    fn open(path: &str, t0: Instant) -> Result<Sensor, MissionError> {
+        let stream = SensorStream::open(&PortConfig::new(path))?;
+        let offset_us = stream
+            .opened_at()
+            .saturating_duration_since(t0)
+            .as_secs_f64()
+            * 1e6;
+        Ok(Sensor {
+            stream,
+            sync: ClockSync::new(30e6),
+            offset_us,
+            samples: Vec::new(),
+            last_at: Instant::now(),
+            path: path.to_string(),
+        })
+    }
+
+    /// Takes what has arrived.
+    fn drain(&mut self) -> Result<usize, MissionError> {
+        let mut n = 0;
+        loop {
+            match self.stream.try_next() {
+                TryNext::Ready(Ok(s)) => {
+                    let host = self.offset_us + s.host_time.as_secs_f64() * 1e6;
+                    self.sync.add(s.device_time_us as f64, host);
+                    self.samples.push(TimedSample {
+                        device_us: s.device_time_us as f64,
+                        host_us: host,
+                        raw: s.raw,
+                    });
+                    self.last_at = Instant::now();
+                    n += 1;
+                }
+                TryNext::Ready(Err(e)) => return Err(e.into()),
+                TryNext::Empty => return Ok(n),
+                TryNext::Ended => {
+                    return Err(MissionError::SensorLost {
+                        port: self.path.clone(),
+                    })
+                }
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Perception.
+
+/// Candidates in the scene's frame: rendered (simulated), detected, mapped to mm.
+fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, MissionError> {
+    use crackbot_sim::render::{render, CrackAssets, RenderOptions};
+    use crackbot_vision::model::{build_detector, DetectorChoice};
+    use crackbot_vision::preprocess::PostprocessParams;
+
+    let assets = CrackAssets::load_default()?;
+    let frame = render(
+        &config.scene,
+        &assets,
+        &RenderOptions::default(),
+        config.seed,
+    )?;
+    std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
+    let frame_path = config.out_dir.join("frame.png");
+    frame
+        .image
+        .save(&frame_path)
+        .map_err(|e| MissionError::Invalid(format!("{}: {e}", frame_path.display())))?;
+    let choice = DetectorChoice {
+        model: config.detector_model.clone(),
+        ..DetectorChoice::default()
+    };
+    let mut detector = build_detector(&choice, PostprocessParams::default())?;
+    let detections = detector.detect(&frame.image)?;
+    let h = crackbot_imaging::Homography::from_nalgebra(
+        frame
+            .plate_to_image
+            .try_inverse()
+            .ok_or_else(|| MissionError::Invalid("the camera's homography is singular".into()))?,
+    )
+    .map_err(|e| MissionError::Invalid(e.to_string()))?;
+    let mut out = Vec::new();
+    for (i, d) in detections.iter().enumerate() {
+        if d.score < config.min_score {
+            continue;
+        }
+        let to_mm = |p: [f32; 2]| h.pixel_to_surface([f64::from(p[0]), f64::from(p[1])]).ok();
+        let id = i as u64 + 1;
+        let c = match &d.shape {
+            Some(shape) => match (to_mm(shape.axis[0]), to_mm(shape.axis[1])) {
+                (Some(a), Some(b)) => Candidate::from_axis(id, [a, b], None, f64::from(d.score)),
+                _ => continue,
+            },
+            None => {
+                let b = &d.bbox;
+                match (to_mm([b.x0, b.y0]), to_mm([b.x1, b.y1])) {
+                    (Some(a), Some(c)) => Candidate::from_box(
+                        id,
+                        [a[0].min(c[0]), a[1].min(c[1])],
+                        [a[0].max(c[0]), a[1].max(c[1])],
+                        f64::from(d.score),
+                    ),
+                    _ => continue,
+                }
+            }
+        };
+        out.push((c, f64::from(d.score)));
+    }
+    Ok(out)
+}
+
+fn io_err(path: &Path, e: std::io::Error) -> MissionError {
+    MissionError::Invalid(format!("{}: {e}", path.display()))
+}
+
+// ---------------------------------------------------------------------------------------------
+// The mission.
+
+/// Runs a mission (see the [module docs](self)) on the simulated scene of `config`. `stop`
+/// ends it early (the arm is stopped first); `progress` sees each stage.
+pub fn run_inspection(
+    config: &InspectConfig,
+    stop: &AtomicBool,
+    mut progress: impl FnMut(&Progress),
+) -> Result<InspectReport, MissionError> {
+    let started = Instant::now();
+    progress(&Progress::Starting);
+    let recognition = TactileModel::load(&config.recognition_model)?;
+    let width = TactileModel::load(&config.width_model)?;
+    std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
+
+    // The simulated controller and sensor, over loopback UDP and a PTY.
+    let host_socket =
+        UdpSocket::bind("127.0.0.1:0").map_err(|e| MissionError::Link(e.to_string()))?;
+    let ctrl_socket =
+        UdpSocket::bind("127.0.0.1:0").map_err(|e| MissionError::Link(e.to_string()))?;
+    let host_addr = host_socket
+        .local_addr()
+        .map_err(|e| MissionError::Link(e.to_string()))?;
+    let ctrl_addr: SocketAddr = ctrl_socket
+        .local_addr()
+        .map_err(|e| MissionError::Link(e.to_string()))?;
+    let mut key_bytes = [0u8; 32];
+    for (i, b) in key_bytes.iter_mut().enumerate() {
+        // A fresh key per mission, never written anywhere (both ends live in this process).
+        *b = (rand_byte(config.seed, i as u64) | 1) as u8;
+    }
+    let key = Key::from_bytes(&key_bytes).map_err(|e| MissionError::Link(e.to_string()))?;
+    let state_dir = config.out_dir.join(".link");
+    std::fs::create_dir_all(&state_dir).map_err(|e| io_err(&state_dir, e))?;
+    let mut server = ServerConfig::new(
+        config.scene.clone(),
+        Security::Signed(key.clone()),
+        state_dir.join("controller.epoch"),
+    );
+    server.seed = config.seed;
+    server.clock = ControllerClock {
+        speedup: config.speedup,
+        ..config.clock
+    };
+    server.faults = config.faults.clone();
+    let controller = SimController::spawn(server, ctrl_socket, host_addr)?;
+    let t0 = Instant::now();
+    let mut ep = LinkEndpoint::from_socket(
+        host_socket,
+        ctrl_addr,
+        LinkConfig::host(
+            Security::Signed(key),
+            EpochSource::File(state_dir.join("host.epoch")),
+        ),
+    )
+    .map_err(link_err)?;
+    if let Some(f) = &config.host_link_faults {
+        ep.set_fault_injector(Some(crackbot_link::FaultInjector::new(f.clone())));
+    }
+    let mut arm = Arm {
+        ep,
+        sync: ClockSync::new(30e6),
+        t0,
+        states: VecDeque::new(),
+        done: Vec::new(),
+        errors: Vec::new(),
+        last_heartbeat: Instant::now(),
+        last_state_at: None,
+        epoch: None,
+        restarted: false,
+    };
+    let mut sensor = Sensor::open(controller.sensor_path(), t0)?;
+    let setup_s = started.elapsed().as_secs_f64();
+
+    let result = mission(
+        config,
+        &recognition,
+        &width,
+        &mut arm,
+        &mut sensor,
+        stop,
+        &mut progress,
+        started,
+        setup_s,
+    );
+    if result.is_err() {
+        arm.stop();
+    }
+    let counters = {
+        let s = arm.ep.stats();
+        LinkCounters {
+            sent: s.sent,
+            retries: s.retries,
+            rejected: s.rejected(),
+            duplicates: s.duplicates,
+        }
+    };
+    drop(sensor);
+    let _ = controller.shutdown();
+    let mut report = result?;
+    report.link = counters;
+    let path = config.out_dir.join("report.json");
+    let json = serde_json::to_string_pretty(&report)
+        .map_err(|e| MissionError::Invalid(format!("report: {e}")))?;
+    std::fs::write(&path, json).map_err(|e| io_err(&path, e))?;
+    Ok(report)
+}
+
+fn rand_byte(seed: u64, i: u64) -> u64 {
+    // SplitMix64 of the seed, the index and the time: a key that differs per run.
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64);
+    let mut z = seed ^ nanos ^ i.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)) & 0xff
+}
+
+#[allow(clippy::too_many_arguments)]
+fn mission(
+    config: &InspectConfig,
+    recognition: &TactileModel,
+    width: &TactileModel,
+    arm: &mut Arm,
+    sensor: &mut Sensor,
+    stop: &AtomicBool,
+    progress: &mut dyn FnMut(&Progress),
+    started: Instant,
+    setup_s: f64,
+) -> Result<InspectReport, MissionError> {
+    let mut stages = StageTimes {
+        setup_s,
+        ..StageTimes::default()
+    };
+    // Wait for the arm's state stream and the sensor.
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while arm.states.is_empty() || sensor.samples.is_empty() {
+        arm.pump(Duration::from_millis(5))?;
+        sensor.drain()?;
+        if Instant::now() > deadline {
+            return Err(if arm.states.is_empty() {
+                MissionError::ControllerUnreachable {
+                    addr: arm.ep.peer_addr().to_string(),
+                }
+            } else {
+                MissionError::NoSamples {
+                    port: sensor.path.clone(),
+                }
+            });
+        }
+    }
+
+    let t = Instant::now();
+    let candidates = match config.mode {
+        InspectMode::Tactile => Vec::new(),
+        _ => perceive(config)?,
+    };
+    stages.perceive_s = t.elapsed().as_secs_f64();
+    progress(&Progress::Perceived {
+        candidates: candidates.len(),
+    });
+
+    let m = &config.scene.manipulator;
+    let workspace = Workspace {
+        x_min_mm: m.workspace_min_mm[0],
+        x_max_mm: m.workspace_max_mm[0],
+        y_min_mm: m.workspace_min_mm[1],
+        y_max_mm: m.workspace_max_mm[1],
+    };
+    let limits = Limits {
+        max_slide_speed_mm_s: 4.0 * m.slide_speed_mm_s,
+        max_travel_speed_mm_s: 2.0 * m.travel_speed_mm_s,
+    };
+    let t = Instant::now();
+    let mut report = InspectReport {
+        mode: config.mode,
+        scene: config.scene.name.clone(),
+        cracks: Vec::new(),
+        rejected: Vec::new(),
+        candidates: candidates.iter().map(|(c, _)| c.clone()).collect(),
+        passes: Vec::new(),
+        plan: None,
+        elapsed_s: 0.0,
+        exploration_s: 0.0,
+        stages: StageTimes::default(),
+        sensor_clock: None,
+        controller_clock: None,
+        link: LinkCounters::default(),
+        out_dir: config.out_dir.display().to_string(),
+    };
+    if config.mode == InspectMode::Vision {
+        for (c, score) in &candidates {
+            report.cracks.push(ReportedCrack {
+                candidate: Some(c.id),
+                position_mm: c.centre_mm,
+                extent_mm: None,
+                class: "crack".into(),
+                width_mm: None,
+                width_std_mm: None,
+                confidence: *score,
+                evidence: Evidence {
+                    detector_score: Some(*score),
+                    slides: Vec::new(),
+                    votes: Vec::new(),
+                    doubts: Vec::new(),
+                },
+            });
+        }
+        stages.explore_s = 0.0;
+        report.stages = stages;
+        report.elapsed_s = started.elapsed().as_secs_f64();
+        return Ok(report);
+    }
+    let planner = Planner::new(workspace, limits, config.planner.clone())?;
+    let plan = match config.mode {
+        InspectMode::Tactile => planner.tactile_scan(config.gamma, config.mean_crack_length_mm)?,
+        _ => planner.targeted(&report.candidates)?,
+    };
+    stages.plan_s = t.elapsed().as_secs_f64();
+    progress(&Progress::Planned {
+        slides: plan.slides.len(),
+        estimated_s: plan.estimated_s,
+    });
+
+    let explore = Instant::now();
+    let mut next_id = 1u32;
+    let n_slides = plan.slides.len();
+    // Per candidate: the recognition votes and the width verdicts of its passes.
+    struct Felt {
+        votes: Vec<f64>,
+        slides: Vec<u32>,
+        widths: Vec<(f64, f64)>,
+        doubts: Vec<String>,
+        crossings: Vec<([f64; 2], Option<[[f64; 2]; 2]>)>,
+        unknown: usize,
+        passes: usize,
+    }
+    let k = recognition.header.classes.len();
+    let crack_class = recognition
+        .header
+        .classes
+        .iter()
+        .position(|c| c == "crack")
+        .ok_or_else(|| {
+            MissionError::Invalid("the recognition model has no `crack` class".into())
+        })?;
+    let mut felt: Vec<(u64, Felt)> = Vec::new();
+    let mut online = OnlineClassifier::new(recognition)?;
+    let mut online_width = OnlineClassifier::new(width)?;
+    for (si, slide) in plan.slides.iter().enumerate() {
+        if stop.load(Ordering::Relaxed) {
+            return Err(MissionError::Interrupted);
+        }
+        let cand = slide.candidates.first().copied();
+        // Tactile rows: no candidate; each row is judged in stroke-long pieces below.
+        for pass in 0..slide.passes.max(1) {
+            let (a, b) = if pass % 2 == 0 {
+                (slide.start_mm, slide.end_mm)
+            } else {
+                (slide.end_mm, slide.start_mm)
+            };
+            let id = next_id;
+            next_id += 1;
+            let (samples, positions, attempts) =
+                slide_and_record(config, arm, sensor, id, a, b, slide.speed_mm_s, stop)?;
+            let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
+            save_pass(&rec_path, &samples, &positions, pass as u8)?;
+            let dir = (pass % 2) as u8;
+            let pieces: Vec<(usize, usize)> = if cand.is_none() {
+                split_by_travel(&positions, config.scene.manipulator.stroke_mm)
+            } else {
+                vec![(0, samples.len())]
+            };
+            for (p0, p1) in pieces {
+                // The context reaches back over the candidate's earlier passes (as over the
+                // authors' back-and-forth strokes); a new candidate or row starts afresh.
+                let fresh = pass == 0 && p0 == 0;
+                let (verdict, wv) = classify(
+                    &mut online,
+                    &mut online_width,
+                    &samples[p0..p1],
+                    &positions[p0..p1],
+                    dir,
+                    fresh,
+                )?;
+                let along = [b[0] - a[0], b[1] - a[1]];
+                let len = along[0].hypot(along[1]).max(1e-9);
+                let u = [along[0] / len, along[1] / len];
+                let extent = crackbot_tactile::localise::localise(
+                    &samples[p0..p1],
+                    &positions[p0..p1],
+                    &crackbot_tactile::localise::LocaliseConfig::default(),
+                )
+                .ok()
+                .flatten();
+                let at = |s: f64| [a[0] + s * u[0], a[1] + s * u[1]];
+                let mid = positions.get((p0 + p1) / 2).copied().unwrap_or(len / 2.0);
+                let crossing = extent.as_ref().map_or((at(mid), None), |e| {
+                    (at(e.centre_mm), Some([at(e.start_mm), at(e.end_mm)]))
+                });
+                let rec = PassRecord {
+                    id,
+                    candidate: cand,
+                    start_mm: a,
+                    end_mm: b,
+                    samples: p1 - p0,
+                    class: verdict.as_ref().map(|v| v.name.clone()),
+                    confidence: verdict.as_ref().map_or(0.0, |v| v.confidence),
+                    width_mm: wv.as_ref().map(|w| w.label),
+                    doubt: verdict
+                        .as_ref()
+                        .and_then(|v| v.doubt.as_ref())
+                        .map(|d| format!("{d:?}")),
+                    dip: extent.as_ref().map(|e| Dip {
+                        centre_mm: e.centre_mm,
+                        width_mm: e.width_mm,
+                        confidence: e.confidence,
+                    }),
+                    recording: rec_path.display().to_string(),
+                    attempts,
+                };
+                progress(&Progress::Slid {
+                    done: si + 1,
+                    of: n_slides,
+                    class: rec.class.clone().unwrap_or_else(|| "–".into()),
+                });
+                report.passes.push(rec);
+                let key = cand.unwrap_or(u64::from(id) << 32 | p0 as u64);
+                let entry = match felt.iter_mut().position(|(c, _)| *c == key) {
+                    Some(i) => &mut felt[i].1,
+                    None => {
+                        felt.push((
+                            key,
+                            Felt {
+                                votes: vec![0.0; k],
+                                slides: Vec::new(),
+                                widths: Vec::new(),
+                                doubts: Vec::new(),
+                                crossings: Vec::new(),
+                                unknown: 0,
+                                passes: 0,
+                            },
+                        ));
+                        &mut felt.last_mut().expect("just pushed").1
+                    }
+                };
+                entry.slides.push(id);
+                entry.passes += 1;
+                if let Some(v) = &verdict {
+                    for (acc, x) in entry.votes.iter_mut().zip(&v.votes) {
+                        *acc += x;
+                    }
+                    // A dead or saturated channel makes the pass unusable; a novel surface is
+                    // reported as a doubt (the simulated finger is still unlike the real one,
+                    // see models/tactile/MODEL_CARD.md) but its vote counts.
+                    if matches!(
+                        v.doubt,
+                        Some(Doubt::DeadChannel { .. } | Doubt::OutOfRange { .. })
+                    ) {
+                        entry.unknown += 1;
+                    }
+                    if let Some(d) = &v.doubt {
+                        entry.doubts.push(format!("{d:?}"));
+                    }
+                    if v.class as usize == crack_class {
+                        entry.crossings.push(crossing);
+                    }
+                }
+                if let Some(w) = &wv {
+                    let std = w.width.as_ref().map_or(0.0, |e| e.std_mm);
+                    entry.widths.push((w.label, std));
+                }
+            }
+        }
+    }
+    stages.explore_s = explore.elapsed().as_secs_f64();
+
+    for (key, f) in felt {
+        let total: f64 = f.votes.iter().sum();
+        let class = f
+            .votes
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(0, |(i, _)| i);
+        let name = recognition
+            .header
+            .classes
+            .get(class)
+            .cloned()
+            .unwrap_or_default();
+        let conf = if total > 0.0 {
+            f.votes[class] / total
+        } else {
+            0.0
+        };
+        let detection = candidates.iter().find(|(c, _)| c.id == key);
+        // Dead or saturated channels on every pass: the finger could not judge.
+        let judged = f.unknown < f.passes;
+        if class == crack_class && judged && !f.crossings.is_empty() {
+            let n = f.crossings.len() as f64;
+            let pos = [
+                f.crossings.iter().map(|c| c.0[0]).sum::<f64>() / n,
+                f.crossings.iter().map(|c| c.0[1]).sum::<f64>() / n,
+            ];
+            let extent = f.crossings.iter().find_map(|c| c.1);
+            let (w, wstd) = if f.widths.is_empty() {
+                (None, None)
+            } else {
+                let m = f.widths.iter().map(|w| w.0).sum::<f64>() / f.widths.len() as f64;
+                let s = f.widths.iter().map(|w| w.1).sum::<f64>() / f.widths.len() as f64;
+                (Some(m), Some(s))
+            };
+            report.cracks.push(ReportedCrack {
+                candidate: detection.map(|(c, _)| c.id),
+                position_mm: pos,
+                extent_mm: extent,
+                class: name,
+                width_mm: w,
+                width_std_mm: wstd,
+                confidence: conf,
+                evidence: Evidence {
+                    detector_score: detection.map(|d| d.1),
+                    slides: f.slides,
+                    votes: f.votes,
+                    doubts: f.doubts,
+                },
+            });
+        } else if let Some((c, score)) = detection {
+            report.rejected.push(RejectedCandidate {
+                candidate: c.id,
+                position_mm: c.centre_mm,
+                felt: if judged { name } else { "unknown".into() },
+                detector_score: *score,
+                slides: f.slides,
+            });
+        }
+    }
+    report.plan = Some(plan);
+    report.stages = stages;
+    report.elapsed_s = started.elapsed().as_secs_f64();
+    report.exploration_s = report.stages.explore_s * config.speedup;
+    report.sensor_clock = sensor.sync.fit();
+    report.controller_clock = arm.sync.fit();
+    Ok(report)
+}
+
+/// Consecutive pieces of a pass, each covering `stroke_mm` of travel (tactile rows).
+fn split_by_travel(positions: &[f64], stroke_mm: f64) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for (i, &x) in positions.iter().enumerate() {
+        if (x - positions[start]).abs() >= stroke_mm {
+            out.push((start, i));
+            start = i;
+        }
+    }
+    if positions.len() > start {
+        out.push((start, positions.len()));
+    }
+    out
+}
+
+/// Both models over one pass: the recognition verdict and the width verdict.
+fn classify(
+    online: &mut OnlineClassifier<'_>,
+    online_width: &mut OnlineClassifier<'_>,
+    samples: &[[f64; 4]],
+    positions: &[f64],
+    dir: u8,
+    fresh: bool,
+) -> Result<(Option<SlideVerdict>, Option<SlideVerdict>), MissionError> {
+    if fresh {
+        online.reset();
+        online_width.reset();
+    }
+    online.begin_slide();
+    online_width.begin_slide();
+    for (s, x) in samples.iter().zip(positions) {
+        online.push(*s, dir, *x)?;
+        online_width.push(*s, dir, *x)?;
+    }
+    Ok((online.end_slide()?, online_width.end_slide()?))
+}
+
+/// Commands one pass and records it: the samples of the stroke (finger down, sliding) with
+/// the position along the pass (mm from `a`) interpolated from the arm's states. Retries once
+/// when the sensor stalled or the controller restarted.
+#[allow(clippy::too_many_arguments)]
+fn slide_and_record(
+    config: &InspectConfig,
+    arm: &mut Arm,
+    sensor: &mut Sensor,
+    id: u32,
+    a: [f64; 2],
+    b: [f64; 2],
+    speed: f64,
+    stop: &AtomicBool,
+) -> Result<(Vec<[f64; 4]>, Vec<f64>, u32), MissionError> {
+    let mut attempts = 0;
+    loop {
+        attempts += 1;
+        match try_slide(config, arm, sensor, id, a, b, speed, stop) {
+            Ok((s, p)) => return Ok((s, p, attempts)),
+            Err(e @ (MissionError::SensorStalled { .. } | MissionError::ControllerRestarted))
+                if attempts < 2 =>
+            {
+                tracing::warn!("slide {id}: {e}; sliding again");
+                arm.restarted = false;
+                continue;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn try_slide(
+    config: &InspectConfig,
+    arm: &mut Arm,
+    sensor: &mut Sensor,
+    id: u32,
+    a: [f64; 2],
+    b: [f64; 2],
+    speed: f64,
+    stop: &AtomicBool,
+) -> Result<(Vec<[f64; 4]>, Vec<f64>), MissionError> {
+    let first_sample = sensor.samples.len();
+    arm.errors.clear();
+    let seq = arm.command(&Message::Slide(crackbot_link::Slide {
+        id,
+        start: Point2 {
+            x_mm: a[0] as f32,
+            y_mm: a[1] as f32,
+        },
+        end: Point2 {
+            x_mm: b[0] as f32,
+            y_mm: b[1] as f32,
+        },
+        speed_mm_s: speed as f32,
+        contact: Contact::DepthMm(1.0),
+    }))?;
+    let here = arm
+        .states
+        .back()
+        .map(|s| pose(&s.state))
+        .unwrap_or([0.0; 3]);
+    let travel =
+        (a[0] - here[0]).hypot(a[1] - here[1]) / config.scene.manipulator.travel_speed_mm_s;
+    let stroke = (b[0] - a[0]).hypot(b[1] - a[1]) / speed;
+    let budget = Duration::from_secs_f64((travel + stroke) / config.speedup * 1.5 + 3.0);
+    let deadline = Instant::now() + budget;
+    let stall_limit = Duration::from_millis(500);
+    loop {
+        if stop.load(Ordering::Relaxed) {
+            return Err(MissionError::Interrupted);
+        }
+        arm.pump(Duration::from_millis(2))?;
+        sensor.drain()?;
+        if let Some(e) = arm.errors.iter().find(|e| e.seq == seq) {
+            return Err(MissionError::Refused {
+                what: format!("slide {id}"),
+                reason: e.text.to_string(),
+            });
+        }
+        if arm.done.contains(&id) {
+            break;
+        }
+        if arm.restarted {
+            return Err(MissionError::ControllerRestarted);
+        }
+        if sensor.last_at.elapsed() > stall_limit {
+            // Wait for the stream to come back before sliding again, or give up.
+            let resume = Instant::now() + Duration::from_secs(5);
+            while sensor.drain()? == 0 {
+                arm.pump(Duration::from_millis(5))?;
+                if Instant::now() > resume {
+                    arm.stop();
+                    return Err(MissionError::NoSamples {
+                        port: sensor.path.clone(),
+                    });
+                }
+            }
+            arm.stop();
+            return Err(MissionError::SensorStalled {
+                port: sensor.path.clone(),
+            });
+        }
+        if arm
+            .last_state_at
+            .is_some_and(|t| t.elapsed() > Duration::from_secs(2))
+        {
+            arm.stop();
+            return Err(MissionError::ControllerUnreachable {
+                addr: arm.ep.peer_addr().to_string(),
+            });
+        }
+        if Instant::now() > deadline {
+            arm.stop();
+            return Err(MissionError::Timeout {
+                what: format!("slide {id}"),
+                seconds: budget.as_secs_f64(),
+            });
+        }
+    }
+    // A few more states, so the end of the stroke is bracketed.
+    let settle = Instant::now() + Duration::from_millis(40);
+    while Instant::now() < settle {
+        arm.pump(Duration::from_millis(2))?;
+        sensor.drain()?;
+    }
+    // The stroke's samples: the arm down (z ≈ 0) in slide `id`.
+    let mut samples = Vec::new();
+    let mut positions = Vec::new();
+    let u = {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let l = d[0].hypot(d[1]).max(1e-9);
+        [d[0] / l, d[1] / l]
+    };
+    let mapped = mapped_states(arm);
+    let taken: Vec<TimedSample> = sensor.samples[first_sample..].to_vec();
+    for s in taken {
+        let host = sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
+        let Some((p, mode)) = position_at(&mapped, host) else {
+            continue;
+        };
+        let down = p[2] < 0.5 && mode == crackbot_link::Mode::Sliding { id };
+        if down {
+            samples.push(s.raw.map(f64::from));
+            positions.push((p[0] - a[0]) * u[0] + (p[1] - a[1]) * u[1]);
+        }
+    }
+    Ok((samples, positions))
+}
+
+/// Writes one pass in the recordings' CSV layout (the acquisition's columns plus the position).
+fn save_pass(
+    path: &Path,
+    samples: &[[f64; 4]],
+    positions: &[f64],
+    dir: u8,
+) -> Result<(), MissionError> {
+    use std::io::Write;
+    let f = std::fs::File::create(path).map_err(|e| io_err(path, e))?;
+    let mut w = std::io::BufWriter::new(f);
+    let mut put = || -> std::io::Result<()> {
+        writeln!(w, "d1,d2,d3,p,direction,x_mm")?;
+        for (s, x) in samples.iter().zip(positions) {
+            writeln!(w, "{},{},{},{},{dir},{x:.4}", s[0], s[1], s[2], s[3])?;
+        }
+        w.flush()
+    };
+    put().map_err(|e| io_err(path, e))
+}
