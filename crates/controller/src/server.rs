@@ -58,6 +58,8 @@ pub struct Faults {
     pub stall: Option<SensorStall>,
     /// Restart the controller once, this long after it started.
     pub restart_after: Option<Duration>,
+    /// Restart the controller once, a third of the way through this slide (1-based).
+    pub restart_during_slide: Option<u32>,
 }
 
 /// A sensor stall.
@@ -247,6 +249,13 @@ fn open(
     Ok(ep)
 }
 
+/// Whether slide `id` is a third of the way through its stroke.
+fn mid_slide(shared: &SharedWorld, id: u32) -> bool {
+    lock(shared)
+        .last
+        .is_some_and(|t| t.mode == Mode::Sliding(id) && t.pose[2] == 0.0 && t.progress >= 0.3)
+}
+
 fn to_link_mode(mode: Mode) -> crackbot_link::Mode {
     match mode {
         Mode::Idle => crackbot_link::Mode::Idle,
@@ -281,11 +290,18 @@ fn serve(
     let mut last_heard = Instant::now();
     let mut restarted = false;
     let mut slides_started = 0u32;
-    let mut stall_due: Option<Instant> = None;
+    let mut stall_pending: Option<u32> = None;
+    let mut restart_pending: Option<u32> = None;
     while !stop.load(Ordering::Relaxed) {
         // Injected restart: the arm stops, the link comes back with a new epoch.
-        if let Some(after) = config.faults.restart_after {
-            if !restarted && started.elapsed() >= after {
+        let restart_now = !restarted
+            && (config
+                .faults
+                .restart_after
+                .is_some_and(|a| started.elapsed() >= a)
+                || restart_pending.is_some_and(|id| mid_slide(shared, id)));
+        {
+            if restart_now {
                 restarted = true;
                 report.restarts += 1;
                 lock(shared).world.stop();
@@ -297,9 +313,10 @@ fn serve(
                 tracing::warn!("controller restarted (injected)");
             }
         }
-        if let Some(at) = stall_due {
-            if Instant::now() >= at {
-                stall_due = None;
+        if let Some(id) = stall_pending {
+            // Mid-slide: once a third of the stroke is done.
+            if mid_slide(shared, id) {
+                stall_pending = None;
                 if let Some(s) = config.faults.stall {
                     control.stall_for(s.duration);
                     tracing::warn!("sensor stalled for {:?} (injected)", s.duration);
@@ -330,11 +347,15 @@ fn serve(
                         );
                         if res.is_ok() {
                             slides_started += 1;
-                            if let Some(st) = config.faults.stall {
-                                if st.slide == slides_started {
-                                    // Mid-slide: after the travel, a second into the stroke.
-                                    stall_due = Some(Instant::now() + Duration::from_secs(2));
-                                }
+                            if config
+                                .faults
+                                .stall
+                                .is_some_and(|st| st.slide == slides_started)
+                            {
+                                stall_pending = Some(sl.id);
+                            }
+                            if config.faults.restart_during_slide == Some(slides_started) {
+                                restart_pending = Some(sl.id);
                             }
                         }
                         Some(res)

@@ -1101,6 +1101,21 @@ fn slide_and_record(
             {
                 tracing::warn!("slide {id}: {e}; sliding again");
                 arm.restarted = false;
+                // Wait for the sensor to stream again (5 s at most).
+                let resume = Instant::now() + Duration::from_secs(5);
+                loop {
+                    arm.pump(Duration::from_millis(5))?;
+                    let before = sensor.last_at;
+                    if sensor.drain()? > 0 && before.elapsed() < Duration::from_millis(50) {
+                        break;
+                    }
+                    if Instant::now() > resume {
+                        arm.stop();
+                        return Err(MissionError::NoSamples {
+                            port: sensor.path.clone(),
+                        });
+                    }
+                }
                 continue;
             }
             Err(e) => return Err(e),
@@ -1121,6 +1136,8 @@ fn try_slide(
 ) -> Result<(Vec<[f64; 4]>, Vec<f64>), MissionError> {
     let first_sample = sensor.samples.len();
     arm.errors.clear();
+    // A retried slide keeps its id: forget the first attempt's end.
+    arm.done.retain(|&d| d != id);
     let seq = arm.command(&Message::Slide(crackbot_link::Slide {
         id,
         start: Point2 {
@@ -1178,6 +1195,7 @@ fn try_slide(
             arm.stop();
             return Err(MissionError::SensorStalled {
                 port: sensor.path.clone(),
+                detail: format!("no sample for {} ms", stall_limit.as_millis()),
             });
         }
         if arm
@@ -1213,6 +1231,25 @@ fn try_slide(
     };
     let mapped = mapped_states(arm);
     let taken: Vec<TimedSample> = sensor.samples[first_sample..].to_vec();
+    // A silence of the sensor inside the stroke (a stall the stroke outlasted): slide again.
+    let nominal_us = 2500.0 / config.speedup;
+    let mut last_down: Option<f64> = None;
+    for s in taken.iter() {
+        let host = sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
+        if let Some((p, mode)) = position_at(&mapped, host) {
+            if p[2] < 0.5 && mode == (crackbot_link::Mode::Sliding { id }) {
+                // (The floor keeps scheduling hiccups of a loaded host from reading as stalls.)
+                if let Some(l) = last_down.filter(|l| host - l > (40.0 * nominal_us).max(200_000.0))
+                {
+                    return Err(MissionError::SensorStalled {
+                        port: sensor.path.clone(),
+                        detail: format!("no sample for {:.0} ms of the stroke", (host - l) / 1e3),
+                    });
+                }
+                last_down = Some(host);
+            }
+        }
+    }
     for s in taken {
         let host = sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
         let Some((p, mode)) = position_at(&mapped, host) else {
@@ -1224,7 +1261,22 @@ fn try_slide(
             positions.push((p[0] - a[0]) * u[0] + (p[1] - a[1]) * u[1]);
         }
     }
+    // Frames lost to a stall that lasted past the stroke's end: too few samples for the stroke.
+    let expected = (b[0] - a[0]).hypot(b[1] - a[1]) / speed * f64::from(crackbot_protocol_rate());
+    if (samples.len() as f64) < 0.8 * expected {
+        return Err(MissionError::SensorStalled {
+            port: sensor.path.clone(),
+            detail: format!(
+                "{} samples of the stroke, {expected:.0} expected",
+                samples.len()
+            ),
+        });
+    }
     Ok((samples, positions))
+}
+
+fn crackbot_protocol_rate() -> u32 {
+    crackbot_sim::run::SAMPLE_RATE_HZ as u32
 }
 
 /// Writes one pass in the recordings' CSV layout (the acquisition's columns plus the position).

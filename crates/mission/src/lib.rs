@@ -56,10 +56,12 @@ pub enum MissionError {
         port: String,
     },
     /// The sensor stream stopped mid-slide (retried once).
-    #[error("the sensor stream over {port} stalled mid-slide")]
+    #[error("the sensor stream over {port} stalled mid-slide ({detail})")]
     SensorStalled {
         /// The device.
         port: String,
+        /// What showed it.
+        detail: String,
     },
     /// The controller does not answer.
     #[error("the manipulator controller at {addr} is unreachable (no state for 2 s or no acknowledgement): the arm was told to stop")]
