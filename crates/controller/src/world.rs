@@ -288,7 +288,7 @@ impl World {
         self.limits.check_point("slide end", end)?;
         Limits::check_speed("slide", speed, self.limits.max_slide_speed_mm_s)?;
         let len = (end[0] - start[0]).hypot(end[1] - start[1]);
-        if !(len >= 0.5 && len <= crackbot_sim::run::MAX_STROKE_MM) {
+        if !(0.5..=crackbot_sim::run::MAX_STROKE_MM).contains(&len) {
             return Err(Refusal::Invalid(format!(
                 "slide {id} is {len:.2} mm long (0.5 to {} mm)",
                 crackbot_sim::run::MAX_STROKE_MM

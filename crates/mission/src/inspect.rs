@@ -825,7 +825,7 @@ fn mission(
         slides: Vec<u32>,
         widths: Vec<(f64, f64)>,
         doubts: Vec<String>,
-        crossings: Vec<([f64; 2], Option<[[f64; 2]; 2]>)>,
+        crossings: Vec<Crossing>,
         unknown: usize,
         passes: usize,
     }
@@ -855,7 +855,7 @@ fn mission(
             };
             let id = next_id;
             next_id += 1;
-            let (samples, positions, attempts) =
+            let ((samples, positions), attempts) =
                 slide_and_record(config, arm, sensor, id, a, b, slide.speed_mm_s, stop)?;
             let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
             save_pass(&rec_path, &samples, &positions, pass as u8)?;
@@ -1039,6 +1039,12 @@ fn mission(
     Ok(report)
 }
 
+/// Where a pass crossed a crack, mm on the plate, and the crack's extent along the pass.
+type Crossing = ([f64; 2], Option<[[f64; 2]; 2]>);
+
+/// A pass's samples (D1, D2, D3, P counts) and positions (mm along the pass).
+type Recorded = (Vec<[f64; 4]>, Vec<f64>);
+
 /// Consecutive pieces of a pass, each covering `stroke_mm` of travel (tactile rows).
 fn split_by_travel(positions: &[f64], stroke_mm: f64) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
@@ -1090,12 +1096,12 @@ fn slide_and_record(
     b: [f64; 2],
     speed: f64,
     stop: &AtomicBool,
-) -> Result<(Vec<[f64; 4]>, Vec<f64>, u32), MissionError> {
+) -> Result<(Recorded, u32), MissionError> {
     let mut attempts = 0;
     loop {
         attempts += 1;
         match try_slide(config, arm, sensor, id, a, b, speed, stop) {
-            Ok((s, p)) => return Ok((s, p, attempts)),
+            Ok(r) => return Ok((r, attempts)),
             Err(e @ (MissionError::SensorStalled { .. } | MissionError::ControllerRestarted))
                 if attempts < 2 =>
             {
@@ -1133,7 +1139,7 @@ fn try_slide(
     b: [f64; 2],
     speed: f64,
     stop: &AtomicBool,
-) -> Result<(Vec<[f64; 4]>, Vec<f64>), MissionError> {
+) -> Result<Recorded, MissionError> {
     let first_sample = sensor.samples.len();
     arm.errors.clear();
     // A retried slide keeps its id: forget the first attempt's end.
