@@ -43,8 +43,12 @@ const LAYERS: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "pipelines: the emulated sensor, the tactile pipeline, the simulated controller",
-        &["crackbot-emulator", "crackbot-tactile", "crackbot-controller"],
+        "pipelines: the emulated sensor, the tactile pipeline",
+        &["crackbot-emulator", "crackbot-tactile"],
+    ),
+    (
+        "simulated hardware: the manipulator controller over the emulated sensor",
+        &["crackbot-controller"],
     ),
     (
         "services: missions, figures",
@@ -75,6 +79,22 @@ const NO_STD_ALLOWED: &[&str] = &[
     "embedded-hal",
     "embedded-hal-nb",
     "nb",
+    // crackbot-link: HMAC-SHA256 (RustCrypto), postcard and serde, all with default features off.
+    "crackbot-link",
+    "hmac",
+    "sha2",
+    "digest",
+    "block-buffer",
+    "crypto-common",
+    "hybrid-array",
+    "typenum",
+    "ctutils",
+    "cmov",
+    "cpufeatures",
+    "cfg-if",
+    "postcard",
+    "serde",
+    "serde_core",
 ];
 
 /// The robot path: the headless binary and the libraries it runs, with default features.
@@ -88,6 +108,9 @@ const ROBOT_PATH: &[&str] = &[
     "crackbot-tactile",
     "crackbot-vision",
     "crackbot-sim",
+    "crackbot-planner",
+    "crackbot-link",
+    "crackbot-controller",
 ];
 
 /// Crates the robot path must not compile by default.

@@ -1,0 +1,266 @@
+//! Plans: slides, the moves between them, and how long it all takes.
+
+use serde::Serialize;
+
+use crate::candidate::CandidateId;
+use crate::geometry::{dist, Point, Workspace};
+use crate::{Order, Overlap, Settings};
+
+/// One slide: the finger down on the surface, from `start_mm` to `end_mm` and, for an even
+/// number of passes, back.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Slide {
+    /// The candidates this slide inspects (several when overlapping candidates were merged;
+    /// empty for a row of the tactile-only scan).
+    pub candidates: Vec<CandidateId>,
+    /// The row of a tactile-only scan, from the first one.
+    pub row: Option<usize>,
+    /// Where the first pass starts, mm.
+    pub start_mm: Point,
+    /// Where the first pass ends, mm.
+    pub end_mm: Point,
+    /// `|end − start|`, mm.
+    pub stroke_mm: f64,
+    /// One-way passes (2: forth and back, the simulator's and the recordings' "slide").
+    pub passes: u32,
+    /// Sliding speed, mm/s.
+    pub speed_mm_s: f64,
+    /// [`slide_time_s`] of this slide, s (settling not included).
+    pub duration_s: f64,
+    /// For a candidate: the run with the whole tip on sound surface before it reaches the
+    /// crack's edge, at the start side and at the end side, mm
+    /// (`distance to the crack's edge − tip radius`); `None` for scan rows.
+    pub sound_run_mm: Option<[f64; 2]>,
+    /// How far the slide was shifted along itself to stay inside the workspace, mm (0: centred
+    /// on the crack).
+    pub shifted_mm: f64,
+    /// Whether the workspace made the stroke shorter than asked.
+    pub clipped: bool,
+    /// How far along the crack's axis the slide was moved because it did not fit where asked, mm
+    /// (0: where asked).
+    pub moved_along_mm: f64,
+}
+
+impl Slide {
+    /// Where the finger is when the slide ends: its start after an even number of passes, its
+    /// end after an odd one.
+    pub fn exit_mm(&self) -> Point {
+        if self.passes.is_multiple_of(2) {
+            self.start_mm
+        } else {
+            self.end_mm
+        }
+    }
+
+    /// Whether the slide is where and as long as asked.
+    pub fn is_as_asked(&self) -> bool {
+        self.shifted_mm == 0.0 && !self.clipped && self.moved_along_mm == 0.0
+    }
+}
+
+/// A move with the finger lifted, in a straight line.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Move {
+    /// From, mm.
+    pub from_mm: Point,
+    /// To, mm.
+    pub to_mm: Point,
+    /// Length, mm.
+    pub length_mm: f64,
+    /// Cruise speed, mm/s.
+    pub speed_mm_s: f64,
+    /// [`travel_time_s`] of this move, s.
+    pub duration_s: f64,
+}
+
+/// Where the time goes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TimeEstimate {
+    /// Moves with the finger lifted, s.
+    pub travel_s: f64,
+    /// Sliding, s.
+    pub slide_s: f64,
+    /// Approach, settling and lift, [`Settings::settle_s`] per slide, s.
+    pub settle_s: f64,
+    /// The sum, s.
+    pub total_s: f64,
+}
+
+/// A candidate (or merged group) that no slide could reach.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Unreachable {
+    /// The candidate(s).
+    pub candidates: Vec<CandidateId>,
+    /// Why.
+    pub reason: String,
+}
+
+/// What kind of plan, with its own figures.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum PlanKind {
+    /// Slides across detected candidates.
+    Targeted {
+        /// Candidates asked for.
+        candidates: usize,
+        /// How the candidates were ordered.
+        order: Order,
+        /// What was done with overlapping candidates.
+        overlap: Overlap,
+    },
+    /// The tactile-only boustrophedon scan of eq. 2.
+    TactileScan {
+        /// The design parameter γ.
+        gamma: f64,
+        /// `L̄`, mm.
+        mean_length_mm: f64,
+        /// `N_s`.
+        rows: usize,
+        /// Distance between rows, mm (`h / (N_s − 1)`; the workspace height for one row).
+        row_spacing_mm: f64,
+        /// Whether every straight crack of length `L̄` lying across the rows crosses one
+        /// (`row_spacing_mm ≤ L̄` and, for a single row, `h / 2 ≤ L̄`).
+        crossing_guaranteed: bool,
+    },
+}
+
+/// A plan: slides in order, the moves between them, and the time estimate.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Plan {
+    /// Targeted or tactile-only.
+    pub kind: PlanKind,
+    /// The workspace everything lies in.
+    pub workspace: Workspace,
+    /// Where the finger starts, mm.
+    pub start_mm: Point,
+    /// Where it ends, mm.
+    pub end_mm: Point,
+    /// The slides, in order.
+    pub slides: Vec<Slide>,
+    /// The moves: `moves[k]` leads to `slides[k].start_mm`; with
+    /// [`Settings::return_to_start`] one more leads back to the start.
+    pub moves: Vec<Move>,
+    /// Sum of the moves, mm.
+    pub travel_mm: f64,
+    /// Distance slid (stroke × passes, summed), mm.
+    pub slide_mm: f64,
+    /// Where the time goes.
+    pub time: TimeEstimate,
+    /// `time.total_s`, s.
+    pub estimated_s: f64,
+    /// Candidates no slide could reach (with [`crate::OnUnreachable::Report`]).
+    pub unreachable: Vec<Unreachable>,
+    /// Groups of candidates whose rectangles overlap (merged into one slide set with
+    /// [`Overlap::Merge`], slid one by one with [`Overlap::SlideBoth`]).
+    pub overlapping: Vec<Vec<CandidateId>>,
+}
+
+/// Time of a move of `distance_mm` at cruise `speed_mm_s`: `d / v`, or with an acceleration
+/// `a` a trapezoidal profile, `d / v + v / a` (`2·√(d / a)` when it never reaches `v`).
+pub fn travel_time_s(distance_mm: f64, speed_mm_s: f64, accel_mm_s2: Option<f64>) -> f64 {
+    if distance_mm <= 0.0 {
+        return 0.0;
+    }
+    match accel_mm_s2 {
+        None => distance_mm / speed_mm_s,
+        Some(a) if distance_mm >= speed_mm_s * speed_mm_s / a => {
+            distance_mm / speed_mm_s + speed_mm_s / a
+        }
+        Some(a) => 2.0 * (distance_mm / a).sqrt(),
+    }
+}
+
+/// Time of a slide of `passes` one-way strokes of `stroke_mm` at `speed_mm_s`, each starting and
+/// stopping over `reversal_s` (the simulator's arm: a raised-cosine ramp of that length at each
+/// reversal, `stroke / v + ramp / 2` per stroke, the ramp no longer than `stroke / v`).
+pub fn slide_time_s(stroke_mm: f64, speed_mm_s: f64, passes: u32, reversal_s: f64) -> f64 {
+    let cruise = stroke_mm / speed_mm_s;
+    let ramp = reversal_s.clamp(0.0, cruise);
+    f64::from(passes) * (cruise + ramp / 2.0)
+}
+
+impl Plan {
+    /// Puts slides in order into a plan: the moves between them, totals and times.
+    pub(crate) fn assemble(
+        kind: PlanKind,
+        workspace: Workspace,
+        start: Point,
+        slides: Vec<Slide>,
+        settings: &Settings,
+        unreachable: Vec<Unreachable>,
+        overlapping: Vec<Vec<CandidateId>>,
+    ) -> Plan {
+        let mut moves = Vec::with_capacity(slides.len() + 1);
+        let mut at = start;
+        let mv = |from: Point, to: Point| {
+            let length = dist(from, to);
+            Move {
+                from_mm: from,
+                to_mm: to,
+                length_mm: length,
+                speed_mm_s: settings.travel_speed_mm_s,
+                duration_s: travel_time_s(
+                    length,
+                    settings.travel_speed_mm_s,
+                    settings.travel_accel_mm_s2,
+                ),
+            }
+        };
+        for s in &slides {
+            moves.push(mv(at, s.start_mm));
+            at = s.exit_mm();
+        }
+        if settings.return_to_start && !slides.is_empty() {
+            moves.push(mv(at, start));
+            at = start;
+        }
+        let travel_s = moves.iter().map(|m| m.duration_s).sum();
+        let slide_s = slides.iter().map(|s| s.duration_s).sum();
+        let settle_s = settings.settle_s * slides.len() as f64;
+        let total = travel_s + slide_s + settle_s;
+        Plan {
+            kind,
+            workspace,
+            start_mm: start,
+            end_mm: at,
+            travel_mm: moves.iter().map(|m| m.length_mm).sum(),
+            slide_mm: slides
+                .iter()
+                .map(|s| s.stroke_mm * f64::from(s.passes))
+                .sum(),
+            slides,
+            moves,
+            time: TimeEstimate {
+                travel_s,
+                slide_s,
+                settle_s,
+                total_s: total,
+            },
+            estimated_s: total,
+            unreachable,
+            overlapping,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn times() {
+        assert_eq!(travel_time_s(100.0, 50.0, None), 2.0);
+        assert_eq!(travel_time_s(0.0, 50.0, Some(10.0)), 0.0);
+        // Reaches 50 mm/s after 25 mm (v²/a = 25 at a = 100): 100/50 + 50/100.
+        assert!((travel_time_s(100.0, 50.0, Some(100.0)) - 2.5).abs() < 1e-12);
+        // Never reaches it: 2·√(16/100).
+        assert!((travel_time_s(16.0, 50.0, Some(100.0)) - 0.8).abs() < 1e-12);
+        // Continuous at d = v²/a.
+        let d = 25.0;
+        assert!((travel_time_s(d, 50.0, Some(100.0)) - 2.0 * (d / 100.0f64).sqrt()).abs() < 1e-12);
+        // The simulator's slide: 2·(16/4.6 + 0.05/2).
+        assert!((slide_time_s(16.0, 4.6, 2, 0.05) - (2.0 * 16.0 / 4.6 + 0.05)).abs() < 1e-12);
+        // A ramp longer than the stroke takes is cut to it.
+        assert!((slide_time_s(0.1, 4.6, 1, 1.0) - 1.5 * 0.1 / 4.6).abs() < 1e-12);
+    }
+}
