@@ -75,6 +75,9 @@ enum Command {
     /// [research, runs crackbot-lab] The simulator: datasets, calibration, figures, scenes.
     #[command(disable_help_flag = true)]
     Sim(lab::Forwarded),
+    /// [research, runs crackbot-lab] The paper's online experiments in simulation.
+    #[command(disable_help_flag = true)]
+    Mission(lab::Forwarded),
 }
 
 #[derive(Debug, Args)]
@@ -175,6 +178,7 @@ fn main() -> Result<()> {
         Command::EvalDetector(args) => lab::run("eval-detector", args),
         Command::DetectorTradeoff(args) => lab::run("detector-tradeoff", args),
         Command::Sim(args) => lab::run("sim", args),
+        Command::Mission(args) => lab::run("mission", args),
         Command::Calibration(CalibrationCommand::Check { file }) => {
             let cal = Calibration::load(&file)?;
             println!(

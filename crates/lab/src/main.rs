@@ -15,6 +15,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod args;
+mod mission;
 mod sim;
 mod tactile;
 mod vision;
@@ -41,6 +42,10 @@ enum Command {
     /// comparison figures, rendered camera frames, scenes.
     #[command(subcommand)]
     Sim(sim::SimCommand),
+    /// The visual-tactile paper's online experiments in simulation: detection trials,
+    /// exploration time.
+    #[command(subcommand)]
+    Mission(mission::MissionCommand),
 }
 
 fn main() -> Result<()> {
@@ -55,5 +60,6 @@ fn main() -> Result<()> {
         Command::EvalDetector(args) => vision::eval_detector(args),
         Command::DetectorTradeoff(args) => vision::detector_tradeoff(args),
         Command::Sim(cmd) => sim::run(cmd),
+        Command::Mission(cmd) => mission::run(cmd),
     }
 }

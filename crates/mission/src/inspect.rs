@@ -108,9 +108,11 @@ impl InspectConfig {
     /// A fused mission over `scene` with the committed models, writing into `out_dir`.
     pub fn new(scene: Scene, out_dir: impl Into<PathBuf>) -> Self {
         let settings = Settings {
-            slide_speed_mm_s: scene.manipulator.slide_speed_mm_s,
             travel_speed_mm_s: scene.manipulator.travel_speed_mm_s,
-            // The paper's protocol: strokes of 16 mm back and forth across the crack.
+            // The paper's protocol: strokes of 16 mm back and forth across the crack, at the
+            // speed of the authors' recordings the tactile models were trained on (4.6 mm/s, the
+            // simulator's fit to them: crates/sim/docs/calibration.md).
+            slide_speed_mm_s: crackbot_planner::SIM_SLIDE_SPEED_MM_S,
             passes: 4,
             margin_mm: 2.0,
             min_margin_mm: 2.0,
@@ -845,81 +847,106 @@ fn mission(
         if stop.load(Ordering::Relaxed) {
             return Err(MissionError::Interrupted);
         }
+        // Tactile rows have no candidate: each row is judged in stroke-long pieces below.
         let cand = slide.candidates.first().copied();
-        // Tactile rows: no candidate; each row is judged in stroke-long pieces below.
-        for pass in 0..slide.passes.max(1) {
-            let (a, b) = if pass % 2 == 0 {
-                (slide.start_mm, slide.end_mm)
+        let axis = [
+            slide.end_mm[0] - slide.start_mm[0],
+            slide.end_mm[1] - slide.start_mm[1],
+        ];
+        let len = axis[0].hypot(axis[1]).max(1e-9);
+        let u = [axis[0] / len, axis[1] / len];
+        let at = |s: f64| [slide.start_mm[0] + s * u[0], slide.start_mm[1] + s * u[1]];
+        let n_passes = slide.passes.max(1);
+        let mut p = 0;
+        while p < n_passes {
+            // One classification unit: a stroke forth and back, as the authors' slides are
+            // (direction 0 then 1); a single stroke when the plan has no way back.
+            let unit = if cand.is_some() && p + 1 < n_passes {
+                2
             } else {
-                (slide.end_mm, slide.start_mm)
+                1
             };
-            let id = next_id;
-            next_id += 1;
-            let ((samples, positions), attempts) =
-                slide_and_record(config, arm, sensor, id, a, b, slide.speed_mm_s, stop)?;
-            let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
-            save_pass(&rec_path, &samples, &positions, pass as u8)?;
-            let dir = (pass % 2) as u8;
+            let (mut samples, mut along, mut dirs) = (Vec::new(), Vec::new(), Vec::new());
+            let mut records = Vec::new();
+            for q in p..p + unit {
+                let forth = q % 2 == 0;
+                let (a, b) = if forth {
+                    (slide.start_mm, slide.end_mm)
+                } else {
+                    (slide.end_mm, slide.start_mm)
+                };
+                let id = next_id;
+                next_id += 1;
+                let ((s, x), attempts) =
+                    slide_and_record(config, arm, sensor, id, a, b, slide.speed_mm_s, stop)?;
+                let dir = u8::from(!forth);
+                let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
+                save_pass(&rec_path, &s, &x, dir)?;
+                records.push((id, a, b, s.len(), rec_path, attempts));
+                // Positions along the slide's axis, from its start.
+                along.extend(x.iter().map(|&v| if forth { v } else { len - v }));
+                dirs.extend(std::iter::repeat_n(dir, s.len()));
+                samples.extend(s);
+            }
+            let fresh_unit = p == 0;
+            p += unit;
             let pieces: Vec<(usize, usize)> = if cand.is_none() {
-                split_by_travel(&positions, config.scene.manipulator.stroke_mm)
+                split_by_travel(&along, config.scene.manipulator.stroke_mm)
             } else {
                 vec![(0, samples.len())]
             };
             for (p0, p1) in pieces {
-                // The context reaches back over the candidate's earlier passes (as over the
+                // The context reaches back over the candidate's earlier strokes (as over the
                 // authors' back-and-forth strokes); a new candidate or row starts afresh.
-                let fresh = pass == 0 && p0 == 0;
                 let (verdict, wv) = classify(
                     &mut online,
                     &mut online_width,
                     &samples[p0..p1],
-                    &positions[p0..p1],
-                    dir,
-                    fresh,
+                    &along[p0..p1],
+                    &dirs[p0..p1],
+                    fresh_unit && p0 == 0,
                 )?;
-                let along = [b[0] - a[0], b[1] - a[1]];
-                let len = along[0].hypot(along[1]).max(1e-9);
-                let u = [along[0] / len, along[1] / len];
                 let extent = crackbot_tactile::localise::localise(
                     &samples[p0..p1],
-                    &positions[p0..p1],
+                    &along[p0..p1],
                     &crackbot_tactile::localise::LocaliseConfig::default(),
                 )
                 .ok()
                 .flatten();
-                let at = |s: f64| [a[0] + s * u[0], a[1] + s * u[1]];
-                let mid = positions.get((p0 + p1) / 2).copied().unwrap_or(len / 2.0);
+                let mid = along.get((p0 + p1) / 2).copied().unwrap_or(len / 2.0);
                 let crossing = extent.as_ref().map_or((at(mid), None), |e| {
                     (at(e.centre_mm), Some([at(e.start_mm), at(e.end_mm)]))
                 });
-                let rec = PassRecord {
-                    id,
-                    candidate: cand,
-                    start_mm: a,
-                    end_mm: b,
-                    samples: p1 - p0,
-                    class: verdict.as_ref().map(|v| v.name.clone()),
-                    confidence: verdict.as_ref().map_or(0.0, |v| v.confidence),
-                    width_mm: wv.as_ref().map(|w| w.label),
-                    doubt: verdict
-                        .as_ref()
-                        .and_then(|v| v.doubt.as_ref())
-                        .map(|d| format!("{d:?}")),
-                    dip: extent.as_ref().map(|e| Dip {
-                        centre_mm: e.centre_mm,
-                        width_mm: e.width_mm,
-                        confidence: e.confidence,
-                    }),
-                    recording: rec_path.display().to_string(),
-                    attempts,
-                };
-                progress(&Progress::Slid {
-                    done: si + 1,
-                    of: n_slides,
-                    class: rec.class.clone().unwrap_or_else(|| "–".into()),
-                });
-                report.passes.push(rec);
-                let key = cand.unwrap_or(u64::from(id) << 32 | p0 as u64);
+                let key = cand.unwrap_or(u64::from(records[0].0) << 32 | p0 as u64);
+                for (id, a, b, n, rec_path, attempts) in &records {
+                    let rec = PassRecord {
+                        id: *id,
+                        candidate: cand,
+                        start_mm: *a,
+                        end_mm: *b,
+                        samples: if cand.is_some() { *n } else { p1 - p0 },
+                        class: verdict.as_ref().map(|v| v.name.clone()),
+                        confidence: verdict.as_ref().map_or(0.0, |v| v.confidence),
+                        width_mm: wv.as_ref().map(|w| w.label),
+                        doubt: verdict
+                            .as_ref()
+                            .and_then(|v| v.doubt.as_ref())
+                            .map(|d| format!("{d:?}")),
+                        dip: extent.as_ref().map(|e| Dip {
+                            centre_mm: e.centre_mm,
+                            width_mm: e.width_mm,
+                            confidence: e.confidence,
+                        }),
+                        recording: rec_path.display().to_string(),
+                        attempts: *attempts,
+                    };
+                    progress(&Progress::Slid {
+                        done: si + 1,
+                        of: n_slides,
+                        class: rec.class.clone().unwrap_or_else(|| "–".into()),
+                    });
+                    report.passes.push(rec);
+                }
                 let entry = match felt.iter_mut().position(|(c, _)| *c == key) {
                     Some(i) => &mut felt[i].1,
                     None => {
@@ -938,13 +965,13 @@ fn mission(
                         &mut felt.last_mut().expect("just pushed").1
                     }
                 };
-                entry.slides.push(id);
+                entry.slides.extend(records.iter().map(|r| r.0));
                 entry.passes += 1;
                 if let Some(v) = &verdict {
                     for (acc, x) in entry.votes.iter_mut().zip(&v.votes) {
                         *acc += x;
                     }
-                    // A dead or saturated channel makes the pass unusable; a novel surface is
+                    // A dead or saturated channel makes the slide unusable; a novel surface is
                     // reported as a doubt (the simulated finger is still unlike the real one,
                     // see models/tactile/MODEL_CARD.md) but its vote counts.
                     if matches!(
@@ -1067,7 +1094,7 @@ fn classify(
     online_width: &mut OnlineClassifier<'_>,
     samples: &[[f64; 4]],
     positions: &[f64],
-    dir: u8,
+    dirs: &[u8],
     fresh: bool,
 ) -> Result<(Option<SlideVerdict>, Option<SlideVerdict>), MissionError> {
     if fresh {
@@ -1076,9 +1103,9 @@ fn classify(
     }
     online.begin_slide();
     online_width.begin_slide();
-    for (s, x) in samples.iter().zip(positions) {
-        online.push(*s, dir, *x)?;
-        online_width.push(*s, dir, *x)?;
+    for ((s, x), d) in samples.iter().zip(positions).zip(dirs) {
+        online.push(*s, *d, *x)?;
+        online_width.push(*s, *d, *x)?;
     }
     Ok((online.end_slide()?, online_width.end_slide()?))
 }

@@ -1,0 +1,106 @@
+//! `crackbot-lab mission trials|exploration`: the visual-tactile paper's online experiments in
+//! simulation, each a series of whole missions (`crackbot_mission::experiments`).
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use crackbot_mission::experiments::{
+    detection_trials, exploration_markdown, exploration_times, ExperimentConfig,
+};
+use crackbot_mission::inspect::InspectConfig;
+use crackbot_sim::Scene;
+
+/// The experiments.
+#[derive(Debug, Subcommand)]
+pub enum MissionCommand {
+    /// Correct detections over trials on random scenes, vision only vs vision + tactile.
+    Trials(TrialsArgs),
+    /// Exploration time of a 200 × 100 mm plate, tactile only (per γ) vs vision + tactile.
+    Exploration(ExplorationArgs),
+}
+
+/// Shared flags.
+#[derive(Debug, Args)]
+pub struct Common {
+    /// Folder for the tables and every mission's folder.
+    #[arg(long, default_value = "out/experiments")]
+    out: PathBuf,
+    /// Simulation speed-up.
+    #[arg(long, default_value_t = 8.0)]
+    speedup: f64,
+}
+
+/// `mission trials`.
+#[derive(Debug, Args)]
+pub struct TrialsArgs {
+    #[command(flatten)]
+    common: Common,
+    /// Number of trials (scenes).
+    #[arg(long, default_value_t = 10)]
+    trials: u64,
+    /// Seed of the first scene.
+    #[arg(long, default_value_t = 1000)]
+    seed: u64,
+}
+
+/// `mission exploration`.
+#[derive(Debug, Args)]
+pub struct ExplorationArgs {
+    #[command(flatten)]
+    common: Common,
+    /// Scene (default: the built-in default scene).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// γ values of the tactile-only scans.
+    #[arg(long, value_delimiter = ',', default_value = "0.25,0.5,0.75")]
+    gamma: Vec<f64>,
+}
+
+fn base(common: &Common) -> Result<ExperimentConfig> {
+    std::fs::create_dir_all(&common.out)
+        .with_context(|| format!("creating {}", common.out.display()))?;
+    Ok(ExperimentConfig {
+        out_dir: common.out.clone(),
+        speedup: common.speedup,
+        template: InspectConfig::new(Scene::builtin_default(), &common.out),
+    })
+}
+
+/// Runs an experiment and writes its Markdown and JSON tables.
+pub fn run(cmd: MissionCommand) -> Result<()> {
+    match cmd {
+        MissionCommand::Trials(a) => {
+            let b = base(&a.common)?;
+            let report = detection_trials(&b, a.seed, a.trials, |seed, t| {
+                eprintln!(
+                    "trial {seed}: vision {:.0} %, vision + tactile {:.0} %",
+                    100.0 * t.vision.correct_fraction(),
+                    100.0 * t.fused.correct_fraction()
+                );
+            })?;
+            let md = report.markdown();
+            std::fs::write(a.common.out.join("trials.md"), &md)?;
+            std::fs::write(
+                a.common.out.join("trials.json"),
+                serde_json::to_string_pretty(&report)?,
+            )?;
+            println!("{md}");
+        }
+        MissionCommand::Exploration(a) => {
+            let b = base(&a.common)?;
+            let scene = Scene::load_or_default(a.scene.as_deref())?;
+            let rows = exploration_times(&b, &scene, &a.gamma, |r| {
+                eprintln!("{:?} γ {:?}: {:.1} s", r.mode, r.gamma, r.exploration_s);
+            })?;
+            let md = exploration_markdown(&rows);
+            std::fs::write(a.common.out.join("exploration.md"), &md)?;
+            std::fs::write(
+                a.common.out.join("exploration.json"),
+                serde_json::to_string_pretty(&rows)?,
+            )?;
+            println!("{md}");
+        }
+    }
+    Ok(())
+}

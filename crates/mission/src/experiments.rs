@@ -1,0 +1,422 @@
+//! The online experiments of the visual-tactile paper, in simulation (Markdown + JSON tables):
+//!
+//! * [`detection_trials`]: correct detections over trials on random scenes (real crack
+//!   appearance 0.5–5 mm, printed decoys, bumps, screws, random camera pose), vision only against
+//!   vision + tactile (paper: 46.66 % vs 92.85 %).
+//! * [`exploration_times`]: time to explore a 200 × 100 mm plate, tactile only for several γ
+//!   against vision + tactile (paper: 519.40 / 278.61 / 198.56 s vs 31.85 s).
+//!
+//! Every figure is a mission run by [`run_inspection`] on a generated scene: the same code path
+//! as the robot's (link, PTY, online classification). Scenes come from a seed
+//! ([`crackbot_sim::random_scene`]); any valid scene file also runs.
+//!
+//! **Scoring.** A reported crack is *correct* when its position lies within
+//! [`MATCH_MM`] of a true crack's centre line and no other report claimed that crack; it is a
+//! false detection otherwise (a decoy, a screw, a duplicate). A true crack with no correct
+//! report is missed. *Correct detections* = correct / (reports + missed): the share of the
+//! mission's calls about cracks that are right, the paper's figure (it counts a crack found by
+//! vision and a decoy rejected by touch alike). Localisation error: the distance of each correct
+//! report from the crack's centre line.
+
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+
+use crackbot_sim::surface::distance_to_polyline;
+use crackbot_sim::{random_scene, Feature, RandomSceneParams, Scene};
+use serde::Serialize;
+
+use crate::inspect::{run_inspection, InspectConfig, InspectMode, InspectReport};
+use crate::MissionError;
+
+/// A report within this distance of a true crack's centre line (plus half its width) matches it, mm.
+pub const MATCH_MM: f64 = 5.0;
+
+/// The scenes of the detection trials: real crack appearance 0.5–5 mm wide, 1–3 cracks, 1–2
+/// printed decoys, screws and bumps, random camera pose.
+pub fn trial_params() -> RandomSceneParams {
+    RandomSceneParams {
+        cracks: [1, 3],
+        crack_width_mm: [0.5, 5.0],
+        decoys: [1, 2],
+        screws: [0, 2],
+        bumps: [0, 1],
+        wavy: [0, 0],
+        ..RandomSceneParams::default()
+    }
+}
+
+/// How one mission scored against its scene's truth.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Score {
+    /// True cracks in the scene.
+    pub cracks: usize,
+    /// Reports that match a true crack.
+    pub correct: usize,
+    /// Reports that match none (decoys, screws, duplicates).
+    pub false_reports: usize,
+    /// True cracks without a correct report.
+    pub missed: usize,
+    /// Distance of each correct report from its crack's centre line, mm.
+    pub localisation_mm: Vec<f64>,
+}
+
+impl Score {
+    /// Correct / (reports + missed), 0–1 (1 when there was nothing to report and nothing was).
+    pub fn correct_fraction(&self) -> f64 {
+        let n = self.correct + self.false_reports + self.missed;
+        if n == 0 {
+            1.0
+        } else {
+            self.correct as f64 / n as f64
+        }
+    }
+}
+
+/// Scores a mission's report against its scene.
+pub fn score(scene: &Scene, report: &InspectReport) -> Score {
+    let cracks: Vec<(&[[f64; 2]], f64)> = scene
+        .features
+        .iter()
+        .filter_map(|f| match f {
+            Feature::Crack { path, width_mm, .. } => Some((path.as_slice(), *width_mm)),
+            _ => None,
+        })
+        .collect();
+    let mut claimed = vec![false; cracks.len()];
+    let mut s = Score {
+        cracks: cracks.len(),
+        ..Score::default()
+    };
+    for r in &report.cracks {
+        let best = cracks
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !claimed[*i])
+            .map(|(i, (path, w))| (i, distance_to_polyline(path, r.position_mm), *w))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match best {
+            Some((i, d, w)) if d <= MATCH_MM + w / 2.0 => {
+                claimed[i] = true;
+                s.correct += 1;
+                s.localisation_mm.push(d);
+            }
+            _ => s.false_reports += 1,
+        }
+    }
+    s.missed = claimed.iter().filter(|c| !**c).count();
+    s
+}
+
+/// One trial: a scene, both modes.
+#[derive(Debug, Clone, Serialize)]
+pub struct Trial {
+    /// The scene's seed.
+    pub seed: u64,
+    /// True cracks and decoys.
+    pub cracks: usize,
+    /// Printed decoys.
+    pub decoys: usize,
+    /// Vision only.
+    pub vision: Score,
+    /// Vision + tactile.
+    pub fused: Score,
+    /// Exploration time of the fused mission (robot time), s.
+    pub fused_exploration_s: f64,
+}
+
+/// The trials' table.
+#[derive(Debug, Clone, Serialize)]
+pub struct TrialsReport {
+    /// Every trial.
+    pub trials: Vec<Trial>,
+    /// Mean correct detections, vision only, 0–1.
+    pub vision_correct: f64,
+    /// Mean correct detections, vision + tactile, 0–1.
+    pub fused_correct: f64,
+    /// Mean localisation error of the fused mission's correct reports, mm.
+    pub fused_localisation_mm: f64,
+    /// The paper's figures: vision only, vision + tactile.
+    pub paper: [f64; 2],
+}
+
+impl TrialsReport {
+    /// The table in Markdown.
+    pub fn markdown(&self) -> String {
+        let mut out = String::from(
+            "| trial (seed) | cracks | decoys | vision only: correct / false / missed | vision + tactile: correct / false / missed | fused exploration, s |\n|---|---|---|---|---|---|\n",
+        );
+        for t in &self.trials {
+            out += &format!(
+                "| {} | {} | {} | {} / {} / {} | {} / {} / {} | {:.1} |\n",
+                t.seed,
+                t.cracks,
+                t.decoys,
+                t.vision.correct,
+                t.vision.false_reports,
+                t.vision.missed,
+                t.fused.correct,
+                t.fused.false_reports,
+                t.fused.missed,
+                t.fused_exploration_s
+            );
+        }
+        out += &format!(
+            "\n| | vision only | vision + tactile |\n|---|---|---|\n| correct detections (this run) | {:.1} % | {:.1} % |\n| the paper | {:.2} % | {:.2} % |\n| localisation error of confirmed cracks | – | {:.2} mm |\n",
+            100.0 * self.vision_correct,
+            100.0 * self.fused_correct,
+            self.paper[0],
+            self.paper[1],
+            self.fused_localisation_mm
+        );
+        out
+    }
+}
+
+/// Settings shared by the experiments.
+#[derive(Debug, Clone)]
+pub struct ExperimentConfig {
+    /// Where each mission writes its folder.
+    pub out_dir: PathBuf,
+    /// Simulation speed-up.
+    pub speedup: f64,
+    /// The mission's settings other than scene, mode and folder.
+    pub template: InspectConfig,
+}
+
+fn run(
+    base: &ExperimentConfig,
+    scene: &Scene,
+    mode: InspectMode,
+    name: &str,
+) -> Result<InspectReport, MissionError> {
+    let mut c = base.template.clone();
+    c.scene = scene.clone();
+    c.mode = mode;
+    c.speedup = base.speedup;
+    c.out_dir = base.out_dir.join(name);
+    let stop = AtomicBool::new(false);
+    run_inspection(&c, &stop, |_| {})
+}
+
+/// Runs `n` detection trials on the random scenes of seeds `first_seed..first_seed + n`.
+pub fn detection_trials(
+    base: &ExperimentConfig,
+    first_seed: u64,
+    n: u64,
+    mut progress: impl FnMut(u64, &Trial),
+) -> Result<TrialsReport, MissionError> {
+    let params = trial_params();
+    let mut trials = Vec::new();
+    for seed in first_seed..first_seed + n {
+        let scene = random_scene(&params, seed)?;
+        let vision = run(
+            base,
+            &scene,
+            InspectMode::Vision,
+            &format!("trial-{seed}-vision"),
+        )?;
+        let fused = run(
+            base,
+            &scene,
+            InspectMode::Fused,
+            &format!("trial-{seed}-fused"),
+        )?;
+        let decoys = scene
+            .features
+            .iter()
+            .filter(|f| matches!(f, Feature::Decoy { .. }))
+            .count();
+        let t = Trial {
+            seed,
+            cracks: score(&scene, &vision).cracks,
+            decoys,
+            vision: score(&scene, &vision),
+            fused: score(&scene, &fused),
+            fused_exploration_s: fused.exploration_s,
+        };
+        progress(seed, &t);
+        trials.push(t);
+    }
+    let mean =
+        |f: &dyn Fn(&Trial) -> f64| trials.iter().map(f).sum::<f64>() / trials.len().max(1) as f64;
+    let locs: Vec<f64> = trials
+        .iter()
+        .flat_map(|t| t.fused.localisation_mm.iter().copied())
+        .collect();
+    Ok(TrialsReport {
+        vision_correct: mean(&|t| t.vision.correct_fraction()),
+        fused_correct: mean(&|t| t.fused.correct_fraction()),
+        fused_localisation_mm: if locs.is_empty() {
+            f64::NAN
+        } else {
+            locs.iter().sum::<f64>() / locs.len() as f64
+        },
+        trials,
+        paper: [46.66, 92.85],
+    })
+}
+
+/// One row of the exploration-time table.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExplorationRow {
+    /// `tactile` or `fused`.
+    pub mode: InspectMode,
+    /// γ of the tactile scan.
+    pub gamma: Option<f64>,
+    /// Slides (passes) made.
+    pub passes: usize,
+    /// Exploration time, robot time, s.
+    pub exploration_s: f64,
+    /// The planner's estimate, s.
+    pub estimated_s: f64,
+    /// Cracks found / in the scene.
+    pub found: usize,
+    /// Cracks in the scene.
+    pub cracks: usize,
+    /// The paper's time, s.
+    pub paper_s: f64,
+}
+
+/// Exploration time on `scene`: tactile only for each γ, then fused.
+pub fn exploration_times(
+    base: &ExperimentConfig,
+    scene: &Scene,
+    gammas: &[f64],
+    mut progress: impl FnMut(&ExplorationRow),
+) -> Result<Vec<ExplorationRow>, MissionError> {
+    let paper = |g: f64| {
+        if (g - 0.25).abs() < 1e-9 {
+            519.40
+        } else if (g - 0.5).abs() < 1e-9 {
+            278.61
+        } else if (g - 0.75).abs() < 1e-9 {
+            198.56
+        } else {
+            f64::NAN
+        }
+    };
+    let mut rows = Vec::new();
+    for &g in gammas {
+        let mut b = base.clone();
+        b.template.gamma = g;
+        let r = run(
+            &b,
+            scene,
+            InspectMode::Tactile,
+            &format!("explore-tactile-{g}"),
+        )?;
+        let s = score(scene, &r);
+        let row = ExplorationRow {
+            mode: InspectMode::Tactile,
+            gamma: Some(g),
+            passes: r.passes.len(),
+            exploration_s: r.exploration_s,
+            estimated_s: r.plan.as_ref().map_or(f64::NAN, |p| p.estimated_s),
+            found: s.correct,
+            cracks: s.cracks,
+            paper_s: paper(g),
+        };
+        progress(&row);
+        rows.push(row);
+    }
+    let r = run(base, scene, InspectMode::Fused, "explore-fused")?;
+    let s = score(scene, &r);
+    let row = ExplorationRow {
+        mode: InspectMode::Fused,
+        gamma: None,
+        passes: r.passes.len(),
+        exploration_s: r.exploration_s,
+        estimated_s: r.plan.as_ref().map_or(f64::NAN, |p| p.estimated_s),
+        found: s.correct,
+        cracks: s.cracks,
+        paper_s: 31.85,
+    };
+    progress(&row);
+    rows.push(row);
+    Ok(rows)
+}
+
+/// The exploration table in Markdown.
+pub fn exploration_markdown(rows: &[ExplorationRow]) -> String {
+    let mut out = String::from(
+        "| modality | γ | passes | exploration, s (robot time) | planner's estimate, s | cracks found | the paper, s |\n|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        out += &format!(
+            "| {} | {} | {} | {:.1} | {:.1} | {}/{} | {:.2} |\n",
+            match r.mode {
+                InspectMode::Tactile => "tactile only",
+                InspectMode::Fused => "vision + tactile",
+                InspectMode::Vision => "vision only",
+            },
+            r.gamma.map_or("–".into(), |g| format!("{g}")),
+            r.passes,
+            r.exploration_s,
+            r.estimated_s,
+            r.found,
+            r.cracks,
+            r.paper_s
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::inspect::{Evidence, ReportedCrack};
+
+    fn report_with(positions: &[[f64; 2]]) -> InspectReport {
+        let scene = Scene::builtin_default();
+        let mut r = InspectReport {
+            mode: InspectMode::Fused,
+            scene: scene.name.clone(),
+            cracks: Vec::new(),
+            rejected: Vec::new(),
+            candidates: Vec::new(),
+            passes: Vec::new(),
+            plan: None,
+            elapsed_s: 0.0,
+            exploration_s: 0.0,
+            stages: Default::default(),
+            sensor_clock: None,
+            controller_clock: None,
+            link: Default::default(),
+            out_dir: String::new(),
+        };
+        for &p in positions {
+            r.cracks.push(ReportedCrack {
+                candidate: None,
+                position_mm: p,
+                extent_mm: None,
+                class: "crack".into(),
+                width_mm: None,
+                width_std_mm: None,
+                confidence: 1.0,
+                evidence: Evidence {
+                    detector_score: None,
+                    slides: Vec::new(),
+                    votes: Vec::new(),
+                    doubts: Vec::new(),
+                },
+            });
+        }
+        r
+    }
+
+    #[test]
+    fn scoring_matches_reports_to_cracks_once_and_counts_decoys_and_misses() {
+        let scene = Scene::builtin_default();
+        // The default scene: four cracks; a report on the 1 mm crack, a duplicate of it, one on
+        // the decoy.
+        let r = report_with(&[[37.5, 30.0], [38.0, 30.2], [40.0, 84.0]]);
+        let s = score(&scene, &r);
+        assert_eq!(s.cracks, 4);
+        assert_eq!((s.correct, s.false_reports, s.missed), (1, 2, 3), "{s:?}");
+        assert!(s.localisation_mm[0] < 0.5, "{s:?}");
+        assert!((s.correct_fraction() - 1.0 / 6.0).abs() < 1e-12);
+        let none = score(&scene, &report_with(&[]));
+        assert_eq!((none.correct, none.missed), (0, 4));
+        assert_eq!(none.correct_fraction(), 0.0);
+    }
+}
