@@ -4,4 +4,5 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 python3 crates/protocol/golden/generate.py --check
+python3 crates/link/golden/generate.py --check
 cargo test --workspace --locked "$@"
