@@ -70,6 +70,24 @@ pub struct RunArgs {
     /// Fault injection: the controller restarts this many seconds after it started.
     #[arg(long)]
     pub restart_after_s: Option<f64>,
+    /// Hardware: the sensor's serial device (with --controller and --key).
+    #[arg(long, requires_all = ["controller", "key"])]
+    pub serial: Option<String>,
+    /// Hardware: the manipulator controller's UDP address, e.g. 192.168.1.20:7700.
+    #[arg(long, requires_all = ["serial", "key"])]
+    pub controller: Option<std::net::SocketAddr>,
+    /// Hardware: this host's UDP address for the link.
+    #[arg(long, default_value = "0.0.0.0:7701")]
+    pub bind: std::net::SocketAddr,
+    /// Hardware: the link's pre-shared key file (64–128 hex digits, mode 0600).
+    #[arg(long)]
+    pub key: Option<PathBuf>,
+    /// Hardware: the camera frame, an image file (fused and vision modes).
+    #[arg(long, requires = "serial")]
+    pub camera: Option<PathBuf>,
+    /// Hardware: the camera's pixel → surface calibration (`crackbot homography fit`).
+    #[arg(long, requires = "camera")]
+    pub homography: Option<PathBuf>,
 }
 
 /// Runs the mission and prints the report.
@@ -107,6 +125,16 @@ pub fn run(args: RunArgs) -> Result<()> {
             duration: Duration::from_secs(1),
         });
     config.faults.restart_after = args.restart_after_s.map(Duration::from_secs_f64);
+    if let (Some(serial), Some(controller), Some(key)) = (args.serial, args.controller, args.key) {
+        config.hardware = Some(crackbot_mission::inspect::Hardware {
+            serial,
+            controller,
+            bind: args.bind,
+            key_file: key,
+            camera: args.camera,
+            homography: args.homography,
+        });
+    }
 
     let stop = Arc::new(AtomicBool::new(false));
     {

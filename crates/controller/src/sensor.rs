@@ -79,7 +79,19 @@ impl<W: Write> Write for StallableLine<W> {
         if now < self.stalled_until_us.load(Ordering::Relaxed) {
             return Ok(buf.len());
         }
-        self.inner.write(buf)
+        match self.inner.write(buf) {
+            // Nobody reads (the robot has not opened the port yet, or has gone): the board
+            // streams regardless, and the bytes are lost, as on a real line.
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::TimedOut | std::io::ErrorKind::WouldBlock
+                ) =>
+            {
+                Ok(buf.len())
+            }
+            other => other,
+        }
     }
 
     fn flush(&mut self) -> std::io::Result<()> {

@@ -69,9 +69,28 @@ impl std::str::FromStr for InspectMode {
     }
 }
 
+/// Real hardware in place of the simulated parts.
+#[derive(Debug, Clone)]
+pub struct Hardware {
+    /// The sensor's serial device (or a pseudo-terminal).
+    pub serial: String,
+    /// The manipulator controller's UDP address.
+    pub controller: SocketAddr,
+    /// This host's UDP address for the link (the controller sends to it).
+    pub bind: SocketAddr,
+    /// The link's pre-shared key file (mode 0600).
+    pub key_file: PathBuf,
+    /// A camera frame (an image file); a live camera device is not supported yet.
+    pub camera: Option<PathBuf>,
+    /// The camera's pixel → surface calibration (`crackbot homography fit`).
+    pub homography: Option<PathBuf>,
+}
+
 /// Settings of a mission.
 #[derive(Debug, Clone)]
 pub struct InspectConfig {
+    /// Real hardware; `None`: the simulated controller and sensor over the scene.
+    pub hardware: Option<Hardware>,
     /// The scene (simulated), or the workspace and manipulator description (hardware).
     pub scene: Scene,
     /// Tactile, vision or fused.
@@ -122,6 +141,7 @@ impl InspectConfig {
             ..Settings::default()
         };
         InspectConfig {
+            hardware: None,
             scene,
             mode: InspectMode::Fused,
             out_dir: out_dir.into(),
@@ -532,17 +552,51 @@ fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, MissionErro
     use crackbot_vision::model::{build_detector, DetectorChoice};
     use crackbot_vision::preprocess::PostprocessParams;
 
-    let assets = CrackAssets::load_default()?;
-    let frame = render(
-        &config.scene,
-        &assets,
-        &RenderOptions::default(),
-        config.seed,
-    )?;
     std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
+    let (image, h) = match &config.hardware {
+        Some(hw) => {
+            let camera = hw.camera.as_ref().ok_or_else(|| {
+                MissionError::Invalid(format!(
+                    "a {:?} mission needs a camera frame (--camera FILE)",
+                    config.mode
+                ))
+            })?;
+            if camera.starts_with("/dev") {
+                return Err(MissionError::Invalid(format!(
+                    "{}: live camera devices are not supported yet; give a frame as an image file",
+                    camera.display()
+                )));
+            }
+            let cal = hw.homography.as_ref().ok_or_else(|| {
+                MissionError::Invalid(
+                    "a camera frame needs its pixel → surface calibration (--homography FILE, from `crackbot homography fit`)".into(),
+                )
+            })?;
+            let image = image::open(camera)
+                .map_err(|e| MissionError::Invalid(format!("{}: {e}", camera.display())))?
+                .to_rgb8();
+            let h = crackbot_vision::homography::HomographyCalibration::load(cal)?.homography()?;
+            (image, h)
+        }
+        None => {
+            let assets = CrackAssets::load_default()?;
+            let frame = render(
+                &config.scene,
+                &assets,
+                &RenderOptions::default(),
+                config.seed,
+            )?;
+            let h = crackbot_imaging::Homography::from_nalgebra(
+                frame.plate_to_image.try_inverse().ok_or_else(|| {
+                    MissionError::Invalid("the camera's homography is singular".into())
+                })?,
+            )
+            .map_err(|e| MissionError::Invalid(e.to_string()))?;
+            (frame.image, h)
+        }
+    };
     let frame_path = config.out_dir.join("frame.png");
-    frame
-        .image
+    image
         .save(&frame_path)
         .map_err(|e| MissionError::Invalid(format!("{}: {e}", frame_path.display())))?;
     let choice = DetectorChoice {
@@ -550,14 +604,7 @@ fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, MissionErro
         ..DetectorChoice::default()
     };
     let mut detector = build_detector(&choice, PostprocessParams::default())?;
-    let detections = detector.detect(&frame.image)?;
-    let h = crackbot_imaging::Homography::from_nalgebra(
-        frame
-            .plate_to_image
-            .try_inverse()
-            .ok_or_else(|| MissionError::Invalid("the camera's homography is singular".into()))?,
-    )
-    .map_err(|e| MissionError::Invalid(e.to_string()))?;
+    let detections = detector.detect(&image)?;
     let mut out = Vec::new();
     for (i, d) in detections.iter().enumerate() {
         if d.score < config.min_score {
@@ -608,37 +655,50 @@ pub fn run_inspection(
     let width = TactileModel::load(&config.width_model)?;
     std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
 
-    // The simulated controller and sensor, over loopback UDP and a PTY.
-    let host_socket =
-        UdpSocket::bind("127.0.0.1:0").map_err(|e| MissionError::Link(e.to_string()))?;
-    let ctrl_socket =
-        UdpSocket::bind("127.0.0.1:0").map_err(|e| MissionError::Link(e.to_string()))?;
-    let host_addr = host_socket
-        .local_addr()
-        .map_err(|e| MissionError::Link(e.to_string()))?;
-    let ctrl_addr: SocketAddr = ctrl_socket
-        .local_addr()
-        .map_err(|e| MissionError::Link(e.to_string()))?;
-    let mut key_bytes = [0u8; 32];
-    for (i, b) in key_bytes.iter_mut().enumerate() {
-        // A fresh key per mission, never written anywhere (both ends live in this process).
-        *b = (rand_byte(config.seed, i as u64) | 1) as u8;
-    }
-    let key = Key::from_bytes(&key_bytes).map_err(|e| MissionError::Link(e.to_string()))?;
     let state_dir = config.out_dir.join(".link");
     std::fs::create_dir_all(&state_dir).map_err(|e| io_err(&state_dir, e))?;
-    let mut server = ServerConfig::new(
-        config.scene.clone(),
-        Security::Signed(key.clone()),
-        state_dir.join("controller.epoch"),
-    );
-    server.seed = config.seed;
-    server.clock = ControllerClock {
-        speedup: config.speedup,
-        ..config.clock
+    let sock = |a: SocketAddr| {
+        UdpSocket::bind(a).map_err(|e| MissionError::Link(format!("binding {a}: {e}")))
     };
-    server.faults = config.faults.clone();
-    let controller = SimController::spawn(server, ctrl_socket, host_addr)?;
+    let (host_socket, ctrl_addr, key, controller) = match &config.hardware {
+        Some(hw) => {
+            let key = Key::from_file(&hw.key_file)
+                .map_err(|e| MissionError::Link(format!("the link key: {e}")))?;
+            (sock(hw.bind)?, hw.controller, key, None)
+        }
+        None => {
+            // The simulated controller and sensor, over loopback UDP and a PTY.
+            let loopback: SocketAddr = ([127, 0, 0, 1], 0).into();
+            let host_socket = sock(loopback)?;
+            let ctrl_socket = sock(loopback)?;
+            let host_addr = host_socket
+                .local_addr()
+                .map_err(|e| MissionError::Link(e.to_string()))?;
+            let ctrl_addr: SocketAddr = ctrl_socket
+                .local_addr()
+                .map_err(|e| MissionError::Link(e.to_string()))?;
+            let mut key_bytes = [0u8; 32];
+            for (i, b) in key_bytes.iter_mut().enumerate() {
+                // A fresh key per mission, never written anywhere (both ends live in this
+                // process).
+                *b = (rand_byte(config.seed, i as u64) | 1) as u8;
+            }
+            let key = Key::from_bytes(&key_bytes).map_err(|e| MissionError::Link(e.to_string()))?;
+            let mut server = ServerConfig::new(
+                config.scene.clone(),
+                Security::Signed(key.clone()),
+                state_dir.join("controller.epoch"),
+            );
+            server.seed = config.seed;
+            server.clock = ControllerClock {
+                speedup: config.speedup,
+                ..config.clock
+            };
+            server.faults = config.faults.clone();
+            let controller = SimController::spawn(server, ctrl_socket, host_addr)?;
+            (host_socket, ctrl_addr, key, Some(controller))
+        }
+    };
     let t0 = Instant::now();
     let mut ep = LinkEndpoint::from_socket(
         host_socket,
@@ -664,7 +724,12 @@ pub fn run_inspection(
         epoch: None,
         restarted: false,
     };
-    let mut sensor = Sensor::open(controller.sensor_path(), t0)?;
+    let port = match (&config.hardware, &controller) {
+        (Some(hw), _) => hw.serial.clone(),
+        (None, Some(c)) => c.sensor_path().to_string(),
+        (None, None) => String::new(),
+    };
+    let mut sensor = Sensor::open(&port, t0)?;
     let setup_s = started.elapsed().as_secs_f64();
 
     let result = mission(
@@ -691,7 +756,9 @@ pub fn run_inspection(
         }
     };
     drop(sensor);
-    let _ = controller.shutdown();
+    if let Some(c) = controller {
+        let _ = c.shutdown();
+    }
     let mut report = result?;
     report.link = counters;
     let path = config.out_dir.join("report.json");

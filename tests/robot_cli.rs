@@ -1,0 +1,174 @@
+//! The headless robot and the simulated controller as two processes, as on hardware: the robot
+//! gets `--serial` (the controller's pseudo-terminal), `--controller` (its UDP address) and
+//! `--key` (the pre-shared key file), and `crackbot run` takes the same flags.
+
+use std::io::{BufRead, BufReader};
+use std::net::UdpSocket;
+use std::process::{Command, Stdio};
+
+use crackbot_tests::{binary, text};
+
+/// A small plate with one 10 mm crack, so that the tactile-only scan is a few short rows.
+const SCENE: &str = r#"
+name = "one crack, small plate"
+[plate]
+size_mm = [40.0, 24.0]
+[[features]]
+kind = "crack"
+path = [[20.0, 6.0], [20.0, 14.0]]
+width_mm = 10.0
+depth_mm = 4.0
+[manipulator]
+workspace_min_mm = [0.0, 0.0, -5.0]
+workspace_max_mm = [40.0, 24.0, 150.0]
+"#;
+
+fn free_port() -> u16 {
+    UdpSocket::bind("127.0.0.1:0")
+        .and_then(|s| s.local_addr())
+        .map(|a| a.port())
+        .expect("a free UDP port")
+}
+
+#[test]
+fn the_robot_drives_the_controller_process_over_the_link_and_refuses_a_bad_key() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, SCENE).expect("scene");
+    let key = dir.path().join("link.key");
+    std::fs::write(&key, format!("{}\n", "5a".repeat(32))).expect("key");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o600)).expect("chmod");
+    }
+    let (cport, hport) = (free_port(), free_port());
+    let mut controller = Command::new(binary("crackbot-sim-controller"))
+        .args(["--scene", scene.to_str().expect("utf-8")])
+        .args(["--bind", &format!("127.0.0.1:{cport}")])
+        .args(["--peer", &format!("127.0.0.1:{hport}")])
+        .args(["--key", key.to_str().expect("utf-8")])
+        .args([
+            "--state-dir",
+            dir.path().join("ctrl").to_str().expect("utf-8"),
+        ])
+        .args(["--speedup", "8", "--seconds", "120"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("starting crackbot-sim-controller");
+    let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
+    let mut line = String::new();
+    out.read_line(&mut line).expect("the PTY line");
+    let pty = line
+        .trim()
+        .strip_prefix("PTY ")
+        .expect("PTY /dev/pts/N")
+        .to_string();
+
+    let robot = |extra: &[&str], key: &std::path::Path| {
+        Command::new(binary("crackbot-robot"))
+            .args(["--scene", scene.to_str().expect("utf-8")])
+            .args([
+                "--mode",
+                "tactile",
+                "--gamma",
+                "0.75",
+                "--speedup",
+                "8",
+                "--json",
+            ])
+            .args(["--serial", &pty])
+            .args(["--controller", &format!("127.0.0.1:{cport}")])
+            .args(["--bind", &format!("127.0.0.1:{hport}")])
+            .args(["--key", key.to_str().expect("utf-8")])
+            .args(extra)
+            .output()
+            .expect("running crackbot-robot")
+    };
+    // A robot with another key is never heard: the mission fails clearly, nothing moves.
+    let wrong = dir.path().join("wrong.key");
+    std::fs::write(&wrong, format!("{}\n", "a7".repeat(32))).expect("key");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&wrong, std::fs::Permissions::from_mode(0o600)).expect("chmod");
+    }
+    let o = robot(
+        &["--out", dir.path().join("wrong").to_str().expect("utf-8")],
+        &wrong,
+    );
+    assert!(!o.status.success());
+    assert!(
+        text(&o.stderr).contains("unreachable"),
+        "{}",
+        text(&o.stderr)
+    );
+
+    let o = robot(
+        &["--out", dir.path().join("mission").to_str().expect("utf-8")],
+        &key,
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let passes = report["passes"].as_array().expect("passes");
+    assert!(!passes.is_empty());
+    for p in passes {
+        assert!(p["samples"].as_u64().expect("samples") > 100, "{p}");
+    }
+    for k in ["cracks", "rejected", "elapsed_s"] {
+        assert!(report.get(k).is_some(), "{k} missing");
+    }
+    // Every row stayed inside the workspace the controller enforces.
+    for p in passes {
+        for end in ["start_mm", "end_mm"] {
+            let x = p[end][0].as_f64().expect("x");
+            let y = p[end][1].as_f64().expect("y");
+            assert!(
+                (0.0..=40.0).contains(&x) && (0.0..=24.0).contains(&y),
+                "{p}"
+            );
+        }
+    }
+    controller.kill().ok();
+    controller.wait().ok();
+}
+
+#[test]
+fn crackbot_run_takes_the_robots_flags() {
+    let robot = Command::new(binary("crackbot-robot"))
+        .arg("--help")
+        .output()
+        .expect("crackbot-robot --help");
+    let run = Command::new(binary("crackbot"))
+        .args(["run", "--help"])
+        .output()
+        .expect("crackbot run --help");
+    let flags = |o: &std::process::Output| -> Vec<String> {
+        text(&o.stdout)
+            .split_whitespace()
+            .filter(|w| w.starts_with("--"))
+            .map(|w| w.trim_end_matches(',').to_string())
+            .collect()
+    };
+    let (a, b) = (flags(&robot), flags(&run));
+    for f in [
+        "--scene",
+        "--mode",
+        "--json",
+        "--serial",
+        "--controller",
+        "--camera",
+        "--key",
+    ] {
+        assert!(a.contains(&f.to_string()), "crackbot-robot lacks {f}");
+    }
+    assert_eq!(a, b, "crackbot run and crackbot-robot differ");
+    // Bad input is refused by name before anything starts.
+    let o = Command::new(binary("crackbot-robot"))
+        .args(["--mode", "sideways"])
+        .output()
+        .expect("crackbot-robot");
+    assert!(!o.status.success());
+    assert!(text(&o.stderr).contains("sideways"), "{}", text(&o.stderr));
+}
