@@ -47,7 +47,7 @@ struct Cli {
 enum Command {
     /// Inspection mission: look, touch, report (fused by default, on the built-in default
     /// scene); the headless robot `crackbot-robot` with the same flags.
-    Run(run::RunArgs),
+    Run(Box<run::RunArgs>),
     /// Acquisition demo on the built-in default scene: simulated finger → emulated sensor →
     /// pseudo-terminal → acquisition → CSV → summary.
     Demo(DemoArgs),
@@ -168,7 +168,7 @@ fn main() -> Result<()> {
         .enable_all()
         .build()?;
     match cli.command {
-        Command::Run(args) => run::run(args),
+        Command::Run(args) => run::run(*args),
         Command::Demo(args) => runtime.block_on(demo(args)),
         Command::Record(args) => runtime.block_on(record(args)),
         Command::Replay(args) => runtime.block_on(replay(args)),
