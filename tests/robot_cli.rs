@@ -172,3 +172,79 @@ fn crackbot_run_takes_the_robots_flags() {
     assert!(!o.status.success());
     assert!(text(&o.stderr).contains("sideways"), "{}", text(&o.stderr));
 }
+
+#[test]
+fn a_controller_and_sensor_that_vanish_mid_mission_end_it_with_a_clear_error() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, SCENE).expect("scene");
+    let key = dir.path().join("link.key");
+    std::fs::write(&key, format!("{}\n", "3c".repeat(32))).expect("key");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o600)).expect("chmod");
+    }
+    let (cport, hport) = (free_port(), free_port());
+    let mut controller = Command::new(binary("crackbot-sim-controller"))
+        .args(["--scene", scene.to_str().expect("utf-8")])
+        .args(["--bind", &format!("127.0.0.1:{cport}")])
+        .args(["--peer", &format!("127.0.0.1:{hport}")])
+        .args(["--key", key.to_str().expect("utf-8")])
+        .args([
+            "--state-dir",
+            dir.path().join("ctrl").to_str().expect("utf-8"),
+        ])
+        .args(["--speedup", "2", "--seconds", "120"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("starting crackbot-sim-controller");
+    let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
+    let mut line = String::new();
+    out.read_line(&mut line).expect("the PTY line");
+    let pty = line
+        .trim()
+        .strip_prefix("PTY ")
+        .expect("PTY /dev/pts/N")
+        .to_string();
+    let out_dir = dir.path().join("mission");
+    let robot = Command::new(binary("crackbot-robot"))
+        .args(["--scene", scene.to_str().expect("utf-8")])
+        .args(["--mode", "tactile", "--gamma", "0.75", "--speedup", "2"])
+        .args(["--serial", &pty])
+        .args(["--controller", &format!("127.0.0.1:{cport}")])
+        .args(["--bind", &format!("127.0.0.1:{hport}")])
+        .args(["--key", key.to_str().expect("utf-8")])
+        .args(["--out", out_dir.to_str().expect("utf-8")])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("starting crackbot-robot");
+    // Mid-mission (the first row takes about 4 s at this speed), the controller process dies:
+    // its link and its serial port go with it.
+    std::thread::sleep(std::time::Duration::from_secs(6));
+    controller.kill().expect("kill");
+    controller.wait().ok();
+    let t = std::time::Instant::now();
+    let o = robot.wait_with_output().expect("the robot ends");
+    assert!(
+        t.elapsed() < std::time::Duration::from_secs(15),
+        "{:?}",
+        t.elapsed()
+    );
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("disconnected") || err.contains("vanished") || err.contains("unreachable"),
+        "{err}"
+    );
+    assert!(err.contains("recordings so far"), "{err}");
+    // What was recorded before is on disk.
+    let saved = std::fs::read_dir(&out_dir)
+        .expect("the mission folder")
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().starts_with("slide-"))
+        .count();
+    assert!(saved >= 1, "no recording kept");
+}

@@ -179,3 +179,26 @@ fn an_unreachable_controller_stops_the_mission_with_a_clear_error() {
     );
     assert!(err.to_string().contains("unreachable"), "{err}");
 }
+
+#[test]
+fn stopping_mid_mission_stops_the_arm_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = config(dir.path());
+    c.speedup = 2.0;
+    let stop = std::sync::Arc::new(AtomicBool::new(false));
+    let _one = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let setter = {
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(2500));
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        })
+    };
+    let t = std::time::Instant::now();
+    let err = run_inspection(&c, &stop, |_| {}).unwrap_err();
+    setter.join().unwrap();
+    assert!(matches!(err, MissionError::Interrupted), "{err}");
+    assert!(err.to_string().contains("arm was stopped"), "{err}");
+    // It stopped promptly, not at the end of the plan.
+    assert!(t.elapsed() < Duration::from_secs(6), "{:?}", t.elapsed());
+}
