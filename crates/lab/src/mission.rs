@@ -29,6 +29,10 @@ pub struct Common {
     /// Simulation speed-up.
     #[arg(long, default_value_t = 8.0)]
     speedup: f64,
+    /// Give every crack the cross-section of the authors' printed plates (the profile the
+    /// deployed tactile models were trained on) instead of the scene's own.
+    #[arg(long)]
+    printed_cracks: bool,
 }
 
 /// `mission trials`.
@@ -64,6 +68,7 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
         out_dir: common.out.clone(),
         speedup: common.speedup,
         template: InspectConfig::new(Scene::builtin_default(), &common.out),
+        printed_cracks: common.printed_cracks,
     })
 }
 
@@ -89,7 +94,10 @@ pub fn run(cmd: MissionCommand) -> Result<()> {
         }
         MissionCommand::Exploration(a) => {
             let b = base(&a.common)?;
-            let scene = Scene::load_or_default(a.scene.as_deref())?;
+            let mut scene = Scene::load_or_default(a.scene.as_deref())?;
+            if a.common.printed_cracks {
+                scene = crackbot_mission::experiments::as_printed(&scene);
+            }
             let rows = exploration_times(&b, &scene, &a.gamma, |r| {
                 eprintln!("{:?} γ {:?}: {:.1} s", r.mode, r.gamma, r.exploration_s);
             })?;
