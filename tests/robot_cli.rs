@@ -30,31 +30,41 @@ fn free_port() -> u16 {
         .expect("a free UDP port")
 }
 
-#[test]
-fn the_robot_drives_the_controller_process_over_the_link_and_refuses_a_bad_key() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let scene = dir.path().join("scene.toml");
-    std::fs::write(&scene, SCENE).expect("scene");
-    let key = dir.path().join("link.key");
-    std::fs::write(&key, format!("{}\n", "5a".repeat(32))).expect("key");
+/// Writes a key file of `byte` repeated (hex), mode 0600.
+fn key_file(path: &std::path::Path, byte: &str) {
+    std::fs::write(path, format!("{}\n", byte.repeat(32))).expect("key");
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o600)).expect("chmod");
+        std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o600)).expect("chmod");
     }
+}
+
+/// A running `crackbot-sim-controller` over [`SCENE`].
+struct Controller {
+    child: std::process::Child,
+    /// Its standard output, kept open (it prints more, and a closed pipe would end it).
+    _stdout: BufReader<std::process::ChildStdout>,
+    pty: String,
+    port: u16,
+    /// The port the robot must bind.
+    host_port: u16,
+}
+
+/// Starts a controller process over [`SCENE`].
+fn start_controller(dir: &std::path::Path, key: &std::path::Path, speedup: &str) -> Controller {
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, SCENE).expect("scene");
     let (cport, hport) = (free_port(), free_port());
     let mut controller = Command::new(binary("crackbot-sim-controller"))
         .args(["--scene", scene.to_str().expect("utf-8")])
         .args(["--bind", &format!("127.0.0.1:{cport}")])
         .args(["--peer", &format!("127.0.0.1:{hport}")])
         .args(["--key", key.to_str().expect("utf-8")])
-        .args([
-            "--state-dir",
-            dir.path().join("ctrl").to_str().expect("utf-8"),
-        ])
-        .args(["--speedup", "8", "--seconds", "120"])
+        .args(["--state-dir", dir.join("ctrl").to_str().expect("utf-8")])
+        .args(["--speedup", speedup, "--seconds", "120"])
         .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
+        .stderr(Stdio::null())
         .spawn()
         .expect("starting crackbot-sim-controller");
     let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
@@ -65,6 +75,24 @@ fn the_robot_drives_the_controller_process_over_the_link_and_refuses_a_bad_key()
         .strip_prefix("PTY ")
         .expect("PTY /dev/pts/N")
         .to_string();
+    Controller {
+        child: controller,
+        _stdout: out,
+        pty,
+        port: cport,
+        host_port: hport,
+    }
+}
+
+#[test]
+fn the_robot_drives_the_controller_process_over_the_link_and_refuses_a_bad_key() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = dir.path().join("scene.toml");
+    let key = dir.path().join("link.key");
+    key_file(&key, "5a");
+    let c = start_controller(dir.path(), &key, "8");
+    let (mut controller, pty, cport, hport) = (c.child, c.pty, c.port, c.host_port);
+    let _stdout = c._stdout;
 
     let robot = |extra: &[&str], key: &std::path::Path| {
         Command::new(binary("crackbot-robot"))
@@ -88,12 +116,7 @@ fn the_robot_drives_the_controller_process_over_the_link_and_refuses_a_bad_key()
     };
     // A robot with another key is never heard: the mission fails clearly, nothing moves.
     let wrong = dir.path().join("wrong.key");
-    std::fs::write(&wrong, format!("{}\n", "a7".repeat(32))).expect("key");
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(&wrong, std::fs::Permissions::from_mode(0o600)).expect("chmod");
-    }
+    key_file(&wrong, "a7");
     let o = robot(
         &["--out", dir.path().join("wrong").to_str().expect("utf-8")],
         &wrong,
@@ -177,37 +200,11 @@ fn crackbot_run_takes_the_robots_flags() {
 fn a_controller_and_sensor_that_vanish_mid_mission_end_it_with_a_clear_error() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scene = dir.path().join("scene.toml");
-    std::fs::write(&scene, SCENE).expect("scene");
     let key = dir.path().join("link.key");
-    std::fs::write(&key, format!("{}\n", "3c".repeat(32))).expect("key");
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o600)).expect("chmod");
-    }
-    let (cport, hport) = (free_port(), free_port());
-    let mut controller = Command::new(binary("crackbot-sim-controller"))
-        .args(["--scene", scene.to_str().expect("utf-8")])
-        .args(["--bind", &format!("127.0.0.1:{cport}")])
-        .args(["--peer", &format!("127.0.0.1:{hport}")])
-        .args(["--key", key.to_str().expect("utf-8")])
-        .args([
-            "--state-dir",
-            dir.path().join("ctrl").to_str().expect("utf-8"),
-        ])
-        .args(["--speedup", "2", "--seconds", "120"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("starting crackbot-sim-controller");
-    let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
-    let mut line = String::new();
-    out.read_line(&mut line).expect("the PTY line");
-    let pty = line
-        .trim()
-        .strip_prefix("PTY ")
-        .expect("PTY /dev/pts/N")
-        .to_string();
+    key_file(&key, "3c");
+    let c = start_controller(dir.path(), &key, "2");
+    let (mut controller, pty, cport, hport) = (c.child, c.pty, c.port, c.host_port);
+    let _stdout = c._stdout;
     let out_dir = dir.path().join("mission");
     let robot = Command::new(binary("crackbot-robot"))
         .args(["--scene", scene.to_str().expect("utf-8")])

@@ -109,8 +109,14 @@ fn main() -> Result<()> {
     config.faults.restart_after = cli.restart_after_s.map(Duration::from_secs_f64);
     let socket = UdpSocket::bind(cli.bind).with_context(|| format!("binding {}", cli.bind))?;
     let controller = SimController::spawn(config, socket, cli.peer)?;
-    println!("PTY {}", controller.sensor_path());
-    println!("LINK {}", controller.addr());
+    {
+        // Whoever started us may close our output; the controller goes on regardless.
+        use std::io::Write;
+        let mut out = std::io::stdout();
+        let _ = writeln!(out, "PTY {}", controller.sensor_path());
+        let _ = writeln!(out, "LINK {}", controller.addr());
+        let _ = out.flush();
+    }
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();

@@ -1139,7 +1139,8 @@ type Crossing = ([f64; 2], Option<[[f64; 2]; 2]>);
 /// A pass's samples (D1, D2, D3, P counts) and positions (mm along the pass).
 type Recorded = (Vec<[f64; 4]>, Vec<f64>);
 
-/// Consecutive pieces of a pass, each covering `stroke_mm` of travel (tactile rows).
+/// Consecutive pieces of a pass, each covering `stroke_mm` of travel (tactile rows); a remainder
+/// shorter than half a stroke joins the last piece.
 fn split_by_travel(positions: &[f64], stroke_mm: f64) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let mut start = 0;
@@ -1150,7 +1151,14 @@ fn split_by_travel(positions: &[f64], stroke_mm: f64) -> Vec<(usize, usize)> {
         }
     }
     if positions.len() > start {
-        out.push((start, positions.len()));
+        let short = positions
+            .last()
+            .is_some_and(|&x| (x - positions[start]).abs() < stroke_mm / 2.0);
+        match out.last_mut() {
+            // A short remainder joins the piece before it.
+            Some(last) if short => last.1 = positions.len(),
+            _ => out.push((start, positions.len())),
+        }
     }
     out
 }
@@ -1397,4 +1405,24 @@ fn save_pass(
         w.flush()
     };
     put().map_err(|e| io_err(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_are_cut_into_stroke_long_pieces_without_a_short_tail() {
+        let x: Vec<f64> = (0..=350).map(|i| f64::from(i) * 0.1).collect(); // 0–35 mm
+                                                                           // 0–16, then 16–35: the 3 mm tail joins the second piece.
+        assert_eq!(split_by_travel(&x, 16.0), vec![(0, 160), (160, 351)]);
+        let x: Vec<f64> = (0..=300).map(|i| f64::from(i) * 0.1).collect(); // 0–30 mm
+        assert_eq!(split_by_travel(&x, 16.0), vec![(0, 160), (160, 301)]);
+        let x: Vec<f64> = (0..=450).map(|i| f64::from(i) * 0.1).collect(); // 0–45 mm
+        assert_eq!(
+            split_by_travel(&x, 16.0),
+            vec![(0, 160), (160, 320), (320, 451)]
+        );
+        assert!(split_by_travel(&[], 16.0).is_empty());
+    }
 }
