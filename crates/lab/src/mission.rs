@@ -33,6 +33,12 @@ pub struct Common {
     /// deployed tactile models were trained on) instead of the scene's own.
     #[arg(long)]
     printed_cracks: bool,
+    /// Strokes across each candidate (forth and back count as two).
+    #[arg(long, default_value_t = 4)]
+    passes: u32,
+    /// Slide speed, mm/s (default: 4.6, the speed of the authors' recordings).
+    #[arg(long)]
+    slide_speed: Option<f64>,
 }
 
 /// `mission trials`.
@@ -64,10 +70,15 @@ pub struct ExplorationArgs {
 fn base(common: &Common) -> Result<ExperimentConfig> {
     std::fs::create_dir_all(&common.out)
         .with_context(|| format!("creating {}", common.out.display()))?;
+    let mut template = InspectConfig::new(Scene::builtin_default(), &common.out);
+    template.planner.passes = common.passes;
+    if let Some(v) = common.slide_speed {
+        template.planner.slide_speed_mm_s = v;
+    }
     Ok(ExperimentConfig {
         out_dir: common.out.clone(),
         speedup: common.speedup,
-        template: InspectConfig::new(Scene::builtin_default(), &common.out),
+        template,
         printed_cracks: common.printed_cracks,
     })
 }

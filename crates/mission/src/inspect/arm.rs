@@ -1,0 +1,128 @@
+//! The arm, through the link: commands, the state stream on the host's clock, positions at any instant.
+
+use super::*;
+
+/// One arm state (its controller time maps to the host's clock through the fit).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ArmSample {
+    pub(super) state: State,
+}
+
+pub(super) struct Arm {
+    pub(super) ep: LinkEndpoint,
+    pub(super) sync: ClockSync,
+    pub(super) t0: Instant,
+    pub(super) states: VecDeque<ArmSample>,
+    pub(super) done: Vec<u32>,
+    pub(super) errors: Vec<crackbot_link::ErrorReport>,
+    pub(super) last_heartbeat: Instant,
+    pub(super) last_state_at: Option<Instant>,
+    pub(super) epoch: Option<u32>,
+    pub(super) restarted: bool,
+}
+
+impl Arm {
+    pub(super) fn host_us(&self, at: Instant) -> f64 {
+        at.saturating_duration_since(self.t0).as_secs_f64() * 1e6
+    }
+
+    /// Takes what has arrived (waiting up to `wait`), sends a heartbeat every 200 ms.
+    pub(super) fn pump(&mut self, wait: Duration) -> Result<(), MissionError> {
+        if self.last_heartbeat.elapsed() > Duration::from_millis(200) {
+            self.ep
+                .send_unreliable(&Message::Heartbeat)
+                .map_err(link_err)?;
+            self.last_heartbeat = Instant::now();
+        }
+        let mut wait = wait;
+        while let Some(r) = self.ep.recv(wait).map_err(link_err)? {
+            wait = Duration::ZERO;
+            if let Some(e) = self.epoch {
+                if e != r.peer_epoch {
+                    self.restarted = true;
+                }
+            }
+            self.epoch = Some(r.peer_epoch);
+            match r.message {
+                Message::State(s) => {
+                    let host = self.host_us(r.at);
+                    self.sync.add(s.controller_time_us as f64, host);
+                    self.last_state_at = Some(r.at);
+                    self.states.push_back(ArmSample { state: s });
+                    while self.states.len() > 100_000 {
+                        self.states.pop_front();
+                    }
+                }
+                Message::Done { slide_id } => self.done.push(slide_id),
+                Message::Error(e) => self.errors.push(e),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn command(&mut self, m: &Message) -> Result<u32, MissionError> {
+        self.ep.send_reliable(m).map_err(link_err)
+    }
+
+    pub(super) fn stop(&mut self) {
+        // Best effort: the link retries; a dead controller's watchdog stops it anyway.
+        let _ = self.ep.send_reliable(&Message::Stop);
+    }
+}
+
+/// The arm's states on the host's clock, oldest first (mapped with the current clock fit).
+pub(super) fn mapped_states(arm: &mut Arm) -> Vec<(f64, State)> {
+    let states: Vec<State> = arm.states.iter().map(|s| s.state).collect();
+    states
+        .into_iter()
+        .filter_map(|s| {
+            arm.sync
+                .to_host(s.controller_time_us as f64)
+                .map(|h| (h, s))
+        })
+        .collect()
+}
+
+/// The arm's pose and mode at host time `host_us`, interpolated between the two states around it.
+pub(super) fn position_at(
+    mapped: &[(f64, State)],
+    host_us: f64,
+) -> Option<([f64; 3], crackbot_link::Mode)> {
+    let idx = mapped.partition_point(|(h, _)| *h <= host_us);
+    let (first, last) = (mapped.first()?, mapped.last()?);
+    if idx == 0 {
+        return Some((pose(&first.1), first.1.mode));
+    }
+    if idx >= mapped.len() {
+        return Some((pose(&last.1), last.1.mode));
+    }
+    let (h0, s0) = mapped[idx - 1];
+    let (h1, s1) = mapped[idx];
+    let f = if h1 > h0 {
+        (host_us - h0) / (h1 - h0)
+    } else {
+        0.0
+    };
+    let (p0, p1) = (pose(&s0), pose(&s1));
+    Some((
+        [
+            p0[0] + f * (p1[0] - p0[0]),
+            p0[1] + f * (p1[1] - p0[1]),
+            p0[2] + f * (p1[2] - p0[2]),
+        ],
+        if f < 0.5 { s0.mode } else { s1.mode },
+    ))
+}
+
+pub(super) fn pose(s: &State) -> [f64; 3] {
+    [
+        f64::from(s.pose.x_mm),
+        f64::from(s.pose.y_mm),
+        f64::from(s.pose.z_mm),
+    ]
+}
+
+pub(super) fn link_err(e: crackbot_link::LinkError) -> MissionError {
+    MissionError::Link(e.to_string())
+}

@@ -1,0 +1,297 @@
+//! One slide pass: command it, record it, cut it into classification units, classify it.
+
+use super::*;
+
+/// Where a pass crossed a crack, mm on the plate, and the crack's extent along the pass.
+pub(super) type Crossing = ([f64; 2], Option<[[f64; 2]; 2]>);
+
+/// A pass's samples (D1, D2, D3, P counts) and positions (mm along the pass).
+pub(super) type Recorded = (Vec<[f64; 4]>, Vec<f64>);
+
+/// Consecutive pieces of a pass, each covering `stroke_mm` of travel (tactile rows); a remainder
+/// shorter than half a stroke joins the last piece.
+pub(super) fn split_by_travel(positions: &[f64], stroke_mm: f64) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for (i, &x) in positions.iter().enumerate() {
+        if (x - positions[start]).abs() >= stroke_mm {
+            out.push((start, i));
+            start = i;
+        }
+    }
+    if positions.len() > start {
+        let short = positions
+            .last()
+            .is_some_and(|&x| (x - positions[start]).abs() < stroke_mm / 2.0);
+        match out.last_mut() {
+            // A short remainder joins the piece before it.
+            Some(last) if short => last.1 = positions.len(),
+            _ => out.push((start, positions.len())),
+        }
+    }
+    out
+}
+
+/// Both models over one pass: the recognition verdict and the width verdict.
+pub(super) fn classify(
+    online: &mut OnlineClassifier<'_>,
+    online_width: &mut OnlineClassifier<'_>,
+    samples: &[[f64; 4]],
+    positions: &[f64],
+    dirs: &[u8],
+    fresh: bool,
+) -> Result<(Option<SlideVerdict>, Option<SlideVerdict>), MissionError> {
+    if fresh {
+        online.reset();
+        online_width.reset();
+    }
+    online.begin_slide();
+    online_width.begin_slide();
+    for ((s, x), d) in samples.iter().zip(positions).zip(dirs) {
+        online.push(*s, *d, *x)?;
+        online_width.push(*s, *d, *x)?;
+    }
+    Ok((online.end_slide()?, online_width.end_slide()?))
+}
+
+/// Commands one pass and records it: the samples of the stroke (finger down, sliding) with
+/// the position along the pass (mm from `a`) interpolated from the arm's states. Retries once
+/// when the sensor stalled or the controller restarted.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn slide_and_record(
+    config: &InspectConfig,
+    arm: &mut Arm,
+    sensor: &mut Sensor,
+    id: u32,
+    a: [f64; 2],
+    b: [f64; 2],
+    speed: f64,
+    stop: &AtomicBool,
+) -> Result<(Recorded, u32), MissionError> {
+    let mut attempts = 0;
+    loop {
+        attempts += 1;
+        match try_slide(config, arm, sensor, id, a, b, speed, stop) {
+            Ok(r) => return Ok((r, attempts)),
+            Err(e @ (MissionError::SensorStalled { .. } | MissionError::ControllerRestarted))
+                if attempts < 2 =>
+            {
+                tracing::warn!("slide {id}: {e}; sliding again");
+                arm.restarted = false;
+                // Wait for the sensor to stream again (5 s at most).
+                let resume = Instant::now() + Duration::from_secs(5);
+                loop {
+                    arm.pump(Duration::from_millis(5))?;
+                    let before = sensor.last_at;
+                    if sensor.drain()? > 0 && before.elapsed() < Duration::from_millis(50) {
+                        break;
+                    }
+                    if Instant::now() > resume {
+                        arm.stop();
+                        return Err(MissionError::NoSamples {
+                            port: sensor.path.clone(),
+                        });
+                    }
+                }
+                continue;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(super) fn try_slide(
+    config: &InspectConfig,
+    arm: &mut Arm,
+    sensor: &mut Sensor,
+    id: u32,
+    a: [f64; 2],
+    b: [f64; 2],
+    speed: f64,
+    stop: &AtomicBool,
+) -> Result<Recorded, MissionError> {
+    let first_sample = sensor.samples.len();
+    arm.errors.clear();
+    // A retried slide keeps its id: forget the first attempt's end.
+    arm.done.retain(|&d| d != id);
+    let seq = arm.command(&Message::Slide(crackbot_link::Slide {
+        id,
+        start: Point2 {
+            x_mm: a[0] as f32,
+            y_mm: a[1] as f32,
+        },
+        end: Point2 {
+            x_mm: b[0] as f32,
+            y_mm: b[1] as f32,
+        },
+        speed_mm_s: speed as f32,
+        contact: Contact::DepthMm(1.0),
+    }))?;
+    let here = arm
+        .states
+        .back()
+        .map(|s| pose(&s.state))
+        .unwrap_or([0.0; 3]);
+    let travel =
+        (a[0] - here[0]).hypot(a[1] - here[1]) / config.scene.manipulator.travel_speed_mm_s;
+    let stroke = (b[0] - a[0]).hypot(b[1] - a[1]) / speed;
+    let budget = Duration::from_secs_f64((travel + stroke) / config.speedup * 1.5 + 3.0);
+    let deadline = Instant::now() + budget;
+    let stall_limit = Duration::from_millis(500);
+    loop {
+        if stop.load(Ordering::Relaxed) {
+            return Err(MissionError::Interrupted);
+        }
+        arm.pump(Duration::from_millis(2))?;
+        sensor.drain()?;
+        if let Some(e) = arm.errors.iter().find(|e| e.seq == seq) {
+            return Err(MissionError::Refused {
+                what: format!("slide {id}"),
+                reason: e.text.to_string(),
+            });
+        }
+        if arm.done.contains(&id) {
+            break;
+        }
+        if arm.restarted {
+            return Err(MissionError::ControllerRestarted);
+        }
+        if sensor.last_at.elapsed() > stall_limit {
+            // Wait for the stream to come back before sliding again, or give up.
+            let resume = Instant::now() + Duration::from_secs(5);
+            while sensor.drain()? == 0 {
+                arm.pump(Duration::from_millis(5))?;
+                if Instant::now() > resume {
+                    arm.stop();
+                    return Err(MissionError::NoSamples {
+                        port: sensor.path.clone(),
+                    });
+                }
+            }
+            arm.stop();
+            return Err(MissionError::SensorStalled {
+                port: sensor.path.clone(),
+                detail: format!("no sample for {} ms", stall_limit.as_millis()),
+            });
+        }
+        if arm
+            .last_state_at
+            .is_some_and(|t| t.elapsed() > Duration::from_secs(2))
+        {
+            arm.stop();
+            return Err(MissionError::ControllerUnreachable {
+                addr: arm.ep.peer_addr().to_string(),
+            });
+        }
+        if Instant::now() > deadline {
+            arm.stop();
+            return Err(MissionError::Timeout {
+                what: format!("slide {id}"),
+                seconds: budget.as_secs_f64(),
+            });
+        }
+    }
+    // A few more states, so the end of the stroke is bracketed.
+    let settle = Instant::now() + Duration::from_millis(40);
+    while Instant::now() < settle {
+        arm.pump(Duration::from_millis(2))?;
+        sensor.drain()?;
+    }
+    // The stroke's samples: the arm down (z ≈ 0) in slide `id`.
+    let mut samples = Vec::new();
+    let mut positions = Vec::new();
+    let u = {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let l = d[0].hypot(d[1]).max(1e-9);
+        [d[0] / l, d[1] / l]
+    };
+    let mapped = mapped_states(arm);
+    let taken: Vec<TimedSample> = sensor.samples[first_sample..].to_vec();
+    // A silence of the sensor inside the stroke (a stall the stroke outlasted): slide again.
+    let nominal_us = 2500.0 / config.speedup;
+    let mut last_down: Option<f64> = None;
+    for s in taken.iter() {
+        let host = sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
+        if let Some((p, mode)) = position_at(&mapped, host) {
+            if p[2] < 0.5 && mode == (crackbot_link::Mode::Sliding { id }) {
+                // (The floor keeps scheduling hiccups of a loaded host from reading as stalls.)
+                if let Some(l) = last_down.filter(|l| host - l > (40.0 * nominal_us).max(200_000.0))
+                {
+                    return Err(MissionError::SensorStalled {
+                        port: sensor.path.clone(),
+                        detail: format!("no sample for {:.0} ms of the stroke", (host - l) / 1e3),
+                    });
+                }
+                last_down = Some(host);
+            }
+        }
+    }
+    for s in taken {
+        let host = sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
+        let Some((p, mode)) = position_at(&mapped, host) else {
+            continue;
+        };
+        let down = p[2] < 0.5 && mode == crackbot_link::Mode::Sliding { id };
+        if down {
+            samples.push(s.raw.map(f64::from));
+            positions.push((p[0] - a[0]) * u[0] + (p[1] - a[1]) * u[1]);
+        }
+    }
+    // Frames lost to a stall that lasted past the stroke's end: too few samples for the stroke.
+    let expected = (b[0] - a[0]).hypot(b[1] - a[1]) / speed * f64::from(crackbot_protocol_rate());
+    if (samples.len() as f64) < 0.8 * expected {
+        return Err(MissionError::SensorStalled {
+            port: sensor.path.clone(),
+            detail: format!(
+                "{} samples of the stroke, {expected:.0} expected",
+                samples.len()
+            ),
+        });
+    }
+    Ok((samples, positions))
+}
+
+pub(super) fn crackbot_protocol_rate() -> u32 {
+    crackbot_sim::run::SAMPLE_RATE_HZ as u32
+}
+
+/// Writes one pass in the recordings' CSV layout (the acquisition's columns plus the position).
+pub(super) fn save_pass(
+    path: &Path,
+    samples: &[[f64; 4]],
+    positions: &[f64],
+    dir: u8,
+) -> Result<(), MissionError> {
+    use std::io::Write;
+    let f = std::fs::File::create(path).map_err(|e| io_err(path, e))?;
+    let mut w = std::io::BufWriter::new(f);
+    let mut put = || -> std::io::Result<()> {
+        writeln!(w, "d1,d2,d3,p,direction,x_mm")?;
+        for (s, x) in samples.iter().zip(positions) {
+            writeln!(w, "{},{},{},{},{dir},{x:.4}", s[0], s[1], s[2], s[3])?;
+        }
+        w.flush()
+    };
+    put().map_err(|e| io_err(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    pub(super) fn rows_are_cut_into_stroke_long_pieces_without_a_short_tail() {
+        let x: Vec<f64> = (0..=350).map(|i| f64::from(i) * 0.1).collect(); // 0–35 mm
+                                                                           // 0–16, then 16–35: the 3 mm tail joins the second piece.
+        assert_eq!(split_by_travel(&x, 16.0), vec![(0, 160), (160, 351)]);
+        let x: Vec<f64> = (0..=300).map(|i| f64::from(i) * 0.1).collect(); // 0–30 mm
+        assert_eq!(split_by_travel(&x, 16.0), vec![(0, 160), (160, 301)]);
+        let x: Vec<f64> = (0..=450).map(|i| f64::from(i) * 0.1).collect(); // 0–45 mm
+        assert_eq!(
+            split_by_travel(&x, 16.0),
+            vec![(0, 160), (160, 320), (320, 451)]
+        );
+        assert!(split_by_travel(&[], 16.0).is_empty());
+    }
+}

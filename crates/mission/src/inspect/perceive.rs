@@ -1,0 +1,96 @@
+//! Perception: a frame (rendered, or a camera file), the detector, candidates in surface mm.
+
+use super::*;
+
+/// Candidates in the scene's frame: rendered (simulated), detected, mapped to mm.
+pub(super) fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, MissionError> {
+    use crackbot_sim::render::{render, CrackAssets, RenderOptions};
+    use crackbot_vision::model::{build_detector, DetectorChoice};
+    use crackbot_vision::preprocess::PostprocessParams;
+
+    std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
+    let (image, h) = match &config.hardware {
+        Some(hw) => {
+            let camera = hw.camera.as_ref().ok_or_else(|| {
+                MissionError::Invalid(format!(
+                    "a {:?} mission needs a camera frame (--camera FILE)",
+                    config.mode
+                ))
+            })?;
+            if camera.starts_with("/dev") {
+                return Err(MissionError::Invalid(format!(
+                    "{}: live camera devices are not supported yet; give a frame as an image file",
+                    camera.display()
+                )));
+            }
+            let cal = hw.homography.as_ref().ok_or_else(|| {
+                MissionError::Invalid(
+                    "a camera frame needs its pixel → surface calibration (--homography FILE, from `crackbot homography fit`)".into(),
+                )
+            })?;
+            let image = image::open(camera)
+                .map_err(|e| MissionError::Invalid(format!("{}: {e}", camera.display())))?
+                .to_rgb8();
+            let h = crackbot_vision::homography::HomographyCalibration::load(cal)?.homography()?;
+            (image, h)
+        }
+        None => {
+            let assets = CrackAssets::load_default()?;
+            let frame = render(
+                &config.scene,
+                &assets,
+                &RenderOptions::default(),
+                config.seed,
+            )?;
+            let h = crackbot_imaging::Homography::from_nalgebra(
+                frame.plate_to_image.try_inverse().ok_or_else(|| {
+                    MissionError::Invalid("the camera's homography is singular".into())
+                })?,
+            )
+            .map_err(|e| MissionError::Invalid(e.to_string()))?;
+            (frame.image, h)
+        }
+    };
+    let frame_path = config.out_dir.join("frame.png");
+    image
+        .save(&frame_path)
+        .map_err(|e| MissionError::Invalid(format!("{}: {e}", frame_path.display())))?;
+    let choice = DetectorChoice {
+        model: config.detector_model.clone(),
+        ..DetectorChoice::default()
+    };
+    let mut detector = build_detector(&choice, PostprocessParams::default())?;
+    let detections = detector.detect(&image)?;
+    let mut out = Vec::new();
+    for (i, d) in detections.iter().enumerate() {
+        if d.score < config.min_score {
+            continue;
+        }
+        let to_mm = |p: [f32; 2]| h.pixel_to_surface([f64::from(p[0]), f64::from(p[1])]).ok();
+        let id = i as u64 + 1;
+        let c = match &d.shape {
+            Some(shape) => match (to_mm(shape.axis[0]), to_mm(shape.axis[1])) {
+                (Some(a), Some(b)) => Candidate::from_axis(id, [a, b], None, f64::from(d.score)),
+                _ => continue,
+            },
+            None => {
+                let b = &d.bbox;
+                match (to_mm([b.x0, b.y0]), to_mm([b.x1, b.y1])) {
+                    (Some(a), Some(c)) => Candidate::from_box(
+                        id,
+                        [a[0].min(c[0]), a[1].min(c[1])],
+                        [a[0].max(c[0]), a[1].max(c[1])],
+                        f64::from(d.score),
+                    ),
+                    _ => continue,
+                }
+            }
+        };
+        out.push((c, f64::from(d.score)));
+    }
+    Ok(out)
+}
+
+pub(super) fn io_err(path: &Path, e: std::io::Error) -> MissionError {
+    MissionError::Invalid(format!("{}: {e}", path.display()))
+}
