@@ -163,12 +163,29 @@ enum Activity {
     },
     Sliding {
         id: u32,
+        /// Start and direction of the simulation's first stroke (its arm coordinate's origin).
         start: [f64; 2],
         dir: [f64; 2],
         sim: Box<SlideSim>,
         done: u64,
         ticks: u64,
+        /// This stroke's start and end (for continuing back along the same line).
+        from: [f64; 2],
+        to: [f64; 2],
+        speed: f64,
     },
+}
+
+/// The finger's simulation after a slide, kept so that a slide straight back along the same
+/// line continues it (the authors slid forth and back without lifting the finger).
+#[derive(Debug)]
+struct Resting {
+    start: [f64; 2],
+    dir: [f64; 2],
+    sim: Box<SlideSim>,
+    from: [f64; 2],
+    to: [f64; 2],
+    speed: f64,
 }
 
 /// The simulated arm, finger and sensor over one scene.
@@ -189,6 +206,7 @@ pub struct World {
     rng: ChaCha8Rng,
     seed: u64,
     slides: u32,
+    resting: Option<Resting>,
 }
 
 impl World {
@@ -230,6 +248,7 @@ impl World {
             rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5eed),
             seed,
             slides: 0,
+            resting: None,
         })
     }
 
@@ -331,6 +350,28 @@ impl World {
         let len = d[0].hypot(d[1]);
         let dir = [d[0] / len, d[1] / len];
         self.slides += 1;
+        // Straight back (or forth again) along the line just slid: the finger never left the
+        // surface, so its simulation goes on (the wait between the commands is a pause at the
+        // stroke's end).
+        if let Some(r) = self.resting.take() {
+            let close = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-3;
+            if close(p.start, r.to) && close(p.end, r.from) && (p.speed - r.speed).abs() < 1e-9 {
+                let ticks = (r.sim.slide_time() / 2.0 * SAMPLE_RATE_HZ).ceil() as u64;
+                self.activity = Activity::Sliding {
+                    id: p.id,
+                    start: r.start,
+                    dir: r.dir,
+                    sim: r.sim,
+                    done: 0,
+                    ticks,
+                    from: p.start,
+                    to: p.end,
+                    speed: p.speed,
+                };
+                return Ok(());
+            }
+        }
+        let samples = crackbot_sim::plates::calibrated_samples();
         let sim = SlideSim::new(
             &self.surface,
             self.reflectivity,
@@ -343,6 +384,12 @@ impl World {
             &self.sensor,
             Integrator::default(),
             self.seed.wrapping_add(u64::from(self.slides)),
+        )?
+        // The printed plates' roughness, as in the simulated recordings.
+        .with_roughness(
+            samples.roughness_rms_mm,
+            samples.roughness_correlation_mm,
+            self.seed ^ u64::from(self.slides).wrapping_mul(0x9e37_79b9),
         )?;
         // One stroke, there only (`slide_time` is forth and back).
         let ticks = (sim.slide_time() / 2.0 * SAMPLE_RATE_HZ).ceil() as u64;
@@ -353,6 +400,9 @@ impl World {
             sim: Box::new(sim),
             done: 0,
             ticks,
+            from: p.start,
+            to: p.end,
+            speed: p.speed,
         };
         Ok(())
     }
@@ -421,6 +471,7 @@ impl World {
                 sim,
                 done,
                 ticks,
+                ..
             } => {
                 let s = match sim.next_sample() {
                     Ok(s) => s,
@@ -438,7 +489,25 @@ impl World {
                 counts = s.counts;
                 if *done >= *ticks {
                     finished = Some(*id);
-                    self.activity = Activity::Idle;
+                    if let Activity::Sliding {
+                        start,
+                        dir,
+                        sim,
+                        from,
+                        to,
+                        speed,
+                        ..
+                    } = std::mem::replace(&mut self.activity, Activity::Idle)
+                    {
+                        self.resting = Some(Resting {
+                            start,
+                            dir,
+                            sim,
+                            from,
+                            to,
+                            speed,
+                        });
+                    }
                     self.pose[2] = TRAVEL_HEIGHT_MM;
                 }
             }
@@ -523,6 +592,44 @@ mod tests {
         );
         assert!((w.pose()[1] - 36.0).abs() < 0.5, "{:?}", w.pose());
         assert_eq!(w.mode(), Mode::Idle);
+    }
+
+    #[test]
+    fn a_slide_straight_back_continues_the_finger_without_lifting_it() {
+        let mut w = world();
+        let (a, b) = ([30.0, 20.0], [30.0, 36.0]);
+        let run = |w: &mut World, id: u32| -> (u64, [f64; 4], [f64; 4]) {
+            let (mut n, mut first, mut last) = (0u64, None, [0.0; 4]);
+            for _ in 0..40_000 {
+                let t = w.step().expect("step");
+                if t.mode == Mode::Sliding(id) && t.pose[2] == 0.0 {
+                    n += 1;
+                    first.get_or_insert(t.counts);
+                    last = t.counts;
+                }
+                if t.finished == Some(id) {
+                    return (n, first.expect("slid"), last);
+                }
+            }
+            panic!("slide {id} never ended");
+        };
+        w.slide(1, a, b, 4.6).expect("forth");
+        let (n1, _, end1) = run(&mut w, 1);
+        w.slide(2, b, a, 4.6).expect("back");
+        // No travel: one hand-over tick, then it slides on from where the finger is.
+        let t = w.step().expect("step");
+        assert_eq!(t.mode, Mode::Sliding(2));
+        assert!((t.pose[1] - 36.0).abs() < 1e-9, "{:?}", t.pose);
+        let (n2, start2, _) = run(&mut w, 2);
+        assert!((n1 as i64 - n2 as i64 - 1).abs() <= 1, "{n1} vs {n2}");
+        // The signal goes on from where the stroke ended (no restart from rest).
+        for c in 0..4 {
+            assert!(
+                (start2[c] - end1[c]).abs() < 60.0,
+                "channel {c}: {end1:?} → {start2:?}"
+            );
+        }
+        assert!((w.pose()[1] - 20.0).abs() < 0.5, "{:?}", w.pose());
     }
 
     #[test]
