@@ -131,7 +131,7 @@ impl SimSensor {
                 "speed-up {speedup} is not in [0.1, 50]"
             )));
         }
-        let rate = f64::from(crackbot_protocol_rate()) * speedup;
+        let rate = crackbot_sim::run::SAMPLE_RATE_HZ * speedup;
         let config = EmulatorConfig {
             rate_hz: rate,
             // The line keeps up with the faster ticks (a PTY has no baud rate of its own).
@@ -201,8 +201,4 @@ impl Drop for SimSensor {
             let _ = t.join();
         }
     }
-}
-
-fn crackbot_protocol_rate() -> u32 {
-    crackbot_sim::run::SAMPLE_RATE_HZ as u32
 }

@@ -300,18 +300,16 @@ fn serve(
                 .restart_after
                 .is_some_and(|a| started.elapsed() >= a)
                 || restart_pending.is_some_and(|id| mid_slide(shared, id)));
-        {
-            if restart_now {
-                restarted = true;
-                report.restarts += 1;
-                lock(shared).world.stop();
-                let addr = ep.local_addr();
-                drop(ep);
-                std::thread::sleep(Duration::from_millis(200));
-                let socket = UdpSocket::bind(addr)?;
-                ep = open(socket, host, link_config.clone(), config)?;
-                tracing::warn!("controller restarted (injected)");
-            }
+        if restart_now {
+            restarted = true;
+            report.restarts += 1;
+            lock(shared).world.stop();
+            let addr = ep.local_addr();
+            drop(ep);
+            std::thread::sleep(Duration::from_millis(200));
+            let socket = UdpSocket::bind(addr)?;
+            ep = open(socket, host, link_config.clone(), config)?;
+            tracing::warn!("controller restarted (injected)");
         }
         if let Some(id) = stall_pending {
             // Mid-slide: once a third of the stroke is done.
@@ -391,8 +389,7 @@ fn serve(
                 tracing::warn!("host silent for {:?}: arm stopped", config.watchdog);
             }
             let finished = std::mem::take(&mut s.finished);
-            let mode = if let Some(f) = &s.fault {
-                let _ = f;
+            let mode = if s.fault.is_some() {
                 crackbot_link::Mode::Fault { code: 1 }
             } else {
                 to_link_mode(s.world.mode())

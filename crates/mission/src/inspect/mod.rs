@@ -397,12 +397,9 @@ pub fn run_inspection(
             let ctrl_addr: SocketAddr = ctrl_socket
                 .local_addr()
                 .map_err(|e| MissionError::Link(e.to_string()))?;
-            let mut key_bytes = [0u8; 32];
-            for (i, b) in key_bytes.iter_mut().enumerate() {
-                // A fresh key per mission, never written anywhere (both ends live in this
-                // process).
-                *b = (rand_byte(config.seed, i as u64) | 1) as u8;
-            }
+            // A fresh random key per mission, never written anywhere (both ends live in this
+            // process).
+            let key_bytes: [u8; 32] = rand::random();
             let key = Key::from_bytes(&key_bytes).map_err(|e| MissionError::Link(e.to_string()))?;
             let mut server = ServerConfig::new(
                 config.scene.clone(),
@@ -486,17 +483,6 @@ pub fn run_inspection(
         .map_err(|e| MissionError::Invalid(format!("report: {e}")))?;
     std::fs::write(&path, json).map_err(|e| io_err(&path, e))?;
     Ok(report)
-}
-
-fn rand_byte(seed: u64, i: u64) -> u64 {
-    // SplitMix64 of the seed, the index and the time: a key that differs per run.
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos() as u64);
-    let mut z = seed ^ nanos ^ i.wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    (z ^ (z >> 31)) & 0xff
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -78,24 +78,29 @@ pub(super) fn slide_and_record(
             {
                 tracing::warn!("slide {id}: {e}; sliding again");
                 arm.restarted = false;
-                // Wait for the sensor to stream again (5 s at most).
-                let resume = Instant::now() + Duration::from_secs(5);
-                loop {
-                    arm.pump(Duration::from_millis(5))?;
-                    let before = sensor.last_at;
-                    if sensor.drain()? > 0 && before.elapsed() < Duration::from_millis(50) {
-                        break;
-                    }
-                    if Instant::now() > resume {
-                        arm.stop();
-                        return Err(MissionError::NoSamples {
-                            port: sensor.path.clone(),
-                        });
-                    }
-                }
+                wait_for_stream(arm, sensor)?;
                 continue;
             }
             Err(e) => return Err(e),
+        }
+    }
+}
+
+/// Waits (5 s at most, keeping the link alive) until the sensor streams again: samples that
+/// arrive now, not ones left in the queue. Stops the arm and fails when it stays silent.
+fn wait_for_stream(arm: &mut Arm, sensor: &mut Sensor) -> Result<(), MissionError> {
+    let resume = Instant::now() + Duration::from_secs(5);
+    loop {
+        arm.pump(Duration::from_millis(5))?;
+        let before = sensor.last_at;
+        if sensor.drain()? > 0 && before.elapsed() < Duration::from_millis(50) {
+            return Ok(());
+        }
+        if Instant::now() > resume {
+            arm.stop();
+            return Err(MissionError::NoSamples {
+                port: sensor.path.clone(),
+            });
         }
     }
 }
@@ -159,16 +164,7 @@ pub(super) fn try_slide(
         }
         if sensor.last_at.elapsed() > stall_limit {
             // Wait for the stream to come back before sliding again, or give up.
-            let resume = Instant::now() + Duration::from_secs(5);
-            while sensor.drain()? == 0 {
-                arm.pump(Duration::from_millis(5))?;
-                if Instant::now() > resume {
-                    arm.stop();
-                    return Err(MissionError::NoSamples {
-                        port: sensor.path.clone(),
-                    });
-                }
-            }
+            wait_for_stream(arm, sensor)?;
             arm.stop();
             return Err(MissionError::SensorStalled {
                 port: sensor.path.clone(),
@@ -239,7 +235,7 @@ pub(super) fn try_slide(
         }
     }
     // Frames lost to a stall that lasted past the stroke's end: too few samples for the stroke.
-    let expected = (b[0] - a[0]).hypot(b[1] - a[1]) / speed * f64::from(crackbot_protocol_rate());
+    let expected = (b[0] - a[0]).hypot(b[1] - a[1]) / speed * crackbot_sim::run::SAMPLE_RATE_HZ;
     if (samples.len() as f64) < 0.8 * expected {
         return Err(MissionError::SensorStalled {
             port: sensor.path.clone(),
@@ -250,10 +246,6 @@ pub(super) fn try_slide(
         });
     }
     Ok((samples, positions))
-}
-
-pub(super) fn crackbot_protocol_rate() -> u32 {
-    crackbot_sim::run::SAMPLE_RATE_HZ as u32
 }
 
 /// Writes one pass in the recordings' CSV layout (the acquisition's columns plus the position).
