@@ -115,15 +115,26 @@ pub(crate) struct WalkNode {
 }
 
 /// Every tree re-encoded for branch-free descent of one row: a leaf reads the padding feature
-/// (always NaN), which sends it "right" by a distance of 0, i.e. to itself. A tree can therefore
-/// take as many steps as its shallowest leaf's depth without checking for leaves, and several trees
-/// step together with no branch at all.
+/// (always NaN), which sends it "right" by a distance of 0, i.e. to itself. A group of trees
+/// therefore takes as many steps as its deepest leaf's depth with no branch at all: a tree that
+/// reached its leaf stays there.
 #[derive(Debug, Clone)]
 pub(crate) struct WalkTrees {
     nodes: Vec<WalkNode>,
-    /// Depth of each tree's shallowest leaf: steps that need no leaf check.
-    sure_steps: Vec<u32>,
+    /// Depth of each [`TREE_LANES`] group's deepest leaf: the steps that take every tree of the
+    /// group to its leaf.
+    group_steps: Vec<u32>,
+    /// The leaf values again, each leaf's padded with zeros to `stride` values (a power of two
+    /// ≤ [`WALK_MAX_STRIDE`]), so that a whole leaf is added to a register accumulator at once.
+    /// Empty when the width is larger (the sums then go through the caller's slice).
+    leaves: Vec<f32>,
+    /// Values per leaf in `leaves`.
+    stride: usize,
 }
+
+/// Widest leaf (classes, or 1 for a regressor) whose sums are kept in registers by the single-row
+/// walk.
+const WALK_MAX_STRIDE: usize = 16;
 
 /// A row copied into a fixed buffer for the single-row layout: features past the row's length and
 /// the leaf padding slot `n_features` are NaN, so every 8-bit feature index is in bounds.
@@ -284,23 +295,46 @@ impl FlatTrees {
                 }
             });
         }
-        let mut sure_steps = Vec::with_capacity(self.n_trees());
+        // Depth of each tree's deepest leaf, then of each group of lanes.
+        let mut depth = Vec::with_capacity(self.n_trees());
         let mut stack: Vec<(u32, u32)> = Vec::new();
         for t in 0..self.n_trees() {
-            let mut shallowest = u32::MAX;
+            let mut deepest = 0;
             stack.push((self.offsets[t], 0));
             while let Some((i, d)) = stack.pop() {
                 let n = self.nodes[i as usize];
                 if n.is_leaf() {
-                    shallowest = shallowest.min(d);
-                } else if d + 1 < shallowest {
+                    deepest = deepest.max(d);
+                } else {
                     stack.push((i + 1, d + 1));
                     stack.push((n.right, d + 1));
                 }
             }
-            sure_steps.push(shallowest);
+            depth.push(deepest);
         }
-        Some(WalkTrees { nodes, sure_steps })
+        let group_steps = depth
+            .chunks(TREE_LANES)
+            .map(|g| g.iter().copied().max().unwrap_or(0))
+            .collect();
+        let stride = self.width.next_power_of_two();
+        let leaves = if stride <= WALK_MAX_STRIDE {
+            let mut leaves = vec![0f32; self.leaf_values.len() / self.width * stride];
+            for (dst, src) in leaves
+                .chunks_exact_mut(stride)
+                .zip(self.leaf_values.chunks_exact(self.width))
+            {
+                dst[..self.width].copy_from_slice(src);
+            }
+            leaves
+        } else {
+            Vec::new()
+        };
+        Some(WalkTrees {
+            nodes,
+            group_steps,
+            leaves,
+            stride,
+        })
     }
 
     /// Adds every tree's leaf values for row `x` to `acc[..width]` (tree order, f32).
@@ -312,15 +346,51 @@ impl FlatTrees {
     }
 
     /// [`accumulate_row`](Self::accumulate_row) on the single-row layout: groups of
-    /// [`TREE_LANES`] trees take their sure steps together without a branch, then finish with a
-    /// leaf check per step.
+    /// [`TREE_LANES`] trees step together without a branch, as many steps as the group's deepest
+    /// leaf; the sums stay in registers when the leaves are narrow enough.
     fn accumulate_row_walk(&self, walk: &WalkTrees, x: &[f32], acc: &mut [f32]) {
-        let w = self.width;
+        match walk.stride {
+            1 => self.walk_in_registers::<1>(walk, x, acc),
+            2 => self.walk_in_registers::<2>(walk, x, acc),
+            4 => self.walk_in_registers::<4>(walk, x, acc),
+            8 => self.walk_in_registers::<8>(walk, x, acc),
+            16 => self.walk_in_registers::<16>(walk, x, acc),
+            _ => {
+                let w = self.width;
+                self.walk_leaves(walk, x, |leaf| {
+                    add(acc, &self.leaf_values[leaf * w..leaf * w + w]);
+                });
+            }
+        }
+    }
+
+    /// The walk with the sums in an `S`-wide local accumulator (`S` = the padded leaf stride):
+    /// each value is still the sum of its trees' leaves in tree order, added one by one in `f32`,
+    /// so the result is the one [`add`] into `acc` gives, bit for bit.
+    #[inline(always)]
+    fn walk_in_registers<const S: usize>(&self, walk: &WalkTrees, x: &[f32], acc: &mut [f32]) {
+        let mut sums = [0f32; S];
+        let n = acc.len().min(self.width).min(S);
+        sums[..n].copy_from_slice(&acc[..n]);
+        self.walk_leaves(walk, x, |leaf| {
+            if let Some(v) = walk.leaves.get(leaf * S..leaf * S + S) {
+                for (a, b) in sums.iter_mut().zip(v) {
+                    *a += *b;
+                }
+            }
+        });
+        acc[..n].copy_from_slice(&sums[..n]);
+    }
+
+    /// Walks every tree for row `x` on the single-row layout and hands each tree's leaf id to
+    /// `leaf`, in tree order.
+    #[inline(always)]
+    fn walk_leaves(&self, walk: &WalkTrees, x: &[f32], mut leaf: impl FnMut(usize)) {
         let xs = padded_row(x, self.n_features);
         let nodes = &walk.nodes;
         let n_trees = self.n_trees();
         let mut t = 0;
-        while t < n_trees {
+        for &steps in &walk.group_steps {
             let lanes = TREE_LANES.min(n_trees - t);
             let mut pos = [0u32; TREE_LANES];
             pos[..lanes].copy_from_slice(&self.offsets[t..t + lanes]);
@@ -328,32 +398,13 @@ impl FlatTrees {
             for p in pos[lanes..].iter_mut() {
                 *p = self.offsets[t];
             }
-            let sure = walk.sure_steps[t..t + lanes]
-                .iter()
-                .copied()
-                .min()
-                .unwrap_or(0);
-            for _ in 0..sure {
+            for _ in 0..steps {
                 for p in pos.iter_mut() {
                     *p = walk_step(*p, nodes[*p as usize], &xs);
                 }
             }
-            loop {
-                let mut active = false;
-                for p in pos.iter_mut() {
-                    let n = nodes[*p as usize];
-                    if n.packed >> 8 != 0 {
-                        *p = walk_step(*p, n, &xs);
-                        active = true;
-                    }
-                }
-                if !active {
-                    break;
-                }
-            }
             for &p in &pos[..lanes] {
-                let leaf = nodes[p as usize].threshold.to_bits() as usize;
-                add(acc, &self.leaf_values[leaf * w..leaf * w + w]);
+                leaf(nodes[p as usize].threshold.to_bits() as usize);
             }
             t += lanes;
         }
@@ -621,13 +672,18 @@ mod tests {
         use crate::{synthetic, ForestParams, RandomForest};
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        for (n_trees, depth, spread) in [
-            (1, None, 40.0),
-            (7, Some(3), 60.0),
-            (13, None, 25.0),
-            (40, Some(9), 50.0),
+        // Class counts: leaves padded to 2, 4, 8 and 16 values, and wider than the registers.
+        for (n_trees, depth, spread, k) in [
+            (1, None, 40.0, 4),
+            (7, Some(3), 60.0, 4),
+            (13, None, 25.0, 4),
+            (40, Some(9), 50.0, 4),
+            (33, Some(10), 50.0, 2),
+            (32, Some(10), 50.0, 6),
+            (17, None, 30.0, 11),
+            (20, Some(8), 30.0, 19),
         ] {
-            let data = synthetic::blobs(600, 3, 4, spread, n_trees as u64).unwrap();
+            let data = synthetic::blobs(600, 3, k, spread, n_trees as u64).unwrap();
             let forest = RandomForest::fit(
                 &data,
                 &ForestParams::classifier()
@@ -649,7 +705,7 @@ mod tests {
                     4 => row.push(1.0),
                     _ => {}
                 }
-                let (mut a, mut b) = (vec![0f32; 4], vec![0f32; 4]);
+                let (mut a, mut b) = (vec![0.25f32; k], vec![0.25f32; k]);
                 trees.accumulate_row(&row, &mut a);
                 trees.accumulate_row_nodes(&row, &mut b);
                 assert_eq!(
@@ -658,6 +714,35 @@ mod tests {
                     "row {row:?}, {n_trees} trees"
                 );
             }
+        }
+    }
+
+    /// The same for a regressor (one value per leaf, summed in a register).
+    #[test]
+    fn walk_layout_matches_the_nodes_for_a_regressor() {
+        use crate::{ForestParams, RandomForestRegressor, RegressionDataset};
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let x: Vec<f32> = (0..1500).map(|_| rng.random_range(-5.0..5.0)).collect();
+        let y: Vec<f32> = x.chunks_exact(3).map(|r| r[0] * r[1] + r[2]).collect();
+        let data = RegressionDataset::new(x, 3, y).unwrap();
+        let forest = RandomForestRegressor::fit(
+            &data,
+            &ForestParams::regressor()
+                .n_trees(21)
+                .max_depth(Some(7))
+                .seed(5)
+                .quiet(true),
+        )
+        .unwrap();
+        let trees = &forest.trees;
+        assert!(trees.walk.is_some());
+        for _ in 0..300 {
+            let row: Vec<f32> = (0..3).map(|_| rng.random_range(-6.0..6.0)).collect();
+            let (mut a, mut b) = ([1.5f32], [1.5f32]);
+            trees.accumulate_row(&row, &mut a);
+            trees.accumulate_row_nodes(&row, &mut b);
+            assert_eq!(a[0].to_bits(), b[0].to_bits(), "row {row:?}");
         }
     }
 

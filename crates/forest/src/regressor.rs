@@ -13,7 +13,7 @@ use crate::train::{train, Mse};
 /// leaf's bootstrap sample). The prediction is the mean over trees.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RandomForestRegressor {
-    trees: FlatTrees,
+    pub(crate) trees: FlatTrees,
     importances: Option<Vec<f64>>,
 }
 
