@@ -2,18 +2,18 @@
 //! the offline [`context_row`](crate::context::context_row).
 //!
 //! Every statistic is an exact integer (samples are whole counts, [`quantise`]), so running sums
-//! give the very numbers a direct loop gives, in any order. Per sample and channel, the state
-//! is updated in O(1) amortised (sums, a ring of the last samples, monotonic queues for each
-//! span's minimum and maximum) plus O(log V) for the "below/above" counts (a Fenwick tree of
-//! counts over the sample values of each span, V = [`SAMPLE_MAX`] − [`SAMPLE_MIN`] + 1); a row
-//! costs O(channels · scales · log V). Nothing is allocated after [`StreamingContext::new`].
+//! give the very numbers a direct loop gives, in any order. Per sample, channel and span, the
+//! state is updated in O(1) (sums, a ring of the last samples, a histogram of the span's values
+//! over [`SAMPLE_MIN`]`..=`[`SAMPLE_MAX`], the "below/above" counts carried against the current
+//! limits), plus, when an extreme leaves the span or a limit moves, a vectorised scan of the
+//! histogram between the old and the new value (mostly a few counts). A row then only turns the
+//! ready statistics into values, O(channels · scales). Nothing is allocated after
+//! [`StreamingContext::new`].
 //!
 //! Spans reach back into earlier slides ([`ContextConfig::across_slides`]) until
 //! [`StreamingContext::reset`]; [`StreamingContext::begin_slide`] starts a new slide (its
 //! baseline and "slide so far"). The per-span shape values ([`ContextConfig::shape`]) have no
 //! streaming form and are refused.
-
-use std::collections::VecDeque;
 
 use crackbot_dsp::check_sample;
 
@@ -23,136 +23,69 @@ use crate::context::{
 };
 use crate::TactileError;
 
-/// Counts of sample values over a span: a Fenwick (binary indexed) tree over
-/// `SAMPLE_MIN..=SAMPLE_MAX`.
-#[derive(Debug, Clone)]
-struct ValueCounts {
-    tree: Vec<u32>,
-}
-
 const N_VALUES: usize = (SAMPLE_MAX - SAMPLE_MIN + 1) as usize;
 
-impl ValueCounts {
-    fn new() -> Self {
-        ValueCounts {
-            tree: vec![0; N_VALUES + 1],
-        }
-    }
-
-    fn clear(&mut self) {
-        self.tree.fill(0);
-    }
-
-    #[inline]
-    fn add(&mut self, q: i32, delta: i32) {
-        self.add_from((q - SAMPLE_MIN) as usize + 1, delta);
-    }
-
-    /// One value `old` becomes `new`: both update paths walked together, stopping where they
-    /// merge (above it, the −1 and +1 cancel), so nearby values cost a few steps.
-    #[inline]
-    fn replace(&mut self, old: i32, new: i32) {
-        let n = self.tree.len();
-        let mut i = (old - SAMPLE_MIN) as usize + 1;
-        let mut j = (new - SAMPLE_MIN) as usize + 1;
-        while i != j {
-            if i < j {
-                if let Some(slot) = self.tree.get_mut(i) {
-                    *slot = slot.wrapping_sub(1);
-                }
-                i += i & i.wrapping_neg();
-                if i >= n {
-                    // The old path has left the tree; finish the new one alone.
-                    self.add_from(j, 1);
-                    return;
-                }
-            } else {
-                if let Some(slot) = self.tree.get_mut(j) {
-                    *slot = slot.wrapping_add(1);
-                }
-                j += j & j.wrapping_neg();
-                if j >= n {
-                    self.add_from(i, -1);
-                    return;
-                }
-            }
-        }
-    }
-
-    #[inline]
-    fn add_from(&mut self, mut i: usize, delta: i32) {
-        while let Some(slot) = self.tree.get_mut(i) {
-            *slot = slot.wrapping_add_signed(delta);
-            i += i & i.wrapping_neg();
-        }
-    }
-
-    /// Number of values `≤ k`.
-    #[inline]
-    fn at_most(&self, k: i64) -> i64 {
-        if k < i64::from(SAMPLE_MIN) {
-            return 0;
-        }
-        let mut i = (k.min(i64::from(SAMPLE_MAX)) - i64::from(SAMPLE_MIN)) as usize + 1;
-        let mut total = 0i64;
-        while i > 0 {
-            total += i64::from(self.tree.get(i).copied().unwrap_or(0));
-            i &= i - 1;
-        }
-        total
-    }
+/// Index of value `q` (in `SAMPLE_MIN..=SAMPLE_MAX`) in a [`Span`]'s histogram.
+#[inline(always)]
+fn slot(q: i32) -> usize {
+    (q - SAMPLE_MIN) as usize
 }
 
-/// Sliding-window minimum (or maximum with `max`) over the last `len` samples.
-#[derive(Debug, Clone)]
-struct MonoQueue<const MAX: bool> {
-    items: VecDeque<(u64, i32)>,
+/// Sum of the counts of a histogram slice (vectorised).
+#[inline]
+fn count_sum(h: &[u16]) -> i64 {
+    i64::from(h.iter().map(|&c| u32::from(c)).sum::<u32>())
 }
 
-impl<const MAX: bool> MonoQueue<MAX> {
-    fn new(len: usize) -> Self {
-        MonoQueue {
-            items: VecDeque::with_capacity(len + 1),
+/// Index of the first non-zero count of `h`, scanning 32 counts at a time.
+#[inline]
+fn first_nonzero(h: &[u16]) -> Option<usize> {
+    let mut base = 0;
+    for chunk in h.chunks(32) {
+        if chunk.iter().fold(0, |a, &c| a | c) != 0 {
+            return chunk.iter().position(|&c| c != 0).map(|i| base + i);
         }
+        base += chunk.len();
     }
-
-    #[inline]
-    fn push(&mut self, t: u64, q: i32, oldest: u64) {
-        while let Some(&(_, v)) = self.items.back() {
-            let dominated = if MAX { v <= q } else { v >= q };
-            if !dominated {
-                break;
-            }
-            self.items.pop_back();
-        }
-        self.items.push_back((t, q));
-        while let Some(&(i, _)) = self.items.front() {
-            if i >= oldest {
-                break;
-            }
-            self.items.pop_front();
-        }
-    }
-
-    fn value(&self) -> i32 {
-        self.items.front().map_or(0, |&(_, v)| v)
-    }
-
-    fn clear(&mut self) {
-        self.items.clear();
-    }
+    None
 }
 
-/// One span (of one channel): running sums, extremes and value counts of its samples.
+/// Index of the last non-zero count of `h`, scanning 32 counts at a time.
+#[inline]
+fn last_nonzero(h: &[u16]) -> Option<usize> {
+    let mut end = h.len();
+    for chunk in h.rchunks(32) {
+        end -= chunk.len();
+        if chunk.iter().fold(0, |a, &c| a | c) != 0 {
+            return chunk.iter().rposition(|&c| c != 0).map(|i| end + i);
+        }
+    }
+    None
+}
+
+/// One span (of one channel): running sums, a histogram of its values, its extremes, and the
+/// "below"/"above" counts against the limits of the baseline last seen.
+///
+/// The limits move only when the extremes or the baseline do, and then mostly by a few counts:
+/// the counts are carried from sample to sample (±1 for the values entering and leaving) and,
+/// when a limit moves, corrected by the histogram's counts between the old and new limit.
 #[derive(Debug, Clone)]
 struct Span {
     len: usize,
     n: usize,
     sum: i64,
     sum_sq: i64,
-    min: MonoQueue<false>,
-    max: MonoQueue<true>,
-    counts: ValueCounts,
+    /// Count of each value `SAMPLE_MIN..=SAMPLE_MAX` in the span (a span is ≤ `MAX_SCALE` <
+    /// 2^16 samples).
+    hist: Vec<u16>,
+    min: i32,
+    max: i32,
+    /// `below` counts the values `≤ below_at`, `above` those `≥ above_at`; the limits are clamped
+    /// to `SAMPLE_MIN − 1..=SAMPLE_MAX` and `SAMPLE_MIN..=SAMPLE_MAX + 1` (same counts).
+    below_at: i32,
+    below: i64,
+    above_at: i32,
+    above: i64,
 }
 
 impl Span {
@@ -162,9 +95,13 @@ impl Span {
             n: 0,
             sum: 0,
             sum_sq: 0,
-            min: MonoQueue::new(len),
-            max: MonoQueue::new(len),
-            counts: ValueCounts::new(),
+            hist: vec![0; N_VALUES],
+            min: 0,
+            max: 0,
+            below_at: SAMPLE_MIN - 1,
+            below: 0,
+            above_at: SAMPLE_MAX + 1,
+            above: 0,
         }
     }
 
@@ -172,9 +109,105 @@ impl Span {
         self.n = 0;
         self.sum = 0;
         self.sum_sq = 0;
-        self.min.clear();
-        self.max.clear();
-        self.counts.clear();
+        self.hist.fill(0);
+        self.min = 0;
+        self.max = 0;
+        self.below_at = SAMPLE_MIN - 1;
+        self.below = 0;
+        self.above_at = SAMPLE_MAX + 1;
+        self.above = 0;
+    }
+
+    /// `q` enters the span and `old` (if any) leaves it.
+    #[inline(always)]
+    fn update(&mut self, q: i32, old: Option<i32>) {
+        let q64 = i64::from(q);
+        if let Some(c) = self.hist.get_mut(slot(q)) {
+            *c = c.wrapping_add(1);
+        }
+        self.below += i64::from(q <= self.below_at);
+        self.above += i64::from(q >= self.above_at);
+        match old {
+            Some(old) => {
+                let o64 = i64::from(old);
+                self.sum += q64 - o64;
+                self.sum_sq += q64 * q64 - o64 * o64;
+                self.below -= i64::from(old <= self.below_at);
+                self.above -= i64::from(old >= self.above_at);
+                let left = match self.hist.get_mut(slot(old)) {
+                    Some(c) => {
+                        *c = c.wrapping_sub(1);
+                        *c == 0
+                    }
+                    None => false,
+                };
+                self.min = self.min.min(q);
+                self.max = self.max.max(q);
+                // The extreme left the span: the next one lies between it and `q` (exclusive of
+                // `old`, inclusive of `q`, whose count is ≥ 1).
+                if left && old == self.min {
+                    let from = slot(old) + 1;
+                    self.min = self
+                        .hist
+                        .get(from..=slot(q))
+                        .and_then(first_nonzero)
+                        .map_or(q, |i| SAMPLE_MIN + (from + i) as i32);
+                }
+                if left && old == self.max {
+                    let from = slot(q);
+                    self.max = self
+                        .hist
+                        .get(from..slot(old))
+                        .and_then(last_nonzero)
+                        .map_or(q, |i| SAMPLE_MIN + (from + i) as i32);
+                }
+            }
+            None => {
+                if self.n == 0 {
+                    self.min = q;
+                    self.max = q;
+                } else {
+                    self.min = self.min.min(q);
+                    self.max = self.max.max(q);
+                }
+                self.n += 1;
+                self.sum += q64;
+                self.sum_sq += q64 * q64;
+            }
+        }
+    }
+
+    /// Moves the "below"/"above" limits to those of the baseline `b2` and the current extremes.
+    #[inline(always)]
+    fn set_limits(&mut self, b2: i64) {
+        let lo2 = b2.min(2 * i64::from(self.min));
+        let hi2 = b2.max(2 * i64::from(self.max));
+        let below_at =
+            below_limit(b2, lo2).clamp(i64::from(SAMPLE_MIN) - 1, i64::from(SAMPLE_MAX)) as i32;
+        let above_at =
+            above_limit(b2, hi2).clamp(i64::from(SAMPLE_MIN), i64::from(SAMPLE_MAX) + 1) as i32;
+        if below_at != self.below_at {
+            // Values in (low, high] of the two limits change sides.
+            let (lo, hi) = (self.below_at.min(below_at), self.below_at.max(below_at));
+            let moved = count_sum(self.hist.get(slot(lo + 1)..slot(hi + 1)).unwrap_or(&[]));
+            self.below += if below_at > self.below_at {
+                moved
+            } else {
+                -moved
+            };
+            self.below_at = below_at;
+        }
+        if above_at != self.above_at {
+            // Values in [low, high) of the two limits change sides.
+            let (lo, hi) = (self.above_at.min(above_at), self.above_at.max(above_at));
+            let moved = count_sum(self.hist.get(slot(lo)..slot(hi)).unwrap_or(&[]));
+            self.above += if above_at < self.above_at {
+                moved
+            } else {
+                -moved
+            };
+            self.above_at = above_at;
+        }
     }
 }
 
@@ -339,9 +372,14 @@ impl StreamingContext {
             self.slide_start
         };
         let mask = self.ring_len as u64 - 1;
-        let slot = (t & mask) as usize;
+        let ring_slot = (t & mask) as usize;
         for (state, &c) in self.states.iter_mut().zip(&self.channels) {
             let q = quantise(sample[c]);
+            if state.head.len() < self.config.baseline_len {
+                let at = state.head.partition_point(|&v| v <= q);
+                state.head.insert(at, q);
+            }
+            let b2 = twice_median(&state.head);
             // The sample leaving each span is still in the ring (every span ≤ ring length).
             let ring = &state.ring;
             let leaving = |len: usize| {
@@ -356,32 +394,10 @@ impl StreamingContext {
             w.n += 1;
             w.sum += i64::from(q);
             for span in state.spans.iter_mut() {
-                let len = span.len as u64;
-                match leaving(span.len) {
-                    // The same value leaves and enters: the counts are unchanged.
-                    Some(old) if old == q => {}
-                    Some(old) => {
-                        span.sum += i64::from(q) - i64::from(old);
-                        span.sum_sq +=
-                            i64::from(q) * i64::from(q) - i64::from(old) * i64::from(old);
-                        span.counts.replace(old, q);
-                    }
-                    None => {
-                        span.n += 1;
-                        span.sum += i64::from(q);
-                        span.sum_sq += i64::from(q) * i64::from(q);
-                        span.counts.add(q, 1);
-                    }
-                }
-                let oldest = (t + 1).saturating_sub(len).max(floor);
-                span.min.push(t, q, oldest);
-                span.max.push(t, q, oldest);
+                span.update(q, leaving(span.len));
+                span.set_limits(b2);
             }
-            state.ring[slot] = q;
-            if state.head.len() < self.config.baseline_len {
-                let at = state.head.partition_point(|&v| v <= q);
-                state.head.insert(at, q);
-            }
+            state.ring[ring_slot] = q;
             if self.slide_len == 0 {
                 state.slide_min = q;
                 state.slide_max = q;
@@ -426,20 +442,18 @@ impl StreamingContext {
             for span in &state.spans {
                 let n = span.n as u64;
                 let first_t = last_t + 1 - n;
-                let mut stats = SpanStats {
+                // The counts are against the limits of this baseline (set by the last push).
+                let stats = SpanStats {
                     n: span.n as i64,
                     sum: span.sum,
                     sum_sq: span.sum_sq,
-                    min: span.min.value(),
-                    max: span.max.value(),
+                    min: span.min,
+                    max: span.max,
                     first: state.ring[(first_t & mask) as usize],
                     last: state.ring[(last_t & mask) as usize],
-                    below: 0,
-                    above: 0,
+                    below: span.below,
+                    above: span.above,
                 };
-                let (lo2, hi2) = stats.extremes2(b2);
-                stats.below = span.counts.at_most(below_limit(b2, lo2));
-                stats.above = stats.n - span.counts.at_most(above_limit(b2, hi2) - 1);
                 put(&stats.values(b2));
             }
             if self.config.prefix {
