@@ -194,6 +194,16 @@ fn crackbot_run_takes_the_robots_flags() {
         .expect("crackbot-robot");
     assert!(!o.status.success());
     assert!(text(&o.stderr).contains("sideways"), "{}", text(&o.stderr));
+    let o = Command::new(binary("crackbot-robot"))
+        .args(["--proposal-min-score", "1.5"])
+        .output()
+        .expect("crackbot-robot");
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("--proposal-min-score") && err.contains("[0, 1]"),
+        "{err}"
+    );
 }
 
 #[test]

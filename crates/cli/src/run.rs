@@ -40,6 +40,13 @@ pub struct RunArgs {
     /// γ of the tactile-only scan (the paper's eq. 2), in (0, 1).
     #[arg(long, default_value_t = 0.5)]
     pub gamma: f64,
+    /// Vision mode: detections scoring below this are not reported.
+    #[arg(long, default_value_t = 0.3, value_parser = score_in_unit_range)]
+    pub min_score: f32,
+    /// Fused mode: detections scoring below this are not touched (the finger confirms or
+    /// rejects the rest).
+    #[arg(long, default_value_t = 0.3, value_parser = score_in_unit_range)]
+    pub proposal_min_score: f32,
     /// Deployed recognition model.
     #[arg(long)]
     pub recognition_model: Option<PathBuf>,
@@ -98,6 +105,8 @@ pub fn run(args: RunArgs) -> Result<()> {
     config.speedup = args.speedup;
     config.seed = args.seed;
     config.gamma = args.gamma;
+    config.min_score = args.min_score;
+    config.proposal_min_score = args.proposal_min_score;
     config.planner.passes = args.passes;
     if let Some(p) = args.recognition_model {
         config.recognition_model = p;
@@ -221,4 +230,16 @@ fn print_summary(r: &InspectReport) {
         );
     }
     println!("report and recordings: {}", r.out_dir);
+}
+
+/// A detector score threshold: a number in [0, 1].
+fn score_in_unit_range(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .parse()
+        .map_err(|e| format!("{s:?} is not a number: {e}"))?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("a detector score lies in [0, 1], got {v}"))
+    }
 }

@@ -39,6 +39,10 @@ pub struct Common {
     /// Slide speed, mm/s (default: 4.6, the speed of the authors' recordings).
     #[arg(long)]
     slide_speed: Option<f64>,
+    /// Fused missions: detections scoring below this are not touched (vision-only missions
+    /// report from 0.3).
+    #[arg(long, default_value_t = 0.3)]
+    proposal_min_score: f32,
 }
 
 /// `mission trials`.
@@ -72,6 +76,13 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
         .with_context(|| format!("creating {}", common.out.display()))?;
     let mut template = InspectConfig::new(Scene::builtin_default(), &common.out);
     template.planner.passes = common.passes;
+    if !(0.0..=1.0).contains(&common.proposal_min_score) {
+        anyhow::bail!(
+            "--proposal-min-score must lie in [0, 1], got {}",
+            common.proposal_min_score
+        );
+    }
+    template.proposal_min_score = common.proposal_min_score;
     if let Some(v) = common.slide_speed {
         template.planner.slide_speed_mm_s = v;
     }

@@ -151,9 +151,21 @@ pub struct CalibrateArgs {
     /// and height) simulated, each with its optics refitted.
     #[arg(long, default_value_t = 60)]
     mechanics_evaluations: usize,
+    /// Weight of the tip-speed term (squared RMS distance of the position column's speed
+    /// quantiles, (mm/s)²) against the channels' weighted squared quantile distances (counts²).
+    #[arg(long, default_value_t = crackbot_sim::calibrate::SPEED_WEIGHT)]
+    speed_weight: f64,
+    /// Start the search from these parameters instead of the calibrated ones: a TOML file as
+    /// `sim dataset --params` takes.
+    #[arg(long)]
+    start: Option<PathBuf>,
     /// Write the report as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Write the fitted parameters (finger, optics, plates, mounts) as a TOML file that
+    /// `sim dataset --params` and `sim calibrate --start` take.
+    #[arg(long)]
+    params_out: Option<PathBuf>,
 }
 
 /// `crackbot sim work-precision`.
@@ -264,11 +276,21 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
         a.mechanics_evaluations,
         "fitting mechanics, geometry and optics",
     );
+    let mut start = crackbot_sim::calibrate::starting_config();
+    if let Some(path) = &a.start {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        start
+            .apply_params_toml(&text)
+            .with_context(|| format!("{}", path.display()))?;
+    }
     let summary = calibrate_to_real(
+        &start,
         &real,
         width_real.as_deref(),
         a.evaluations,
         a.mechanics_evaluations,
+        a.speed_weight,
         |k, _| pb.set_position(k as u64),
     )?;
     pb.finish_and_clear();
@@ -281,6 +303,10 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
     println!(
         "after                        {:7.2} {:7.2} {:7.2} {:7.2}",
         report.rms_after[0], report.rms_after[1], report.rms_after[2], report.rms_after[3]
+    );
+    println!(
+        "tip speed quantile distance (RMS mm/s): before {:.2}, after {:.2}",
+        report.speed_rms_before, report.speed_rms_after
     );
     println!("fitted finger (TOML, [sensor.finger]):");
     println!("{}", toml::to_string(&report.finger)?);
@@ -296,6 +322,22 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
                 x.offset_counts[0], x.offset_counts[1], x.offset_counts[2], x.reflectivity
             );
         }
+    }
+    if let Some(path) = &a.params_out {
+        let mut finger_optics = toml::Table::new();
+        finger_optics.insert("finger".into(), toml::Value::try_from(&report.finger)?);
+        finger_optics.insert("optics".into(), toml::Value::try_from(&report.optics)?);
+        let mut mounts = toml::Table::new();
+        for (name, m) in &summary.mounts {
+            mounts.insert(name.clone(), toml::Value::try_from(m)?);
+        }
+        let mut doc = toml::Table::new();
+        doc.insert("sensor".into(), toml::Value::Table(finger_optics));
+        doc.insert("samples".into(), toml::Value::try_from(&report.samples)?);
+        doc.insert("mounts".into(), toml::Value::Table(mounts));
+        std::fs::write(path, toml::to_string(&doc)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote the fitted parameters to {}", path.display());
     }
     if let Some(path) = a.json {
         let doc = serde_json::to_value(&summary)?;

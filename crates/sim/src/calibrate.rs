@@ -186,6 +186,93 @@ pub fn real_quantiles(recordings: &[Recording]) -> Vec<ChannelQuantiles> {
     out
 }
 
+/// Samples between the two ends of a tip-speed measurement (0.1 s at 400 Hz).
+pub const SPEED_SPAN: usize = 40;
+
+/// The position column's speeds, mm/s: over [`SPEED_SPAN`] samples, every 10 samples, of a
+/// sequence of positions (mm); non-finite ones left out.
+fn speeds(x_mm: &[f64]) -> impl Iterator<Item = f64> + '_ {
+    let dt = SPEED_SPAN as f64 / SAMPLE_RATE_HZ;
+    (0..x_mm.len().saturating_sub(SPEED_SPAN))
+        .step_by(10)
+        .map(move |i| (x_mm[i + SPEED_SPAN] - x_mm[i]).abs() / dt)
+        .filter(|v| v.is_finite())
+}
+
+/// Quantiles ([`QUANTILES`]) of the speeds ([`speeds`]) of a sequence of positions (mm);
+/// `None` when it is too short.
+pub fn speed_quantiles(x_mm: &[f64]) -> Option<Vec<f64>> {
+    let v: Vec<f64> = speeds(x_mm).collect();
+    (!v.is_empty()).then(|| quantiles(v))
+}
+
+/// The real tip-speed targets: per class label, the quantiles of the position column's speed
+/// ([`speed_quantiles`]) over all its recordings. The authors' encoder shows the finger crossing
+/// every plate, the widest cracks included, at the arm's pace, stopping only where the stroke
+/// turns (about 1.5 % of the time): a simulated finger that jams in a crack misses this target.
+pub fn real_speed_quantiles(recordings: &[Recording]) -> Vec<(f64, Vec<f64>)> {
+    let mut labels: Vec<f64> = recordings.iter().filter_map(|r| r.label()).collect();
+    labels.sort_by(f64::total_cmp);
+    labels.dedup();
+    labels
+        .into_iter()
+        .filter_map(|label| {
+            let mut all = Vec::new();
+            for r in recordings.iter().filter(|r| r.label() == Some(label)) {
+                let x: Vec<f64> = r.rows.iter().map(|row| row.x_mm).collect();
+                all.extend(speeds(&x));
+            }
+            (!all.is_empty()).then(|| (label, quantiles(all)))
+        })
+        .collect()
+}
+
+/// Mean squared quantile distance (mm/s)² between the simulated tips' speeds and the real
+/// targets, over the labels both have.
+pub fn speed_loss(traces: &[Trace], targets: &[(f64, Vec<f64>)]) -> f64 {
+    let mut total = 0.0;
+    let mut n = 0usize;
+    for (label, target) in targets {
+        let Some(trace) = traces.iter().find(|t| t.label == *label) else {
+            continue;
+        };
+        let x: Vec<f64> = trace.samples.iter().map(|s| s.tip_x_mm).collect();
+        let Some(q) = speed_quantiles(&x) else {
+            continue;
+        };
+        for (a, b) in q.iter().zip(target) {
+            total += (a - b).powi(2);
+            n += 1;
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        total / n as f64
+    }
+}
+
+/// Default weight of the tip-speed term ([`speed_loss`], (mm/s)²) in the mechanics search,
+/// against [`weighted_loss`] (counts²): 1 mm/s RMS off costs as much as 31.6 counts RMS of P.
+pub const SPEED_WEIGHT: f64 = 1000.0;
+
+/// Quantile of the real proximity readings taken as the fibre's dark level.
+pub const DARK_QUANTILE: f64 = 0.005;
+
+/// The proximity fibre's dark level (nothing in view), counts: the [`DARK_QUANTILE`] quantile
+/// of every real proximity reading, reached where the fibre looks into a crack. `None` without
+/// finite readings.
+pub fn real_dark_counts(recordings: &[&Recording]) -> Option<f64> {
+    let v = sorted_finite(
+        recordings
+            .iter()
+            .flat_map(|r| r.rows.iter().map(|row| row.channels()[3]))
+            .collect(),
+    )?;
+    let i = ((v.len() - 1) as f64 * DARK_QUANTILE).round() as usize;
+    Some(v[i])
+}
+
 /// One simulated recording's mechanics, kept for refitting the optics.
 #[derive(Debug, Clone)]
 pub struct Trace {
@@ -410,6 +497,10 @@ pub struct CalibrationReport {
     pub rms_before: [f64; 4],
     /// After the fit.
     pub rms_after: [f64; 4],
+    /// Tip-speed quantile distance ([`speed_loss`], RMS, mm/s) before the fit.
+    pub speed_rms_before: f64,
+    /// After the fit.
+    pub speed_rms_after: f64,
     /// White-noise levels measured on the real flat recordings, counts.
     pub noise_counts: [f64; 4],
     /// The fitted optics.
@@ -469,6 +560,17 @@ pub fn with_mechanics(config: &ExperimentConfig, m: &[f64]) -> ExperimentConfig 
 struct Set {
     traces: Vec<Trace>,
     targets: Vec<ChannelQuantiles>,
+    speed_targets: Vec<(f64, Vec<f64>)>,
+}
+
+/// Root mean square tip-speed distance over the sets, mm/s.
+fn sets_speed_rms(sets: &[Set]) -> f64 {
+    (sets
+        .iter()
+        .map(|s| speed_loss(&s.traces, &s.speed_targets))
+        .sum::<f64>()
+        / sets.len().max(1) as f64)
+        .sqrt()
 }
 
 fn sets_loss(o: &OpticsParams, static_mm: f64, sets: &[Set], channel: usize) -> f64 {
@@ -529,19 +631,19 @@ fn fit_proximity(
     starts: &[(f64, f64)],
     max_evals: usize,
 ) -> (OpticsParams, f64) {
+    // The dark level is measured, not fitted ([`real_dark_counts`]): the quantiles barely see
+    // the short dips into the dark, and a free dark level can settle far above the real one.
     let apply = |o: &mut OpticsParams, x: &[f64]| {
-        o.proximity_dark_counts = x[0];
-        o.proximity_peak_counts = x[1];
-        o.proximity_peak_mm = x[2].max(0.05);
-        o.proximity_height_mm = x[3];
-        o.proximity_offset_mm = x[4];
-        o.proximity_spot_mm = x[5].abs();
+        o.proximity_peak_counts = x[0];
+        o.proximity_peak_mm = x[1].max(0.05);
+        o.proximity_height_mm = x[2];
+        o.proximity_offset_mm = x[3];
+        o.proximity_spot_mm = x[4].abs();
     };
     let mut best = (start.clone(), f64::INFINITY);
     // Look-ahead behind, under and ahead of the tip; the fibre on either side of the curve's peak.
     for &(offset, height) in starts {
         let x0 = [
-            start.proximity_dark_counts,
             start.proximity_peak_counts,
             start.proximity_peak_mm,
             height,
@@ -555,7 +657,7 @@ fn fit_proximity(
                 sets_loss(&o, static_mm, sets, 3)
             },
             &x0,
-            &[20.0, 50.0, 0.3, 0.5, 0.5, 0.3],
+            &[50.0, 0.3, 0.5, 0.5, 0.3],
             max_evals,
         );
         if v < best.1 {
@@ -599,21 +701,32 @@ pub fn calibrate(
     width: Option<&[Recording]>,
     max_evals: usize,
     mechanics_evals: usize,
+    speed_weight: f64,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<CalibrationReport, SimError> {
+    if !(speed_weight.is_finite() && speed_weight >= 0.0) {
+        return Err(SimError::Invalid(format!(
+            "the tip-speed weight must be a non-negative number, got {speed_weight}"
+        )));
+    }
     if recognition.is_empty() {
         return Err(SimError::Invalid(
             "no real recordings to calibrate against".into(),
         ));
     }
-    let mut experiments = vec![(Experiment::Recognition, real_quantiles(recognition))];
+    let mut experiments = vec![(
+        Experiment::Recognition,
+        real_quantiles(recognition),
+        real_speed_quantiles(recognition),
+    )];
     if let Some(w) = width.filter(|w| !w.is_empty()) {
-        experiments.push((Experiment::Width, real_quantiles(w)));
+        experiments.push((
+            Experiment::Width,
+            real_quantiles(w),
+            real_speed_quantiles(w),
+        ));
     }
-    let static_mm = {
-        let s = &config.sensor.finger;
-        s.body_mass_g * 1e-3 * 9.81 / (s.normal_stiffness_n_mm * 1e3) * 1e3
-    };
+    let static_mm = static_of(config);
     let mut quiet = config.clone();
     quiet.integrator = Integrator::default();
     quiet.mounts.clear();
@@ -621,29 +734,31 @@ pub fn calibrate(
     let sets_of = |c: &ExperimentConfig| -> Result<Vec<Set>, SimError> {
         experiments
             .iter()
-            .map(|(e, targets)| {
+            .map(|(e, targets, speed_targets)| {
                 let mut c = c.clone();
                 c.experiment = *e;
                 Ok(Set {
                     traces: simulate_traces(&c)?,
                     targets: targets.clone(),
+                    speed_targets: speed_targets.clone(),
                 })
             })
             .collect()
     };
     let start_sets = sets_of(&quiet)?;
+    let mut start_optics = config.sensor.optics.clone();
+    let all_real: Vec<&Recording> = recognition.iter().chain(width.unwrap_or(&[])).collect();
+    if let Some(dark) = real_dark_counts(&all_real) {
+        start_optics.proximity_dark_counts = dark;
+    }
     let rms_before = sets_rms(&config.sensor.optics, static_mm, &start_sets);
+    let speed_rms_before = sets_speed_rms(&start_sets);
     let one_start = [(
         config.sensor.optics.proximity_offset_mm,
         config.sensor.optics.proximity_height_mm,
     )];
-    let (start_optics, _) = fit_optics(
-        &config.sensor.optics,
-        static_mm,
-        &start_sets,
-        &one_start,
-        max_evals,
-    );
+    let (start_optics, _) =
+        fit_optics(&start_optics, static_mm, &start_sets, &one_start, max_evals);
     let m0 = mechanics_of(&quiet);
     let total = mechanics_evals.max(1);
     let mut candidates: Vec<(Vec<f64>, f64)> = Vec::new();
@@ -656,7 +771,7 @@ pub fn calibrate(
                 Ok(sets) => {
                     let (_, rms) =
                         fit_optics(&start_optics, static_mm, &sets, &one_start, max_evals / 3);
-                    weighted_loss(&rms)
+                    weighted_loss(&rms) + speed_weight * sets_speed_rms(&sets).powi(2)
                 }
                 Err(SimError::Invalid(_)) => f64::INFINITY,
                 Err(e) => {
@@ -721,6 +836,8 @@ pub fn calibrate(
     Ok(CalibrationReport {
         rms_before,
         rms_after: sets_rms(&optics, static_mm, &sets),
+        speed_rms_before,
+        speed_rms_after: sets_speed_rms(&sets),
         noise_counts,
         optics,
         finger: fitted.sensor.finger.clone(),
@@ -738,10 +855,32 @@ pub fn fit_rms(
     recognition: &[Recording],
     width: Option<&[Recording]>,
 ) -> Result<[f64; 4], SimError> {
-    let static_mm = {
-        let s = &config.sensor.finger;
-        s.body_mass_g * 1e-3 * 9.81 / (s.normal_stiffness_n_mm * 1e3) * 1e3
-    };
+    let sets = fit_sets(config, recognition, width)?;
+    Ok(sets_rms(&config.sensor.optics, static_of(config), &sets))
+}
+
+/// The tip-speed distance (RMS of [`speed_loss`], mm/s) between `config`'s finger and the real
+/// recordings, over the same simulated recordings as [`fit_rms`]: the number [`calibrate`]
+/// reports as `speed_rms_after`.
+pub fn fit_speed_rms(
+    config: &ExperimentConfig,
+    recognition: &[Recording],
+    width: Option<&[Recording]>,
+) -> Result<f64, SimError> {
+    Ok(sets_speed_rms(&fit_sets(config, recognition, width)?))
+}
+
+/// Static compression of the normal spring under the body's weight, mm.
+fn static_of(config: &ExperimentConfig) -> f64 {
+    let s = &config.sensor.finger;
+    s.body_mass_g * 1e-3 * 9.81 / (s.normal_stiffness_n_mm * 1e3) * 1e3
+}
+
+fn fit_sets(
+    config: &ExperimentConfig,
+    recognition: &[Recording],
+    width: Option<&[Recording]>,
+) -> Result<Vec<Set>, SimError> {
     let mut quiet = config.clone();
     quiet.mounts.clear();
     quiet.slides = CALIBRATION_SLIDES;
@@ -757,9 +896,10 @@ pub fn fit_rms(
         sets.push(Set {
             traces: simulate_traces(&quiet)?,
             targets: real_quantiles(real),
+            speed_targets: real_speed_quantiles(real),
         });
     }
-    Ok(sets_rms(&config.sensor.optics, static_mm, &sets))
+    Ok(sets)
 }
 
 /// The roughness (height rms, mm) that gives the real flat plate's proximity spread: the
@@ -838,25 +978,29 @@ pub fn starting_config() -> ExperimentConfig {
     config
 }
 
-/// Calibrates the simulated sensor on real recordings: [`calibrate`] from [`starting_config`] on
+/// Calibrates the simulated sensor on real recordings: [`calibrate`] from `start` (usually
+/// [`starting_config`]) on
 /// the `recognition` and (when given) `width` recordings (at most `evaluations` per
 /// Nelder–Mead run of the optics and `mechanics_evaluations` mechanics candidates, `progress`
 /// as [`calibrate`] calls it), the roughness of the flat plate ([`fit_roughness`]), then the
 /// plate mounts of both experiments with the fitted sensor and geometry.
 pub fn calibrate_to_real(
+    start: &ExperimentConfig,
     recognition: &[Recording],
     width: Option<&[Recording]>,
     evaluations: usize,
     mechanics_evaluations: usize,
+    speed_weight: f64,
     progress: impl FnMut(usize, usize),
 ) -> Result<CalibrationSummary, SimError> {
-    let config = starting_config();
+    let config = start.clone();
     let mut report = calibrate(
         &config,
         recognition,
         width,
         evaluations,
         mechanics_evaluations,
+        speed_weight,
         progress,
     )?;
     report.samples.roughness_rms_mm = fit_roughness(&report.optics, recognition);

@@ -82,8 +82,11 @@ impl ExperimentConfig {
 
     /// Replaces the parameters that a TOML text names: any of the tables `[sensor.finger]`,
     /// `[sensor.optics]` (fields of [`FingerParams`](crate::FingerParams),
-    /// [`OpticsParams`](crate::OpticsParams)) and `[samples]` (fields of [`Samples`]); the
-    /// fields it leaves out keep their values. Validates the result.
+    /// [`OpticsParams`](crate::OpticsParams)), `[samples]` (fields of [`Samples`]) and
+    /// `[mounts]` (`recognition` and `width`: each an array of
+    /// [`PlateMount`](crate::plates::PlateMount)s, one per plate; this experiment's is used), as
+    /// `crackbot sim calibrate --params-out` writes them; the fields it leaves out keep their
+    /// values. Validates the result.
     pub fn apply_params_toml(&mut self, text: &str) -> Result<(), SimError> {
         let invalid = |m: String| SimError::Invalid(m);
         let mut params: toml::Table = toml::from_str(text).map_err(|e| invalid(e.to_string()))?;
@@ -103,6 +106,29 @@ impl ExperimentConfig {
             "sensor.optics",
         )?;
         self.samples = overlay(&self.samples, params.remove("samples"), "samples")?;
+        match params.remove("mounts") {
+            None => {}
+            Some(toml::Value::Table(mut per_experiment)) => {
+                let key = match self.experiment {
+                    Experiment::Recognition => "recognition",
+                    Experiment::Width => "width",
+                };
+                if let Some(k) = per_experiment
+                    .keys()
+                    .find(|k| *k != "recognition" && *k != "width")
+                {
+                    return Err(invalid(format!(
+                        "mounts.{k}: unknown experiment (recognition or width)"
+                    )));
+                }
+                if let Some(v) = per_experiment.remove(key) {
+                    self.mounts = v
+                        .try_into()
+                        .map_err(|e| invalid(format!("mounts.{key}: {e}")))?;
+                }
+            }
+            Some(_) => return Err(invalid("[mounts] must be a table".into())),
+        }
         if let Some(k) = sensor.keys().chain(params.keys()).next() {
             return Err(invalid(format!("unknown parameter table {k}")));
         }

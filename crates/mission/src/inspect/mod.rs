@@ -113,8 +113,12 @@ pub struct InspectConfig {
     pub width_model: PathBuf,
     /// The ONNX detector (fused and vision modes).
     pub detector_model: Option<PathBuf>,
-    /// Detections below this score are not candidates.
+    /// Vision missions: detections below this score are not reported.
     pub min_score: f32,
+    /// Fused missions: detections below this score are not touched. Lower than
+    /// [`min_score`](Self::min_score): the finger confirms or rejects what the camera proposes,
+    /// so a weak detection costs a slide, not a false report.
+    pub proposal_min_score: f32,
     /// Simulation speed-up (1: real time).
     pub speedup: f64,
     /// Seed of the simulated sensor and camera.
@@ -159,6 +163,7 @@ impl InspectConfig {
             width_model: repo_path("models/tactile/width.ctm"),
             detector_model: None,
             min_score: 0.3,
+            proposal_min_score: 0.3,
             speedup: 1.0,
             seed: 7,
             planner: settings,

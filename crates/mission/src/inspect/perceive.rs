@@ -62,8 +62,12 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, 
     let mut detector = build_detector(&choice, PostprocessParams::default())?;
     let detections = detector.detect(&image)?;
     let mut out = Vec::new();
+    let min_score = match config.mode {
+        InspectMode::Fused => config.proposal_min_score,
+        _ => config.min_score,
+    };
     for (i, d) in detections.iter().enumerate() {
-        if d.score < config.min_score {
+        if d.score < min_score {
             continue;
         }
         let to_mm = |p: [f32; 2]| h.pixel_to_surface([f64::from(p[0]), f64::from(p[1])]).ok();

@@ -1,0 +1,128 @@
+//! Parameter files (`sim dataset --params`, `sim calibrate --start/--params-out`) and the
+//! calibration's measured targets: the tip-speed quantiles and the proximity dark level.
+#![allow(clippy::unwrap_used)]
+
+use crackbot_recording::{Recording, Row};
+use crackbot_sim::calibrate::{real_dark_counts, speed_quantiles, QUANTILES};
+use crackbot_sim::experiment::{Experiment, ExperimentConfig, PlateMount};
+
+fn width_mounts_toml(n: usize, reflectivity: f64) -> String {
+    (0..n)
+        .map(|k| {
+            format!(
+                "[[mounts.width]]\noffset_counts = [{k}.0, 1.5, -2.0]\nreflectivity = {reflectivity}\n"
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn mounts_of_this_experiment_are_applied() {
+    let mut width = ExperimentConfig::paper(Experiment::Width, 7);
+    let n = width.surfaces().len();
+    let text = format!(
+        "[sensor.finger]\nfriction = 0.2\n\n[[mounts.recognition]]\noffset_counts = [9.0, 9.0, 9.0]\nreflectivity = 0.5\n\n{}",
+        width_mounts_toml(n, 0.9)
+    );
+    width.apply_params_toml(&text).unwrap();
+    assert_eq!(width.sensor.finger.friction, 0.2);
+    assert_eq!(width.mounts.len(), n);
+    assert_eq!(
+        width.mounts[2],
+        PlateMount {
+            offset_counts: [2.0, 1.5, -2.0],
+            reflectivity: 0.9
+        }
+    );
+    // The recognition experiment takes the recognition table, not the width one (which has
+    // another number of plates and would be refused).
+    let mut recognition = ExperimentConfig::paper(Experiment::Recognition, 7);
+    let before = recognition.mounts.clone();
+    let only_width = width_mounts_toml(n, 0.9);
+    recognition.apply_params_toml(&only_width).unwrap();
+    assert_eq!(recognition.mounts, before);
+}
+
+#[test]
+fn bad_mounts_are_named() {
+    let mut c = ExperimentConfig::paper(Experiment::Width, 7);
+    let n = c.surfaces().len();
+    let err = c
+        .apply_params_toml("[[mounts.tank]]\noffset_counts = [0.0, 0.0, 0.0]\nreflectivity = 1.0\n")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("mounts.tank"), "{err}");
+    let err = c
+        .apply_params_toml(&width_mounts_toml(n - 1, 1.0))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("plate mounts"), "{err}");
+    let err = c
+        .apply_params_toml("[[mounts.width]]\noffset_counts = [0.0, 0.0]\nreflectivity = 1.0\n")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("mounts.width"), "{err}");
+    let err = c.apply_params_toml("mounts = 3\n").unwrap_err().to_string();
+    assert!(err.contains("[mounts]"), "{err}");
+}
+
+#[test]
+fn speed_quantiles_see_a_steady_tip_and_a_stuck_one() {
+    // 4.6 mm/s at 400 Hz: every quantile is 4.6 mm/s.
+    let steady: Vec<f64> = (0..4000).map(|i| 4.6 * i as f64 / 400.0).collect();
+    let q = speed_quantiles(&steady).unwrap();
+    assert_eq!(q.len(), QUANTILES.len());
+    for v in &q {
+        assert!((v - 4.6).abs() < 1e-9, "{q:?}");
+    }
+    // Stuck for the first half: the lower quantiles are 0, the upper ones the pace.
+    let stuck: Vec<f64> = (0..4000)
+        .map(|i| {
+            if i < 2000 {
+                0.0
+            } else {
+                4.6 * (i - 2000) as f64 / 400.0
+            }
+        })
+        .collect();
+    let q = speed_quantiles(&stuck).unwrap();
+    assert!(q[0].abs() < 1e-9 && q[3].abs() < 1e-9, "{q:?}");
+    assert!((q[QUANTILES.len() - 1] - 4.6).abs() < 1e-9, "{q:?}");
+    // Too short to measure.
+    assert!(speed_quantiles(&steady[..10]).is_none());
+}
+
+#[test]
+fn dark_level_is_a_low_quantile_of_every_proximity_reading() {
+    let rows = |p: &[f64]| -> Vec<Row> {
+        p.iter()
+            .enumerate()
+            .map(|(i, &p)| Row {
+                x_mm: i as f64,
+                d1: 600.0,
+                d2: 400.0,
+                d3: 700.0,
+                p,
+                direction: 0,
+                slide: 1,
+                label: 5.0,
+                repetition: 1,
+            })
+            .collect()
+    };
+    let bright: Vec<f64> = (0..1000).map(|i| 500.0 + (i % 7) as f64).collect();
+    let mut dipped = bright.clone();
+    dipped[100..150].iter_mut().for_each(|p| *p = 265.0);
+    let a = Recording {
+        rows: rows(&bright),
+        extra: None,
+    };
+    let b = Recording {
+        rows: rows(&dipped),
+        extra: None,
+    };
+    let dark = real_dark_counts(&[&a, &b]).unwrap();
+    assert_eq!(dark, 265.0);
+    assert_eq!(real_dark_counts(&[&a]).unwrap(), 500.0);
+    assert!(real_dark_counts(&[]).is_none());
+}
