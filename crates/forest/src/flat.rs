@@ -116,14 +116,14 @@ pub(crate) struct WalkNode {
 
 /// Every tree re-encoded for branch-free descent of one row: a leaf reads the padding feature
 /// (always NaN), which sends it "right" by a distance of 0, i.e. to itself. A group of trees
-/// therefore takes as many steps as its deepest leaf's depth with no branch at all: a tree that
-/// reached its leaf stays there.
+/// therefore steps together with no branch per tree (a tree that reached its leaf stays there):
+/// as many steps as its shallowest leaf's depth unchecked, then one check per step for the group.
 #[derive(Debug, Clone)]
 pub(crate) struct WalkTrees {
     nodes: Vec<WalkNode>,
-    /// Depth of each [`TREE_LANES`] group's deepest leaf: the steps that take every tree of the
-    /// group to its leaf.
-    group_steps: Vec<u32>,
+    /// Per [`TREE_LANES`] group of trees, the depth of its shallowest and of its deepest leaf:
+    /// the steps every row takes, and the most steps a row can take.
+    group_steps: Vec<(u32, u32)>,
     /// The leaf values again, each leaf's padded with zeros to `stride` values (a power of two
     /// ≤ [`WALK_MAX_STRIDE`]), so that a whole leaf is added to a register accumulator at once.
     /// Empty when the width is larger (the sums then go through the caller's slice).
@@ -156,6 +156,11 @@ fn walk_step(i: u32, n: WalkNode, xs: &[f32; WALK_MAX_FEATURES + 1]) -> u32 {
 /// Number of trees traversed together for one row (overlaps their cache misses and dependency
 /// chains; 16 measured fastest of 4, 8, 16 on the real windows, `benches/tactile.rs`).
 const TREE_LANES: usize = 16;
+/// Deepest leaf up to which a group of trees walks every row to that depth with no check for
+/// "every tree on a leaf": measured 5 % faster than checking on the deployed depth-≤ 10 forests,
+/// while fully grown trees (a few leaves 30 deep) need the checks (half again as many steps
+/// without them; `scripts/callgrind_check.sh`).
+const UNCHECKED_DEPTH: u32 = 12;
 /// Rows per block in the batch path: each tree (~150 KB with its leaves for 7k nodes) is used for a whole
 /// block while it sits in the L2 cache, next to the block's rows (96 KB) and accumulators (128 KB).
 pub(crate) const BLOCK_ROWS: usize = 8192;
@@ -295,26 +300,31 @@ impl FlatTrees {
                 }
             });
         }
-        // Depth of each tree's deepest leaf, then of each group of lanes.
-        let mut depth = Vec::with_capacity(self.n_trees());
+        // Depths of each tree's shallowest and deepest leaf, then of each group of lanes.
+        let mut depths = Vec::with_capacity(self.n_trees());
         let mut stack: Vec<(u32, u32)> = Vec::new();
         for t in 0..self.n_trees() {
-            let mut deepest = 0;
+            let (mut shallowest, mut deepest) = (u32::MAX, 0);
             stack.push((self.offsets[t], 0));
             while let Some((i, d)) = stack.pop() {
                 let n = self.nodes[i as usize];
                 if n.is_leaf() {
+                    shallowest = shallowest.min(d);
                     deepest = deepest.max(d);
                 } else {
                     stack.push((i + 1, d + 1));
                     stack.push((n.right, d + 1));
                 }
             }
-            depth.push(deepest);
+            depths.push((shallowest, deepest));
         }
-        let group_steps = depth
+        let group_steps = depths
             .chunks(TREE_LANES)
-            .map(|g| g.iter().copied().max().unwrap_or(0))
+            .map(|g| {
+                let sure = g.iter().map(|d| d.0).min().unwrap_or(0);
+                let most = g.iter().map(|d| d.1).max().unwrap_or(0);
+                (sure, most)
+            })
             .collect();
         let stride = self.width.next_power_of_two();
         let leaves = if stride <= WALK_MAX_STRIDE {
@@ -346,8 +356,8 @@ impl FlatTrees {
     }
 
     /// [`accumulate_row`](Self::accumulate_row) on the single-row layout: groups of
-    /// [`TREE_LANES`] trees step together without a branch, as many steps as the group's deepest
-    /// leaf; the sums stay in registers when the leaves are narrow enough.
+    /// [`TREE_LANES`] trees step together without a branch per tree, until the row has reached a
+    /// leaf in each; the sums stay in registers when the leaves are narrow enough.
     fn accumulate_row_walk(&self, walk: &WalkTrees, x: &[f32], acc: &mut [f32]) {
         match walk.stride {
             1 => self.walk_in_registers::<1>(walk, x, acc),
@@ -386,11 +396,11 @@ impl FlatTrees {
     /// `leaf`, in tree order.
     #[inline(always)]
     fn walk_leaves(&self, walk: &WalkTrees, x: &[f32], mut leaf: impl FnMut(usize)) {
-        let xs = padded_row(x, self.n_features);
+        let xs = &padded_row(x, self.n_features);
         let nodes = &walk.nodes;
         let n_trees = self.n_trees();
         let mut t = 0;
-        for &steps in &walk.group_steps {
+        for &(sure, most) in &walk.group_steps {
             let lanes = TREE_LANES.min(n_trees - t);
             let mut pos = [0u32; TREE_LANES];
             pos[..lanes].copy_from_slice(&self.offsets[t..t + lanes]);
@@ -398,9 +408,33 @@ impl FlatTrees {
             for p in pos[lanes..].iter_mut() {
                 *p = self.offsets[t];
             }
-            for _ in 0..steps {
-                for p in pos.iter_mut() {
-                    *p = walk_step(*p, nodes[*p as usize], &xs);
+            if most <= UNCHECKED_DEPTH {
+                // Shallow trees: every step to the deepest leaf, with no check at all.
+                for _ in 0..most {
+                    for p in pos.iter_mut() {
+                        *p = walk_step(*p, nodes[*p as usize], xs);
+                    }
+                }
+            } else {
+                // Deep trees: the steps every tree takes, then only the trees not yet on a leaf
+                // step, until none is left.
+                for _ in 0..sure {
+                    for p in pos.iter_mut() {
+                        *p = walk_step(*p, nodes[*p as usize], xs);
+                    }
+                }
+                loop {
+                    let mut active = false;
+                    for p in pos.iter_mut() {
+                        let n = nodes[*p as usize];
+                        if n.packed >> 8 != 0 {
+                            *p = walk_step(*p, n, xs);
+                            active = true;
+                        }
+                    }
+                    if !active {
+                        break;
+                    }
                 }
             }
             for &p in &pos[..lanes] {
@@ -672,6 +706,8 @@ mod tests {
         use crate::{synthetic, ForestParams, RandomForest};
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        // Both walks (unchecked, checked) must be exercised.
+        let (mut deep_seen, mut shallow_seen) = (false, false);
         // Class counts: leaves padded to 2, 4, 8 and 16 values, and wider than the registers.
         for (n_trees, depth, spread, k) in [
             (1, None, 40.0, 4),
@@ -695,6 +731,8 @@ mod tests {
             .unwrap();
             let trees = &forest.trees;
             assert!(trees.walk.is_some());
+            deep_seen |= trees.max_depth() > UNCHECKED_DEPTH as usize;
+            shallow_seen |= trees.max_depth() <= UNCHECKED_DEPTH as usize;
             for r in 0..400 {
                 let mut row: Vec<f32> = (0..3).map(|_| rng.random_range(300.0..900.0)).collect();
                 match r % 8 {
@@ -715,6 +753,10 @@ mod tests {
                 );
             }
         }
+        assert!(
+            deep_seen && shallow_seen,
+            "deep {deep_seen}, shallow {shallow_seen}"
+        );
     }
 
     /// The same for a regressor (one value per leaf, summed in a register).
