@@ -37,6 +37,10 @@ pub struct RunArgs {
     /// Slides across each candidate (back and forth).
     #[arg(long, default_value_t = 4)]
     pub passes: u32,
+    /// Shortest stroke across a candidate, mm (default: the scene's manipulator stroke, 16 mm
+    /// in the paper); a wide candidate still gets a stroke that starts and ends on sound surface.
+    #[arg(long)]
+    pub stroke_mm: Option<f64>,
     /// γ of the tactile-only scan (the paper's eq. 2), in (0, 1).
     #[arg(long, default_value_t = 0.5)]
     pub gamma: f64,
@@ -108,6 +112,9 @@ pub fn run(args: RunArgs) -> Result<()> {
     config.min_score = args.min_score;
     config.proposal_min_score = args.proposal_min_score;
     config.planner.passes = args.passes;
+    if let Some(v) = args.stroke_mm {
+        config.planner.min_stroke_mm = v;
+    }
     if let Some(p) = args.recognition_model {
         config.recognition_model = p;
     }

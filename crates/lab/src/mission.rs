@@ -39,6 +39,9 @@ pub struct Common {
     /// Slide speed, mm/s (default: 4.6, the speed of the authors' recordings).
     #[arg(long)]
     slide_speed: Option<f64>,
+    /// Shortest stroke across a candidate, mm (default: 16, the paper's).
+    #[arg(long)]
+    stroke_mm: Option<f64>,
     /// Fused missions: detections scoring below this are not touched (vision-only missions
     /// report from 0.3).
     #[arg(long, default_value_t = 0.3)]
@@ -83,6 +86,9 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
         );
     }
     template.proposal_min_score = common.proposal_min_score;
+    if let Some(v) = common.stroke_mm {
+        template.planner.min_stroke_mm = v;
+    }
     if let Some(v) = common.slide_speed {
         template.planner.slide_speed_mm_s = v;
     }

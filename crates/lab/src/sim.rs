@@ -153,8 +153,24 @@ pub struct CalibrateArgs {
     mechanics_evaluations: usize,
     /// Weight of the tip-speed term (squared RMS distance of the position column's speed
     /// quantiles, (mm/s)²) against the channels' weighted squared quantile distances (counts²).
-    #[arg(long, default_value_t = crackbot_sim::calibrate::SPEED_WEIGHT)]
+    /// 0 (the default) leaves it out, as the committed calibration was fitted; 1000 makes a
+    /// 1 mm/s RMS miss cost as much as 31.6 counts RMS of P.
+    #[arg(long, default_value_t = 0.0)]
     speed_weight: f64,
+    /// Take the proximity fibre's dark level from the data (the 0.5 % quantile of every real
+    /// proximity reading) instead of fitting it.
+    #[arg(long)]
+    measured_dark: bool,
+    /// Keep the proximity fibre on the far side of its curve's peak (the reading falls as the
+    /// surface recedes).
+    #[arg(long)]
+    far_branch: bool,
+    /// Keep these mechanics parameters at the starting values (comma-separated names:
+    /// finger.tip_radius_mm, finger.lateral_stiffness_n_mm, finger.friction,
+    /// samples.crack_depth_mm, samples.bump_radius_mm, samples.bump_height_mm,
+    /// samples.crack_wall_angle_deg).
+    #[arg(long, value_delimiter = ',')]
+    fixed: Vec<String>,
     /// Start the search from these parameters instead of the calibrated ones: a TOML file as
     /// `sim dataset --params` takes.
     #[arg(long)]
@@ -288,9 +304,16 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
         &start,
         &real,
         width_real.as_deref(),
-        a.evaluations,
-        a.mechanics_evaluations,
-        a.speed_weight,
+        &crackbot_sim::calibrate::SearchSettings {
+            evaluations: a.evaluations,
+            mechanics_evaluations: a.mechanics_evaluations,
+            speed_weight: a.speed_weight,
+            fixed: a.fixed.clone(),
+            proximity: crackbot_sim::calibrate::ProximityRules {
+                measured_dark: a.measured_dark,
+                far_branch: a.far_branch,
+            },
+        },
         |k, _| pb.set_position(k as u64),
     )?;
     pb.finish_and_clear();

@@ -36,6 +36,11 @@
 //! rise; the deformation channels' excursions over a crack are the real ones' size.
 //!
 //! Transfer, measured on repetitions 2 and 3 only: see the crate's `docs/calibration.md`.
+//!
+//! Optional ([`SearchSettings`]): the tip-speed quantiles of the authors' position column as a
+//! further target ([`speed_loss`]; the committed fit's tip jams in wide cracks where the real
+//! one never stops), the proximity dark level measured instead of fitted
+//! ([`real_dark_counts`]), the fibre kept beyond its curve's peak, some mechanics held fixed.
 
 use crackbot_recording::Recording;
 use serde::Serialize;
@@ -252,8 +257,60 @@ pub fn speed_loss(traces: &[Trace], targets: &[(f64, Vec<f64>)]) -> f64 {
     }
 }
 
-/// Default weight of the tip-speed term ([`speed_loss`], (mm/s)²) in the mechanics search,
-/// against [`weighted_loss`] (counts²): 1 mm/s RMS off costs as much as 31.6 counts RMS of P.
+/// How hard [`calibrate`] searches, and what it leaves alone.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SearchSettings {
+    /// Evaluations per Nelder–Mead run of the optics.
+    pub evaluations: usize,
+    /// Mechanics candidates simulated, each with its optics refitted.
+    pub mechanics_evaluations: usize,
+    /// Weight of the tip-speed term ([`speed_loss`]) against [`weighted_loss`].
+    pub speed_weight: f64,
+    /// Names of [`MECHANICS`] kept at the starting configuration's values.
+    pub fixed: Vec<String>,
+    /// Constraints on the proximity fit.
+    pub proximity: ProximityRules,
+}
+
+impl Default for SearchSettings {
+    fn default() -> Self {
+        SearchSettings {
+            evaluations: 300,
+            mechanics_evaluations: 60,
+            speed_weight: 0.0,
+            fixed: Vec::new(),
+            proximity: ProximityRules::default(),
+        }
+    }
+}
+
+impl SearchSettings {
+    /// Which of [`MECHANICS`] are searched; an unknown name in `fixed` is an error naming it.
+    pub fn free_mask(&self) -> Result<[bool; 7], SimError> {
+        let mut free = [true; 7];
+        for name in &self.fixed {
+            let k = MECHANICS.iter().position(|m| m == name).ok_or_else(|| {
+                SimError::Invalid(format!(
+                    "unknown mechanics parameter {name:?} (one of {})",
+                    MECHANICS.join(", ")
+                ))
+            })?;
+            free[k] = false;
+        }
+        if !(self.speed_weight.is_finite() && self.speed_weight >= 0.0) {
+            return Err(SimError::Invalid(format!(
+                "the tip-speed weight must be a non-negative number, got {}",
+                self.speed_weight
+            )));
+        }
+        Ok(free)
+    }
+}
+
+/// A weight of the tip-speed term ([`speed_loss`], (mm/s)²) in the mechanics search that
+/// makes it count, against [`weighted_loss`] (counts²): 1 mm/s RMS off costs as much as 31.6
+/// counts RMS of P. The committed calibration was fitted without it (weight 0, the default of
+/// [`SearchSettings`]); see the crate's `docs/calibration.md` for what the term does.
 pub const SPEED_WEIGHT: f64 = 1000.0;
 
 /// Quantile of the real proximity readings taken as the fibre's dark level.
@@ -630,34 +687,45 @@ fn fit_proximity(
     sets: &[Set],
     starts: &[(f64, f64)],
     max_evals: usize,
+    rules: ProximityRules,
 ) -> (OpticsParams, f64) {
-    // The dark level is measured, not fitted ([`real_dark_counts`]): the quantiles barely see
-    // the short dips into the dark, and a free dark level can settle far above the real one.
+    // x = [peak counts, peak distance, height, look-ahead, spot] (+ the dark level when fitted).
     let apply = |o: &mut OpticsParams, x: &[f64]| {
         o.proximity_peak_counts = x[0];
         o.proximity_peak_mm = x[1].max(0.05);
         o.proximity_height_mm = x[2];
         o.proximity_offset_mm = x[3];
         o.proximity_spot_mm = x[4].abs();
+        if let Some(&dark) = x.get(5) {
+            o.proximity_dark_counts = dark;
+        }
     };
     let mut best = (start.clone(), f64::INFINITY);
     // Look-ahead behind, under and ahead of the tip; the fibre on either side of the curve's peak.
     for &(offset, height) in starts {
-        let x0 = [
+        let mut x0 = vec![
             start.proximity_peak_counts,
             start.proximity_peak_mm,
             height,
             offset,
             start.proximity_spot_mm,
         ];
+        let mut steps = vec![50.0, 0.3, 0.5, 0.5, 0.3];
+        if !rules.measured_dark {
+            x0.push(start.proximity_dark_counts);
+            steps.push(20.0);
+        }
         let (x, v) = nelder_mead(
             |x| {
                 let mut o = start.clone();
                 apply(&mut o, x);
+                if rules.far_branch && o.proximity_height_mm < o.proximity_peak_mm {
+                    return f64::INFINITY;
+                }
                 sets_loss(&o, static_mm, sets, 3)
             },
             &x0,
-            &[50.0, 0.3, 0.5, 0.5, 0.3],
+            &steps,
             max_evals,
         );
         if v < best.1 {
@@ -669,6 +737,18 @@ fn fit_proximity(
     (best.0, best.1.sqrt())
 }
 
+/// Constraints on the proximity fit ([`SearchSettings`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ProximityRules {
+    /// The dark level is measured ([`real_dark_counts`]), not fitted: the quantiles barely see
+    /// the short dips into the dark, and a free dark level can settle far above the real one.
+    pub measured_dark: bool,
+    /// The fibre works on the far side of its curve's peak (height ≥ peak distance), where the
+    /// reading falls as the surface recedes: the real proximity drops straight into the dark
+    /// over a crack, it never first rises.
+    pub far_branch: bool,
+}
+
 /// Fits the optics to `sets` for fixed mechanics: the proximity channel from `starts`, then
 /// each deformation channel. Returns the optics and the RMS per channel.
 fn fit_optics(
@@ -677,8 +757,9 @@ fn fit_optics(
     sets: &[Set],
     starts: &[(f64, f64)],
     max_evals: usize,
+    rules: ProximityRules,
 ) -> (OpticsParams, [f64; 4]) {
-    let (mut optics, _) = fit_proximity(start, static_mm, sets, starts, max_evals);
+    let (mut optics, _) = fit_proximity(start, static_mm, sets, starts, max_evals, rules);
     for c in 0..3 {
         fit_deformation(&mut optics, static_mm, sets, c, max_evals / 2);
     }
@@ -699,16 +780,15 @@ pub fn calibrate(
     config: &ExperimentConfig,
     recognition: &[Recording],
     width: Option<&[Recording]>,
-    max_evals: usize,
-    mechanics_evals: usize,
-    speed_weight: f64,
+    search: &SearchSettings,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<CalibrationReport, SimError> {
-    if !(speed_weight.is_finite() && speed_weight >= 0.0) {
-        return Err(SimError::Invalid(format!(
-            "the tip-speed weight must be a non-negative number, got {speed_weight}"
-        )));
-    }
+    let free = search.free_mask()?;
+    let (max_evals, mechanics_evals, speed_weight) = (
+        search.evaluations,
+        search.mechanics_evaluations,
+        search.speed_weight,
+    );
     if recognition.is_empty() {
         return Err(SimError::Invalid(
             "no real recordings to calibrate against".into(),
@@ -748,7 +828,8 @@ pub fn calibrate(
     let start_sets = sets_of(&quiet)?;
     let mut start_optics = config.sensor.optics.clone();
     let all_real: Vec<&Recording> = recognition.iter().chain(width.unwrap_or(&[])).collect();
-    if let Some(dark) = real_dark_counts(&all_real) {
+    let rules = search.proximity;
+    if let Some(dark) = real_dark_counts(&all_real).filter(|_| rules.measured_dark) {
         start_optics.proximity_dark_counts = dark;
     }
     let rms_before = sets_rms(&config.sensor.optics, static_mm, &start_sets);
@@ -757,20 +838,42 @@ pub fn calibrate(
         config.sensor.optics.proximity_offset_mm,
         config.sensor.optics.proximity_height_mm,
     )];
-    let (start_optics, _) =
-        fit_optics(&start_optics, static_mm, &start_sets, &one_start, max_evals);
+    let (start_optics, _) = fit_optics(
+        &start_optics,
+        static_mm,
+        &start_sets,
+        &one_start,
+        max_evals,
+        rules,
+    );
     let m0 = mechanics_of(&quiet);
     let total = mechanics_evals.max(1);
     let mut candidates: Vec<(Vec<f64>, f64)> = Vec::new();
     let mut failure: Option<SimError> = None;
+    // The search runs over the free parameters only (log space); the fixed ones keep m0.
+    let free_idx: Vec<usize> = (0..m0.len()).filter(|&k| free[k]).collect();
+    let full = |x: &[f64]| -> Vec<f64> {
+        let mut m = m0.to_vec();
+        for (&k, v) in free_idx.iter().zip(x) {
+            m[k] = v.exp();
+        }
+        m
+    };
+    const STEPS: [f64; 7] = [0.3, 0.5, 0.4, 0.3, 0.2, 0.2, 0.15];
     let (best_log, _) = nelder_mead(
         |x| {
-            let m: Vec<f64> = x.iter().map(|v| v.exp()).collect();
+            let m = full(x);
             let trial = with_mechanics(&quiet, &m);
             let loss = match trial.validate().and_then(|()| sets_of(&trial)) {
                 Ok(sets) => {
-                    let (_, rms) =
-                        fit_optics(&start_optics, static_mm, &sets, &one_start, max_evals / 3);
+                    let (_, rms) = fit_optics(
+                        &start_optics,
+                        static_mm,
+                        &sets,
+                        &one_start,
+                        max_evals / 3,
+                        rules,
+                    );
                     weighted_loss(&rms) + speed_weight * sets_speed_rms(&sets).powi(2)
                 }
                 Err(SimError::Invalid(_)) => f64::INFINITY,
@@ -783,14 +886,14 @@ pub fn calibrate(
             progress(candidates.len().min(total), total);
             loss
         },
-        &m0.map(f64::ln),
-        &[0.3, 0.5, 0.4, 0.3, 0.2, 0.2, 0.15],
+        &free_idx.iter().map(|&k| m0[k].ln()).collect::<Vec<_>>(),
+        &free_idx.iter().map(|&k| STEPS[k]).collect::<Vec<_>>(),
         total,
     );
     if let Some(e) = failure {
         return Err(e);
     }
-    let best: Vec<f64> = best_log.iter().map(|v| v.exp()).collect();
+    let best = full(&best_log);
     let fitted = with_mechanics(&quiet, &best);
     let sets = sets_of(&fitted)?;
     let (mut optics, _) = fit_optics(
@@ -808,6 +911,7 @@ pub fn calibrate(
             (0.0, 3.5),
         ],
         max_evals,
+        rules,
     );
     // Resting levels: the simulated flat plate's medians onto the real one's.
     let real_flat: Vec<Recording> = recognition
@@ -988,21 +1092,11 @@ pub fn calibrate_to_real(
     start: &ExperimentConfig,
     recognition: &[Recording],
     width: Option<&[Recording]>,
-    evaluations: usize,
-    mechanics_evaluations: usize,
-    speed_weight: f64,
+    search: &SearchSettings,
     progress: impl FnMut(usize, usize),
 ) -> Result<CalibrationSummary, SimError> {
     let config = start.clone();
-    let mut report = calibrate(
-        &config,
-        recognition,
-        width,
-        evaluations,
-        mechanics_evaluations,
-        speed_weight,
-        progress,
-    )?;
+    let mut report = calibrate(&config, recognition, width, search, progress)?;
     report.samples.roughness_rms_mm = fit_roughness(&report.optics, recognition);
     let mut calibrated = config;
     calibrated.sensor.optics = report.optics.clone();

@@ -126,3 +126,34 @@ fn dark_level_is_a_low_quantile_of_every_proximity_reading() {
     assert_eq!(real_dark_counts(&[&a]).unwrap(), 500.0);
     assert!(real_dark_counts(&[]).is_none());
 }
+
+#[test]
+fn calibration_search_settings_name_what_is_wrong() {
+    use crackbot_sim::calibrate::{SearchSettings, MECHANICS};
+    let all_free = SearchSettings::default().free_mask().unwrap();
+    assert!(all_free.iter().all(|f| *f));
+    let some = SearchSettings {
+        fixed: vec![MECHANICS[0].to_string(), MECHANICS[3].to_string()],
+        ..SearchSettings::default()
+    };
+    let free = some.free_mask().unwrap();
+    assert!(!free[0] && !free[3] && free[1] && free[2]);
+    let typo = SearchSettings {
+        fixed: vec!["finger.stiffness".into()],
+        ..SearchSettings::default()
+    };
+    let err = typo.free_mask().unwrap_err().to_string();
+    assert!(
+        err.contains("finger.stiffness") && err.contains(MECHANICS[1]),
+        "{err}"
+    );
+    let nan = SearchSettings {
+        speed_weight: f64::NAN,
+        ..SearchSettings::default()
+    };
+    assert!(nan
+        .free_mask()
+        .unwrap_err()
+        .to_string()
+        .contains("tip-speed"));
+}
