@@ -37,10 +37,11 @@
 //! right child; the left child is the next node), leaves index a probability table. The rule is
 //! scikit-learn's `x[feature] <= threshold` → left (NaN goes right); the child is chosen with
 //! `std::hint::select_unpredictable` (a conditional move: the comparison is a coin flip for the branch
-//! predictor). A single row walks four trees in lockstep to overlap their cache misses. The batch path
-//! takes blocks of 8192 rows and, tree by tree, moves all rows of the block down one level at a time,
-//! compacting the list of unfinished rows without branches: the tree stays in L2 for the whole block and
-//! the independent iterations overlap their memory accesses. Soft voting sums leaf probabilities in `f32`
+//! predictor). A single row walks an 8-byte copy of the nodes (leaves step to themselves), sixteen trees
+//! in lockstep to overlap their cache misses, summing their leaves in registers. The batch path of
+//! models that do not fit that copy takes blocks of 8192 rows and, tree by tree, moves all rows of the
+//! block down one level at a time, compacting the list of unfinished rows without branches: the tree
+//! stays in L2 for the whole block and the independent iterations overlap their memory accesses. Soft voting sums leaf probabilities in `f32`
 //! in tree order on both paths, so they agree bit for bit. Validation at load time (children strictly
 //! after their parent and inside their tree, feature and leaf indices in range) guarantees that traversal
 //! terminates and stays in bounds; no `unsafe` is used.
