@@ -84,7 +84,7 @@ fn bench_mission(c: &mut Criterion) {
         "\nmission stages, medians over {} fused missions on the default scene at speed-up {SPEEDUP}:",
         runs.len()
     );
-    println!("| stage | wall s | share |");
+    println!("| stage | wall ms | share |");
     println!("|---|---|---|");
     for (name, v) in [
         ("setup (controller, sensor, models)", setup),
@@ -97,7 +97,7 @@ fn bench_mission(c: &mut Criterion) {
         ("rest (last verdicts, report, recordings)", rest),
         ("total", total),
     ] {
-        println!("| {name} | {v:.4} | {:.1} % |", 100.0 * v / total);
+        println!("| {name} | {:.3} | {:.1} % |", 1e3 * v, 100.0 * v / total);
     }
     println!(
         "baseline, same run: the planner's exploration estimate / speed-up = {floor:.3} s; \

@@ -34,7 +34,7 @@ pub struct Common {
     #[arg(long)]
     printed_cracks: bool,
     /// Strokes across each candidate (forth and back count as two).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 1)]
     passes: u32,
     /// Slide speed, mm/s (default: 4.6, the speed of the authors' recordings).
     #[arg(long)]
@@ -42,6 +42,10 @@ pub struct Common {
     /// Shortest stroke across a candidate, mm (default: 16, the paper's).
     #[arg(long)]
     stroke_mm: Option<f64>,
+    /// Sound surface wanted beyond a candidate's edge and the tip on each side of its stroke,
+    /// mm (default: 2).
+    #[arg(long)]
+    margin_mm: Option<f64>,
     /// Fused missions: detections scoring below this are not touched (vision-only missions
     /// report from 0.3).
     #[arg(long, default_value_t = 0.3)]
@@ -88,6 +92,10 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
     template.proposal_min_score = common.proposal_min_score;
     if let Some(v) = common.stroke_mm {
         template.planner.min_stroke_mm = v;
+    }
+    if let Some(v) = common.margin_mm {
+        template.planner.margin_mm = v;
+        template.planner.min_margin_mm = template.planner.min_margin_mm.min(v);
     }
     if let Some(v) = common.slide_speed {
         template.planner.slide_speed_mm_s = v;

@@ -59,13 +59,18 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, 
         model: config.detector_model.clone(),
         ..DetectorChoice::default()
     };
-    let mut detector = build_detector(&choice, PostprocessParams::default())?;
-    let detections = detector.detect(&image)?;
-    let mut out = Vec::new();
     let min_score = match config.mode {
         InspectMode::Fused => config.proposal_min_score,
         _ => config.min_score,
     };
+    // The detector's own cut must not be above ours.
+    let post = PostprocessParams {
+        score_threshold: PostprocessParams::default().score_threshold.min(min_score),
+        ..PostprocessParams::default()
+    };
+    let mut detector = build_detector(&choice, post)?;
+    let detections = detector.detect(&image)?;
+    let mut out = Vec::new();
     for (i, d) in detections.iter().enumerate() {
         if d.score < min_score {
             continue;
