@@ -46,6 +46,12 @@ pub struct Common {
     /// mm (default: 2).
     #[arg(long)]
     margin_mm: Option<f64>,
+    /// Deployed recognition model (default: models/tactile/recognition.ctm).
+    #[arg(long)]
+    recognition_model: Option<PathBuf>,
+    /// Deployed width model (default: models/tactile/width.ctm).
+    #[arg(long)]
+    width_model: Option<PathBuf>,
     /// Fused missions: detections scoring below this are not touched (vision-only missions
     /// report from 0.3).
     #[arg(long, default_value_t = 0.3)]
@@ -90,6 +96,12 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
         );
     }
     template.proposal_min_score = common.proposal_min_score;
+    if let Some(p) = &common.recognition_model {
+        template.recognition_model = p.clone();
+    }
+    if let Some(p) = &common.width_model {
+        template.width_model = p.clone();
+    }
     if let Some(v) = common.stroke_mm {
         template.planner.min_stroke_mm = v;
     }
