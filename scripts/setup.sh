@@ -55,6 +55,18 @@ if ! ls "$ort_venv"/lib/python3*/site-packages/onnxruntime/capi/libonnxruntime.s
   "$ort_venv/bin/pip" install --quiet --disable-pip-version-check "onnxruntime==$ort_version"
 fi
 
+# ffmpeg for live cameras and video streams (crates/vision/src/camera.rs: `--camera /dev/video0`,
+# `rtsp://…`, a video file): the static binary of the imageio-ffmpeg wheel from PyPI, in a venv
+# outside the clone that crackbot finds by itself (CRACKBOT_FFMPEG or an ffmpeg on PATH override it).
+ffmpeg_wheel_version=0.8.1
+ffmpeg_venv="$crackbot_cache/ffmpeg-venv"
+if ! ls "$ffmpeg_venv"/lib/python3*/site-packages/imageio_ffmpeg/binaries/ffmpeg-* >/dev/null 2>&1; then
+  echo "crackbot setup: installing imageio-ffmpeg==$ffmpeg_wheel_version (a static ffmpeg) into $ffmpeg_venv" >&2
+  rm -rf "$ffmpeg_venv"
+  python3 -m venv "$ffmpeg_venv"
+  "$ffmpeg_venv/bin/pip" install --quiet --disable-pip-version-check "imageio-ffmpeg==$ffmpeg_wheel_version"
+fi
+
 # The forest → ONNX exporter (scripts/forest_to_onnx.py; tests/forest_onnx.rs, benches/tactile.rs): numpy
 # and onnx, pinned in scripts/forest_to_onnx.requirements.txt, in $crackbot_cache/forest-onnx-venv.
 bash "$crackbot_root/scripts/forest_to_onnx.sh" --setup

@@ -99,7 +99,8 @@ pub struct RunArgs {
     /// Hardware: the link's pre-shared key file (64–128 hex digits, mode 0600).
     #[arg(long)]
     pub key: Option<PathBuf>,
-    /// Hardware: the camera frame, an image file (fused and vision modes).
+    /// Hardware: the camera (fused and vision modes): a V4L2 device (/dev/video0), a video file
+    /// or stream URL (both through ffmpeg, installed by scripts/setup.sh), or an image file.
     #[arg(long, requires = "serial")]
     pub camera: Option<PathBuf>,
     /// Hardware: the camera's pixel → surface calibration (`crackbot homography fit`).

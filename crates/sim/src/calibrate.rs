@@ -235,8 +235,7 @@ pub fn real_speed_quantiles(recordings: &[Recording]) -> Vec<(f64, Vec<f64>)> {
 /// Mean squared quantile distance (mm/s)² between the simulated tips' speeds and the real
 /// targets, over the labels both have.
 pub fn speed_loss(traces: &[Trace], targets: &[(f64, Vec<f64>)]) -> f64 {
-    let mut total = 0.0;
-    let mut n = 0usize;
+    let mut d = SquaredDistance::default();
     for (label, target) in targets {
         let Some(trace) = traces.iter().find(|t| t.label == *label) else {
             continue;
@@ -245,15 +244,33 @@ pub fn speed_loss(traces: &[Trace], targets: &[(f64, Vec<f64>)]) -> f64 {
         let Some(q) = speed_quantiles(&x) else {
             continue;
         };
-        for (a, b) in q.iter().zip(target) {
-            total += (a - b).powi(2);
-            n += 1;
+        d.add(&q, target);
+    }
+    d.mean()
+}
+
+/// Running mean of squared differences between paired quantiles.
+#[derive(Default)]
+struct SquaredDistance {
+    total: f64,
+    n: usize,
+}
+
+impl SquaredDistance {
+    fn add(&mut self, a: &[f64], b: &[f64]) {
+        for (x, y) in a.iter().zip(b) {
+            self.total += (x - y).powi(2);
+            self.n += 1;
         }
     }
-    if n == 0 {
-        0.0
-    } else {
-        total / n as f64
+
+    /// The mean, 0 when nothing was added.
+    fn mean(&self) -> f64 {
+        if self.n == 0 {
+            0.0
+        } else {
+            self.total / self.n as f64
+        }
     }
 }
 
@@ -428,8 +445,7 @@ pub fn channel_loss(
     targets: &[ChannelQuantiles],
     channel: usize,
 ) -> f64 {
-    let mut total = 0.0;
-    let mut n = 0usize;
+    let mut d = SquaredDistance::default();
     for t in targets.iter().filter(|t| t.channel == channel) {
         let Some(trace) = traces.iter().find(|tr| tr.label == t.label) else {
             continue;
@@ -457,17 +473,9 @@ pub fn channel_loss(
             .filter(|a| a.0 == t.direction)
             .map(|a| a.1 - shift)
             .collect();
-        let q = quantiles(values);
-        for (a, b) in q.iter().zip(&t.values) {
-            total += (a - b).powi(2);
-            n += 1;
-        }
+        d.add(&quantiles(values), &t.values);
     }
-    if n == 0 {
-        0.0
-    } else {
-        total / n as f64
-    }
+    d.mean()
 }
 
 /// Minimises `f` from `x0` with initial simplex steps `step` by Nelder–Mead, for at most

@@ -23,6 +23,7 @@
 
 pub mod benchmark;
 pub mod boxes;
+pub mod camera;
 pub mod classical;
 pub mod coco;
 pub mod crack_map;

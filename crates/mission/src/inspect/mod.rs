@@ -90,7 +90,8 @@ pub struct Hardware {
     pub bind: SocketAddr,
     /// The link's pre-shared key file (mode 0600).
     pub key_file: PathBuf,
-    /// A camera frame (an image file); a live camera device is not supported yet.
+    /// The camera: a V4L2 device, a video file or stream URL, or an image file
+    /// ([`crackbot_vision::camera::CameraSource::parse`]).
     pub camera: Option<PathBuf>,
     /// The camera's pixel → surface calibration (`crackbot homography fit`).
     pub homography: Option<PathBuf>,

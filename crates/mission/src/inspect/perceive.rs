@@ -13,24 +13,19 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, 
         Some(hw) => {
             let camera = hw.camera.as_ref().ok_or_else(|| {
                 MissionError::Invalid(format!(
-                    "a {:?} mission needs a camera frame (--camera FILE)",
+                    "a {:?} mission needs a camera (--camera DEVICE|FILE|URL)",
                     config.mode
                 ))
             })?;
-            if camera.starts_with("/dev") {
-                return Err(MissionError::Invalid(format!(
-                    "{}: live camera devices are not supported yet; give a frame as an image file",
-                    camera.display()
-                )));
-            }
             let cal = hw.homography.as_ref().ok_or_else(|| {
                 MissionError::Invalid(
                     "a camera frame needs its pixel → surface calibration (--homography FILE, from `crackbot homography fit`)".into(),
                 )
             })?;
-            let image = image::open(camera)
-                .map_err(|e| MissionError::Invalid(format!("{}: {e}", camera.display())))?
-                .to_rgb8();
+            use crackbot_vision::camera::{grab_frame, CameraSource, DEFAULT_TIMEOUT};
+            let source = CameraSource::parse(&camera.to_string_lossy());
+            let image = grab_frame(&source, None, DEFAULT_TIMEOUT)
+                .map_err(|e| MissionError::Invalid(format!("camera {e}")))?;
             let h = crackbot_vision::homography::HomographyCalibration::load(cal)?.homography()?;
             (image, h)
         }
