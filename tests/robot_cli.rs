@@ -266,3 +266,131 @@ fn a_controller_and_sensor_that_vanish_mid_mission_end_it_with_a_clear_error() {
     // What was recorded before is still on disk.
     assert!(slides_saved() >= 1, "no recording kept");
 }
+
+/// The fused mission on hardware with the camera given as a video file: the default scene is
+/// rendered once, encoded into a lossless video by ffmpeg, calibrated with `crackbot homography
+/// fit`, and the robot reads its frame through `--camera video.mkv` (the same ffmpeg path as a
+/// V4L2 device), detects, and slides across every candidate on the controller process.
+#[test]
+fn a_fused_mission_reads_its_camera_through_ffmpeg() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/sim/scenes/default.toml");
+    // The frame and its exact plate → image homography.
+    let render = dir.path().join("render");
+    let o = Command::new(binary("crackbot-lab"))
+        .args(["sim", "render", "--frames", "1", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&render)
+        .output()
+        .expect("crackbot-lab sim render");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let coco: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(render.join("coco.json")).expect("coco.json"))
+            .expect("COCO JSON");
+    let h: Vec<Vec<f64>> = serde_json::from_value(coco["images"][0]["plate_to_image"].clone())
+        .expect("plate_to_image");
+    let mut pairs = String::from("u,v,x_mm,y_mm\n");
+    for (x, y) in [
+        (10.0, 10.0),
+        (190.0, 10.0),
+        (10.0, 90.0),
+        (190.0, 90.0),
+        (100.0, 50.0),
+        (60.0, 30.0),
+    ] {
+        let w = h[2][0] * x + h[2][1] * y + h[2][2];
+        let u = (h[0][0] * x + h[0][1] * y + h[0][2]) / w;
+        let v = (h[1][0] * x + h[1][1] * y + h[1][2]) / w;
+        pairs.push_str(&format!("{u},{v},{x},{y}\n"));
+    }
+    let pairs_csv = dir.path().join("pairs.csv");
+    std::fs::write(&pairs_csv, pairs).expect("pairs");
+    let cal = dir.path().join("camera.toml");
+    let o = Command::new(binary("crackbot"))
+        .args(["homography", "fit"])
+        .arg(&pairs_csv)
+        .arg("--out")
+        .arg(&cal)
+        .output()
+        .expect("crackbot homography fit");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // The camera: a lossless video of that frame.
+    let frame = render.join("images/frame_0000.png");
+    let video = dir.path().join("camera.mkv");
+    let ffmpeg = crackbot_vision::camera::Ffmpeg::locate()
+        .expect("ffmpeg: run `bash scripts/setup.sh` (installs imageio-ffmpeg)");
+    let status = Command::new(&ffmpeg.0)
+        .args(["-nostdin", "-loglevel", "error", "-loop", "1", "-i"])
+        .arg(&frame)
+        .args(["-frames:v", "3", "-c:v", "png"])
+        .arg(&video)
+        .status()
+        .expect("ffmpeg");
+    assert!(status.success());
+
+    let key = dir.path().join("link.key");
+    key_file(&key, "6d");
+    let (cport, hport) = (free_port(), free_port());
+    let mut controller = Command::new(binary("crackbot-sim-controller"))
+        .arg("--scene")
+        .arg(&scene)
+        .args(["--bind", &format!("127.0.0.1:{cport}")])
+        .args(["--peer", &format!("127.0.0.1:{hport}")])
+        .args(["--key", key.to_str().expect("utf-8")])
+        .args([
+            "--state-dir",
+            dir.path().join("ctrl").to_str().expect("utf-8"),
+        ])
+        .args(["--speedup", "8", "--seconds", "120"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("starting crackbot-sim-controller");
+    let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
+    let mut line = String::new();
+    out.read_line(&mut line).expect("the PTY line");
+    let pty = line
+        .trim()
+        .strip_prefix("PTY ")
+        .expect("PTY /dev/pts/N")
+        .to_string();
+    let mission = dir.path().join("mission");
+    let o = Command::new(binary("crackbot-robot"))
+        .arg("--scene")
+        .arg(&scene)
+        .args(["--mode", "fused", "--speedup", "8", "--json"])
+        .args(["--serial", &pty])
+        .args(["--controller", &format!("127.0.0.1:{cport}")])
+        .args(["--bind", &format!("127.0.0.1:{hport}")])
+        .args(["--key", key.to_str().expect("utf-8")])
+        .arg("--camera")
+        .arg(&video)
+        .arg("--homography")
+        .arg(&cal)
+        .arg("--out")
+        .arg(&mission)
+        .output()
+        .expect("running crackbot-robot");
+    controller.kill().ok();
+    controller.wait().ok();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // The frame the robot saw is the rendered one, pixel for pixel.
+    let seen = image::open(mission.join("frame.png"))
+        .expect("frame.png")
+        .to_rgb8();
+    let rendered = image::open(&frame).expect("the rendered frame").to_rgb8();
+    assert!(seen == rendered, "the camera's frame came through changed");
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let candidates = report["candidates"].as_array().expect("candidates").len();
+    assert!(
+        candidates >= 4,
+        "{candidates} candidates on the default scene"
+    );
+    let passes = report["passes"].as_array().expect("passes").len();
+    assert_eq!(passes, candidates, "one stroke per candidate");
+    let judged = report["cracks"].as_array().expect("cracks").len()
+        + report["rejected"].as_array().expect("rejected").len();
+    assert_eq!(judged, candidates, "every candidate confirmed or rejected");
+}
