@@ -88,12 +88,14 @@ impl LinkConfig {
 }
 
 /// Errors of the endpoint.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum LinkError {
     /// The socket failed.
-    Io(io::Error),
+    #[error("link socket: {0}")]
+    Io(#[from] io::Error),
     /// A reliable message was not acknowledged after `attempts` attempts.
+    #[error("no acknowledgement from {peer} after {attempts} attempts")]
     Timeout {
         /// The peer address.
         peer: SocketAddr,
@@ -101,72 +103,17 @@ pub enum LinkError {
         attempts: u32,
     },
     /// The key file was refused.
-    KeyFile(KeyFileError),
+    #[error("{0}")]
+    KeyFile(#[from] KeyFileError),
     /// The epoch file failed.
-    Epoch(EpochError),
+    #[error("{0}")]
+    Epoch(#[from] EpochError),
     /// Inconsistent configuration.
-    Config(ConfigError),
+    #[error("link configuration: {0}")]
+    Config(#[from] ConfigError),
     /// The message could not be encoded.
-    Encode(EncodeError),
-}
-
-impl fmt::Display for LinkError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            LinkError::Io(e) => write!(f, "link socket: {e}"),
-            LinkError::Timeout { peer, attempts } => write!(
-                f,
-                "no acknowledgement from {peer} after {attempts} attempts"
-            ),
-            LinkError::KeyFile(e) => e.fmt(f),
-            LinkError::Epoch(e) => e.fmt(f),
-            LinkError::Config(e) => write!(f, "link configuration: {e}"),
-            LinkError::Encode(e) => write!(f, "encoding a message: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for LinkError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            LinkError::Io(e) => Some(e),
-            LinkError::KeyFile(e) => Some(e),
-            LinkError::Epoch(e) => Some(e),
-            LinkError::Config(e) => Some(e),
-            LinkError::Encode(e) => Some(e),
-            LinkError::Timeout { .. } => None,
-        }
-    }
-}
-
-impl From<io::Error> for LinkError {
-    fn from(e: io::Error) -> Self {
-        LinkError::Io(e)
-    }
-}
-
-impl From<KeyFileError> for LinkError {
-    fn from(e: KeyFileError) -> Self {
-        LinkError::KeyFile(e)
-    }
-}
-
-impl From<EpochError> for LinkError {
-    fn from(e: EpochError) -> Self {
-        LinkError::Epoch(e)
-    }
-}
-
-impl From<ConfigError> for LinkError {
-    fn from(e: ConfigError) -> Self {
-        LinkError::Config(e)
-    }
-}
-
-impl From<EncodeError> for LinkError {
-    fn from(e: EncodeError) -> Self {
-        LinkError::Encode(e)
-    }
+    #[error("encoding a message: {0}")]
+    Encode(#[from] EncodeError),
 }
 
 /// A message delivered by [`LinkEndpoint::recv`]: authentic (when signed), not a replay, not a

@@ -1,6 +1,5 @@
 //! The persisted epoch: a new one at every start, written to disk before the first packet.
 
-use std::fmt;
 use std::fs;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -10,10 +9,11 @@ use std::time::{SystemTime, UNIX_EPOCH};
 const CLOCK_FLOOR_MAX: u32 = 0xF000_0000;
 
 /// Why the epoch file could not give a new epoch.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum EpochError {
     /// It could not be read or written.
+    #[error("epoch file {}: {source}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -22,43 +22,24 @@ pub enum EpochError {
     },
     /// It exists but does not hold `crackbot-link epoch <n>`: refused rather than guessed (a
     /// guessed epoch could repeat an old one).
+    #[error(
+        "epoch file {} is corrupt (expected `crackbot-link epoch <n>`); \
+         delete it only together with changing the key",
+        path.display()
+    )]
     Format {
         /// The file.
         path: PathBuf,
     },
     /// The epoch space is used up (u32::MAX reached): change the key.
+    #[error(
+        "epoch file {}: epochs used up; change the key and delete the file",
+        path.display()
+    )]
     Exhausted {
         /// The file.
         path: PathBuf,
     },
-}
-
-impl fmt::Display for EpochError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            EpochError::Io { path, source } => write!(f, "epoch file {}: {source}", path.display()),
-            EpochError::Format { path } => write!(
-                f,
-                "epoch file {} is corrupt (expected `crackbot-link epoch <n>`); \
-                 delete it only together with changing the key",
-                path.display()
-            ),
-            EpochError::Exhausted { path } => write!(
-                f,
-                "epoch file {}: epochs used up; change the key and delete the file",
-                path.display()
-            ),
-        }
-    }
-}
-
-impl std::error::Error for EpochError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            EpochError::Io { source, .. } => Some(source),
-            _ => None,
-        }
-    }
 }
 
 /// The file that makes each start of an endpoint use a new epoch. It holds one line,

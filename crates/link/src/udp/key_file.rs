@@ -1,6 +1,5 @@
 //! Reading (and writing) the key file: hex text, owner-only permissions.
 
-use std::fmt;
 use std::fs;
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
@@ -10,10 +9,11 @@ use std::vec::Vec;
 use crate::auth::{Key, KeyError, KEY_MAX_LEN};
 
 /// Why a key file was refused. Never contains key material.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum KeyFileError {
     /// The file could not be read or written.
+    #[error("key file {}: {source}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -21,6 +21,11 @@ pub enum KeyFileError {
         source: io::Error,
     },
     /// The file is readable or writable by its group or by others (Unix mode bits `0o077`).
+    #[error(
+        "key file {} has mode {mode:03o}: group or others may access it; \
+         `chmod 600` it (and consider the key compromised)",
+        path.display()
+    )]
     Permissions {
         /// The file.
         path: PathBuf,
@@ -28,57 +33,29 @@ pub enum KeyFileError {
         mode: u32,
     },
     /// Not a regular file.
+    #[error("key file {} is not a regular file", path.display())]
     NotAFile {
         /// The path.
         path: PathBuf,
     },
     /// The content is not 64 to 128 hex digits (surrounding whitespace allowed).
+    #[error(
+        "key file {} must hold 64 to 128 hex digits (32 to 64 bytes) and nothing else",
+        path.display()
+    )]
     Format {
         /// The file.
         path: PathBuf,
     },
     /// The bytes are not a usable key (too short, too long, all zero).
+    #[error("key file {}: {error}", path.display())]
     Key {
         /// The file.
         path: PathBuf,
         /// Why.
+        #[source]
         error: KeyError,
     },
-}
-
-impl fmt::Display for KeyFileError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            KeyFileError::Io { path, source } => {
-                write!(f, "key file {}: {source}", path.display())
-            }
-            KeyFileError::Permissions { path, mode } => write!(
-                f,
-                "key file {} has mode {mode:03o}: group or others may access it; \
-                 `chmod 600` it (and consider the key compromised)",
-                path.display()
-            ),
-            KeyFileError::NotAFile { path } => {
-                write!(f, "key file {} is not a regular file", path.display())
-            }
-            KeyFileError::Format { path } => write!(
-                f,
-                "key file {} must hold 64 to 128 hex digits (32 to 64 bytes) and nothing else",
-                path.display()
-            ),
-            KeyFileError::Key { path, error } => write!(f, "key file {}: {error}", path.display()),
-        }
-    }
-}
-
-impl std::error::Error for KeyFileError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            KeyFileError::Io { source, .. } => Some(source),
-            KeyFileError::Key { error, .. } => Some(error),
-            _ => None,
-        }
-    }
 }
 
 fn hex_value(c: u8) -> Option<u8> {
