@@ -165,6 +165,10 @@ pub struct CalibrateArgs {
     /// surface recedes).
     #[arg(long)]
     far_branch: bool,
+    /// Compare the proximity channel at its low tail quantiles too (0.5, 1, 2 %), where the
+    /// short dips into the dark over narrow cracks show.
+    #[arg(long)]
+    p_tails: bool,
     /// Keep these mechanics parameters at the starting values (comma-separated names:
     /// finger.tip_radius_mm, finger.lateral_stiffness_n_mm, finger.friction,
     /// samples.crack_depth_mm, samples.bump_radius_mm, samples.bump_height_mm,
@@ -312,6 +316,7 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
             proximity: crackbot_sim::calibrate::ProximityRules {
                 measured_dark: a.measured_dark,
                 far_branch: a.far_branch,
+                tails: a.p_tails,
             },
         },
         |k, _| pb.set_position(k as u64),

@@ -132,13 +132,28 @@ fn sorted_finite(mut v: Vec<f64>) -> Option<Vec<f64>> {
 }
 
 fn quantiles(v: Vec<f64>) -> Vec<f64> {
+    quantiles_at(v, &QUANTILES)
+}
+
+/// The quantiles of `v` at `levels` (zeros without finite values).
+fn quantiles_at(v: Vec<f64>, levels: &[f64]) -> Vec<f64> {
     match sorted_finite(v) {
-        Some(v) => QUANTILES
+        Some(v) => levels
             .iter()
             .map(|q| v[((v.len() - 1) as f64 * q).round() as usize])
             .collect(),
-        None => vec![0.0; QUANTILES.len()],
+        None => vec![0.0; levels.len()],
     }
+}
+
+/// Low tail quantiles of the proximity channel that [`ProximityRules::tails`] adds to
+/// [`QUANTILES`]: the short dips into the dark over a crack, which the 5 % quantile misses
+/// (a 1 mm crack is dark for about 1 % of a recording).
+pub const P_TAILS: [f64; 3] = [0.005, 0.01, 0.02];
+
+/// [`QUANTILES`] followed by [`P_TAILS`].
+fn levels_with_tails() -> Vec<f64> {
+    QUANTILES.iter().chain(&P_TAILS).copied().collect()
 }
 
 /// The median of each channel of one recording (`None` when it has no rows).
@@ -157,6 +172,13 @@ fn recording_medians(r: &Recording) -> Option<[f64; 4]> {
 /// (that is the plate mounts' business, [`fit_mounts`]), their excursions are the finger's.
 /// The proximity channel is taken as it is.
 pub fn real_quantiles(recordings: &[Recording]) -> Vec<ChannelQuantiles> {
+    real_quantiles_with(recordings, false)
+}
+
+/// [`real_quantiles`], the proximity channel's with [`P_TAILS`] appended when `p_tails`
+/// ([`channel_loss`] then compares those too).
+pub fn real_quantiles_with(recordings: &[Recording], p_tails: bool) -> Vec<ChannelQuantiles> {
+    let tails = levels_with_tails();
     let mut labels: Vec<f64> = recordings.iter().filter_map(|r| r.label()).collect();
     labels.sort_by(f64::total_cmp);
     labels.dedup();
@@ -179,11 +201,16 @@ pub fn real_quantiles(recordings: &[Recording]) -> Vec<ChannelQuantiles> {
                             .map(move |row| row.channels()[channel] - shift)
                     })
                     .collect();
+                let values = if p_tails && channel == 3 {
+                    quantiles_at(values, &tails)
+                } else {
+                    quantiles(values)
+                };
                 out.push(ChannelQuantiles {
                     label,
                     direction,
                     channel,
-                    values: quantiles(values),
+                    values,
                 });
             }
         }
@@ -473,7 +500,13 @@ pub fn channel_loss(
             .filter(|a| a.0 == t.direction)
             .map(|a| a.1 - shift)
             .collect();
-        d.add(&quantiles(values), &t.values);
+        // Targets with the proximity tails ([`P_TAILS`]) are compared at those levels too.
+        let q = if t.values.len() == QUANTILES.len() + P_TAILS.len() {
+            quantiles_at(values, &levels_with_tails())
+        } else {
+            quantiles(values)
+        };
+        d.add(&q, &t.values);
     }
     d.mean()
 }
@@ -755,6 +788,9 @@ pub struct ProximityRules {
     /// reading falls as the surface recedes: the real proximity drops straight into the dark
     /// over a crack, it never first rises.
     pub far_branch: bool,
+    /// The proximity channel is also compared at the low tail quantiles [`P_TAILS`], where the
+    /// short dips into the dark over narrow cracks show.
+    pub tails: bool,
 }
 
 /// Fits the optics to `sets` for fixed mechanics: the proximity channel from `starts`, then
@@ -804,13 +840,13 @@ pub fn calibrate(
     }
     let mut experiments = vec![(
         Experiment::Recognition,
-        real_quantiles(recognition),
+        real_quantiles_with(recognition, search.proximity.tails),
         real_speed_quantiles(recognition),
     )];
     if let Some(w) = width.filter(|w| !w.is_empty()) {
         experiments.push((
             Experiment::Width,
-            real_quantiles(w),
+            real_quantiles_with(w, search.proximity.tails),
             real_speed_quantiles(w),
         ));
     }

@@ -157,3 +157,39 @@ fn calibration_search_settings_name_what_is_wrong() {
         .to_string()
         .contains("tip-speed"));
 }
+
+#[test]
+fn proximity_tails_join_only_the_proximity_targets() {
+    use crackbot_sim::calibrate::{real_quantiles, real_quantiles_with, P_TAILS};
+    let rows: Vec<Row> = (0..2000)
+        .map(|i| Row {
+            x_mm: i as f64 * 0.01,
+            d1: 600.0 + (i % 5) as f64,
+            d2: 400.0,
+            d3: 700.0,
+            // Dark for 1 % of the samples: the 5 % quantile cannot see it, the tails do.
+            p: if i % 100 == 0 { 265.0 } else { 520.0 },
+            direction: 0,
+            slide: 1,
+            label: 1.0,
+            repetition: 1,
+        })
+        .collect();
+    let rec = Recording { rows, extra: None };
+    let plain = real_quantiles(std::slice::from_ref(&rec));
+    let tails = real_quantiles_with(std::slice::from_ref(&rec), true);
+    assert_eq!(plain.len(), tails.len());
+    for (a, b) in plain.iter().zip(&tails) {
+        if a.channel == 3 {
+            assert_eq!(b.values.len(), QUANTILES.len() + P_TAILS.len());
+            assert_eq!(b.values[..QUANTILES.len()], a.values[..]);
+            // Direction 0 holds every row (direction 1 has none: zeros).
+            if a.direction == 0 {
+                assert_eq!(a.values[0], 520.0);
+                assert_eq!(b.values[QUANTILES.len()], 265.0, "{:?}", b.values);
+            }
+        } else {
+            assert_eq!(a.values, b.values);
+        }
+    }
+}
