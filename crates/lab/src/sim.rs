@@ -169,6 +169,9 @@ pub struct CalibrateArgs {
     /// short dips into the dark over narrow cracks show.
     #[arg(long)]
     p_tails: bool,
+    /// Keep the proximity fibre's spot at least this wide, mm (0: no bound).
+    #[arg(long, default_value_t = 0.0)]
+    min_spot_mm: f64,
     /// Keep these mechanics parameters at the starting values (comma-separated names:
     /// finger.tip_radius_mm, finger.lateral_stiffness_n_mm, finger.friction,
     /// samples.crack_depth_mm, samples.bump_radius_mm, samples.bump_height_mm,
@@ -317,6 +320,7 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
                 measured_dark: a.measured_dark,
                 far_branch: a.far_branch,
                 tails: a.p_tails,
+                min_spot_mm: a.min_spot_mm,
             },
         },
         |k, _| pb.set_position(k as u64),

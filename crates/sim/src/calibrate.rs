@@ -341,6 +341,12 @@ impl SearchSettings {
             })?;
             free[k] = false;
         }
+        let spot = self.proximity.min_spot_mm;
+        if !(spot.is_finite() && spot >= 0.0) {
+            return Err(SimError::Invalid(format!(
+                "the smallest proximity spot must be a non-negative number of mm, got {spot}"
+            )));
+        }
         if !(self.speed_weight.is_finite() && self.speed_weight >= 0.0) {
             return Err(SimError::Invalid(format!(
                 "the tip-speed weight must be a non-negative number, got {}",
@@ -763,6 +769,9 @@ fn fit_proximity(
                 if rules.far_branch && o.proximity_height_mm < o.proximity_peak_mm {
                     return f64::INFINITY;
                 }
+                if o.proximity_spot_mm < rules.min_spot_mm {
+                    return f64::INFINITY;
+                }
                 sets_loss(&o, static_mm, sets, 3)
             },
             &x0,
@@ -791,6 +800,9 @@ pub struct ProximityRules {
     /// The proximity channel is also compared at the low tail quantiles [`P_TAILS`], where the
     /// short dips into the dark over narrow cracks show.
     pub tails: bool,
+    /// The proximity fibre's spot is at least this wide, mm (0: no bound). The wavy plate's
+    /// flat real reading rules out a pinpoint spot far above the surface.
+    pub min_spot_mm: f64,
 }
 
 /// Fits the optics to `sets` for fixed mechanics: the proximity channel from `starts`, then

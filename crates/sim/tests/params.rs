@@ -156,6 +156,14 @@ fn calibration_search_settings_name_what_is_wrong() {
         .unwrap_err()
         .to_string()
         .contains("tip-speed"));
+    let spot = SearchSettings {
+        proximity: crackbot_sim::calibrate::ProximityRules {
+            min_spot_mm: -1.0,
+            ..Default::default()
+        },
+        ..SearchSettings::default()
+    };
+    assert!(spot.free_mask().unwrap_err().to_string().contains("spot"));
 }
 
 #[test]
