@@ -55,6 +55,16 @@ struct Controller {
 fn start_controller(dir: &std::path::Path, key: &std::path::Path, speedup: &str) -> Controller {
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, SCENE).expect("scene");
+    spawn_controller(dir, &scene, key, speedup)
+}
+
+/// `crackbot-sim-controller` over `scene`, its state in `dir/ctrl`, once it has printed its PTY.
+fn spawn_controller(
+    dir: &std::path::Path,
+    scene: &std::path::Path,
+    key: &std::path::Path,
+    speedup: &str,
+) -> Controller {
     let (cport, hport) = (free_port(), free_port());
     let mut controller = Command::new(binary("crackbot-sim-controller"))
         .args(["--scene", scene.to_str().expect("utf-8")])
@@ -332,30 +342,9 @@ fn a_fused_mission_reads_its_camera_through_ffmpeg() {
 
     let key = dir.path().join("link.key");
     key_file(&key, "6d");
-    let (cport, hport) = (free_port(), free_port());
-    let mut controller = Command::new(binary("crackbot-sim-controller"))
-        .arg("--scene")
-        .arg(&scene)
-        .args(["--bind", &format!("127.0.0.1:{cport}")])
-        .args(["--peer", &format!("127.0.0.1:{hport}")])
-        .args(["--key", key.to_str().expect("utf-8")])
-        .args([
-            "--state-dir",
-            dir.path().join("ctrl").to_str().expect("utf-8"),
-        ])
-        .args(["--speedup", "8", "--seconds", "120"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("starting crackbot-sim-controller");
-    let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
-    let mut line = String::new();
-    out.read_line(&mut line).expect("the PTY line");
-    let pty = line
-        .trim()
-        .strip_prefix("PTY ")
-        .expect("PTY /dev/pts/N")
-        .to_string();
+    let c = spawn_controller(dir.path(), &scene, &key, "8");
+    let (mut controller, pty, cport, hport) = (c.child, c.pty, c.port, c.host_port);
+    let _stdout = c._stdout;
     let mission = dir.path().join("mission");
     let o = Command::new(binary("crackbot-robot"))
         .arg("--scene")
