@@ -182,12 +182,13 @@ pub fn run(args: RunArgs) -> Result<()> {
     );
     let report = run_inspection(&config, &stop, |p| match p {
         Progress::Starting => bar.set_message("starting the controller, the sensor and the models"),
-        Progress::Perceived { candidates } => {
+        Progress::Perceived { candidates, .. } => {
             bar.set_message(format!("{candidates} candidates in the frame"))
         }
         Progress::Planned {
             slides,
             estimated_s,
+            ..
         } => {
             bar.set_length(*slides as u64);
             bar.set_message(format!("{slides} slides planned, about {estimated_s:.0} s"));
@@ -196,6 +197,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             bar.set_position(*done as u64);
             bar.set_message(format!("last pass: {class}"));
         }
+        Progress::Frame(_) | Progress::Samples { .. } => {}
     })
     .with_context(|| {
         format!(

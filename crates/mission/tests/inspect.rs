@@ -202,3 +202,78 @@ fn stopping_mid_mission_stops_the_arm_and_says_so() {
     // It stopped promptly, not at the end of the plan.
     assert!(t.elapsed() < Duration::from_secs(6), "{:?}", t.elapsed());
 }
+
+#[test]
+fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_verdict() {
+    use crackbot_mission::inspect::Progress;
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = config(dir.path());
+    c.planner.passes = 1;
+    let mut events = Vec::new();
+    let r = {
+        let _one = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+        let stop = AtomicBool::new(false);
+        run_inspection(&c, &stop, |p| events.push(p.clone())).unwrap()
+    };
+    let frame = events
+        .iter()
+        .find_map(|e| match e {
+            Progress::Frame(f) => Some(f.clone()),
+            _ => None,
+        })
+        .expect("no frame event");
+    let img = image::open(&frame.path).unwrap();
+    assert_eq!((img.width(), img.height()), (frame.width, frame.height));
+    // The overlay's homography puts each candidate's centre inside the frame.
+    let detections = events
+        .iter()
+        .find_map(|e| match e {
+            Progress::Perceived { detections, .. } => Some(detections.clone()),
+            _ => None,
+        })
+        .expect("no detections event");
+    assert_eq!(detections, r.candidates);
+    for d in &detections {
+        let m = frame.surface_to_image;
+        let (x, y) = (d.centre_mm[0], d.centre_mm[1]);
+        let w = m[2][0] * x + m[2][1] * y + m[2][2];
+        let px = (m[0][0] * x + m[0][1] * y + m[0][2]) / w;
+        let py = (m[1][0] * x + m[1][1] * y + m[1][2]) / w;
+        assert!(
+            (0.0..f64::from(frame.width)).contains(&px)
+                && (0.0..f64::from(frame.height)).contains(&py),
+            "candidate {} maps to ({px}, {py})",
+            d.id
+        );
+    }
+    let plan = events
+        .iter()
+        .find_map(|e| match e {
+            Progress::Planned { plan, .. } => Some(plan.clone()),
+            _ => None,
+        })
+        .expect("no plan event");
+    assert_eq!(Some(plan), r.plan);
+    // Samples arrive in time order, in many chunks, and cover every pass's samples.
+    let chunks: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            Progress::Samples { samples } => Some(samples.clone()),
+            _ => None,
+        })
+        .collect();
+    let all: Vec<_> = chunks.iter().flatten().collect();
+    assert!(chunks.len() > 20, "{} chunks", chunks.len());
+    assert!(all.windows(2).all(|w| w[1].t_s >= w[0].t_s - 1e-3));
+    let slid: usize = r.passes.iter().map(|p| p.samples).sum();
+    assert!(all.len() >= slid, "{} live samples, {slid} slid", all.len());
+    // One verdict event per pass, equal to the report's.
+    let passes: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            Progress::Slid { pass, .. } => Some((**pass).clone()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(passes, r.passes);
+}

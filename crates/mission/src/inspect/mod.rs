@@ -197,10 +197,14 @@ pub fn repo_path(rel: &str) -> PathBuf {
 pub enum Progress {
     /// Setting up (controller, sensor, models).
     Starting,
+    /// The camera frame the mission looks at (saved beside the report).
+    Frame(FrameInfo),
     /// Candidates found in the frame.
     Perceived {
         /// How many.
         candidates: usize,
+        /// Each, in surface mm (with the detector's score).
+        detections: Vec<Candidate>,
     },
     /// The plan is made.
     Planned {
@@ -208,8 +212,15 @@ pub enum Progress {
         slides: usize,
         /// The planner's time estimate, s.
         estimated_s: f64,
+        /// The plan.
+        plan: Plan,
     },
-    /// A slide is done.
+    /// Sensor samples as they arrive (every 25 ms or so, whether the finger is down or not).
+    Samples {
+        /// The new samples, oldest first.
+        samples: Vec<LiveSample>,
+    },
+    /// A slide pass is done and judged.
     Slid {
         /// Slides done.
         done: usize,
@@ -217,11 +228,37 @@ pub enum Progress {
         of: usize,
         /// Its verdict's class name.
         class: String,
+        /// The pass and its verdict.
+        pass: Box<PassRecord>,
     },
 }
 
+/// The camera frame a mission looked at.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrameInfo {
+    /// Where it is saved (PNG).
+    pub path: String,
+    /// Width, px.
+    pub width: u32,
+    /// Height, px.
+    pub height: u32,
+    /// Surface mm → image pixels, a homography (row-major), to draw candidates and slides on
+    /// the frame.
+    pub surface_to_image: [[f64; 3]; 3],
+}
+
+/// One sensor sample as it arrived.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LiveSample {
+    /// Time since the mission's link started, s (the host's clock, from the board's through
+    /// the clock fit).
+    pub t_s: f64,
+    /// D1, D2, D3, P, counts.
+    pub raw: [u16; 4],
+}
+
 /// What the finger found for one slide pass.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PassRecord {
     /// Slide number (link id).
     pub id: u32,
@@ -251,7 +288,7 @@ pub struct PassRecord {
 }
 
 /// A crack located along a pass by the proximity channel's dip ([`crackbot_tactile::localise`]).
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Dip {
     /// Centre, mm along the pass from its start.
     pub centre_mm: f64,
@@ -457,17 +494,10 @@ pub fn run_inspection(
     let mut sensor = Sensor::open(&port, t0)?;
     let setup_s = started.elapsed().as_secs_f64();
 
-    let result = mission(
-        config,
-        &recognition,
-        &width,
-        &mut arm,
-        &mut sensor,
-        stop,
-        &mut progress,
-        started,
-        setup_s,
-    );
+    let result = {
+        let mut rig = Rig::new(config, &mut arm, &mut sensor, stop, &mut progress);
+        mission(&mut rig, &recognition, &width, started, setup_s)
+    };
     if result.is_err() {
         arm.stop();
     }
@@ -493,48 +523,50 @@ pub fn run_inspection(
     Ok(report)
 }
 
-#[allow(clippy::too_many_arguments)]
 fn mission(
-    config: &InspectConfig,
+    rig: &mut Rig<'_>,
     recognition: &TactileModel,
     width: &TactileModel,
-    arm: &mut Arm,
-    sensor: &mut Sensor,
-    stop: &AtomicBool,
-    progress: &mut dyn FnMut(&Progress),
     started: Instant,
     setup_s: f64,
 ) -> Result<InspectReport, MissionError> {
+    let config = rig.config;
     let mut stages = StageTimes {
         setup_s,
         ..StageTimes::default()
     };
     // Wait for the arm's state stream and the sensor.
     let deadline = Instant::now() + Duration::from_secs(5);
-    while arm.states.is_empty() || sensor.samples.is_empty() {
-        arm.pump(Duration::from_millis(5))?;
-        sensor.drain()?;
+    while rig.arm.states.is_empty() || rig.sensor.samples.is_empty() {
+        rig.pump(Duration::from_millis(5))?;
         if Instant::now() > deadline {
-            return Err(if arm.states.is_empty() {
+            return Err(if rig.arm.states.is_empty() {
                 MissionError::ControllerUnreachable {
-                    addr: arm.ep.peer_addr().to_string(),
+                    addr: rig.arm.ep.peer_addr().to_string(),
                 }
             } else {
                 MissionError::NoSamples {
-                    port: sensor.path.clone(),
+                    port: rig.sensor.path.clone(),
                 }
             });
         }
     }
 
     let t = Instant::now();
-    let candidates = match config.mode {
-        InspectMode::Tactile => Vec::new(),
-        _ => perceive(config)?,
+    let (candidates, frame) = match config.mode {
+        InspectMode::Tactile => (Vec::new(), None),
+        _ => {
+            let (c, f) = perceive(config)?;
+            (c, Some(f))
+        }
     };
     stages.perceive_s = t.elapsed().as_secs_f64();
-    progress(&Progress::Perceived {
+    if let Some(frame) = &frame {
+        (rig.progress)(&Progress::Frame(frame.clone()));
+    }
+    (rig.progress)(&Progress::Perceived {
         candidates: candidates.len(),
+        detections: candidates.iter().map(|(c, _)| c.clone()).collect(),
     });
 
     let m = &config.scene.manipulator;
@@ -594,9 +626,10 @@ fn mission(
         _ => planner.targeted(&report.candidates)?,
     };
     stages.plan_s = t.elapsed().as_secs_f64();
-    progress(&Progress::Planned {
+    (rig.progress)(&Progress::Planned {
         slides: plan.slides.len(),
         estimated_s: plan.estimated_s,
+        plan: plan.clone(),
     });
 
     let explore = Instant::now();
@@ -625,7 +658,7 @@ fn mission(
     let mut online = OnlineClassifier::new(recognition)?;
     let mut online_width = OnlineClassifier::new(width)?;
     for (si, slide) in plan.slides.iter().enumerate() {
-        if stop.load(Ordering::Relaxed) {
+        if rig.stop.load(Ordering::Relaxed) {
             return Err(MissionError::Interrupted);
         }
         // Tactile rows have no candidate: each row is judged in stroke-long pieces below.
@@ -658,8 +691,7 @@ fn mission(
                 };
                 let id = next_id;
                 next_id += 1;
-                let ((s, x), attempts) =
-                    slide_and_record(config, arm, sensor, id, a, b, slide.speed_mm_s, stop)?;
+                let ((s, x), attempts) = rig.slide_and_record(id, a, b, slide.speed_mm_s)?;
                 let dir = u8::from(!forth);
                 let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
                 save_pass(&rec_path, &s, &x, dir)?;
@@ -721,10 +753,11 @@ fn mission(
                         recording: rec_path.display().to_string(),
                         attempts: *attempts,
                     };
-                    progress(&Progress::Slid {
+                    (rig.progress)(&Progress::Slid {
                         done: si + 1,
                         of: n_slides,
                         class: rec.class.clone().unwrap_or_else(|| "–".into()),
+                        pass: Box::new(rec.clone()),
                     });
                     report.passes.push(rec);
                 }
@@ -842,7 +875,7 @@ fn mission(
     report.stages = stages;
     report.elapsed_s = started.elapsed().as_secs_f64();
     report.exploration_s = report.stages.explore_s * config.speedup;
-    report.sensor_clock = sensor.sync.fit();
-    report.controller_clock = arm.sync.fit();
+    report.sensor_clock = rig.sensor.sync.fit();
+    report.controller_clock = rig.arm.sync.fit();
     Ok(report)
 }

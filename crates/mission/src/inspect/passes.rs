@@ -54,198 +54,254 @@ pub(super) fn classify(
     Ok((online.end_slide()?, online_width.end_slide()?))
 }
 
-/// Commands one pass and records it: the samples of the stroke (finger down, sliding) with
-/// the position along the pass (mm from `a`) interpolated from the arm's states. Retries once
-/// when the sensor stalled or the controller restarted.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn slide_and_record(
-    config: &InspectConfig,
-    arm: &mut Arm,
-    sensor: &mut Sensor,
-    id: u32,
-    a: [f64; 2],
-    b: [f64; 2],
-    speed: f64,
-    stop: &AtomicBool,
-) -> Result<(Recorded, u32), MissionError> {
-    let mut attempts = 0;
-    loop {
-        attempts += 1;
-        match try_slide(config, arm, sensor, id, a, b, speed, stop) {
-            Ok(r) => return Ok((r, attempts)),
-            Err(e @ (MissionError::SensorStalled { .. } | MissionError::ControllerRestarted))
-                if attempts < 2 =>
-            {
-                tracing::warn!("slide {id}: {e}; sliding again");
-                arm.restarted = false;
-                wait_for_stream(arm, sensor)?;
-                continue;
-            }
-            Err(e) => return Err(e),
-        }
-    }
+/// What a slide needs: the mission's settings, the arm, the sensor, the stop flag and the front
+/// end's progress callback, which also sees every sensor sample as it arrives.
+pub(super) struct Rig<'a> {
+    pub(super) config: &'a InspectConfig,
+    pub(super) arm: &'a mut Arm,
+    pub(super) sensor: &'a mut Sensor,
+    pub(super) stop: &'a AtomicBool,
+    pub(super) progress: &'a mut dyn FnMut(&Progress),
+    /// Samples already shown to the front end.
+    shown: usize,
+    last_shown: Instant,
 }
 
-/// Waits (5 s at most, keeping the link alive) until the sensor streams again: samples that
-/// arrive now, not ones left in the queue. Stops the arm and fails when it stays silent.
-fn wait_for_stream(arm: &mut Arm, sensor: &mut Sensor) -> Result<(), MissionError> {
-    let resume = Instant::now() + Duration::from_secs(5);
-    loop {
-        arm.pump(Duration::from_millis(5))?;
-        let before = sensor.last_at;
-        if sensor.drain()? > 0 && before.elapsed() < Duration::from_millis(50) {
-            return Ok(());
-        }
-        if Instant::now() > resume {
-            arm.stop();
-            return Err(MissionError::NoSamples {
-                port: sensor.path.clone(),
-            });
+/// How often the front end is shown the samples that arrived.
+const SHOW_SAMPLES_EVERY: Duration = Duration::from_millis(25);
+
+impl<'a> Rig<'a> {
+    pub(super) fn new(
+        config: &'a InspectConfig,
+        arm: &'a mut Arm,
+        sensor: &'a mut Sensor,
+        stop: &'a AtomicBool,
+        progress: &'a mut dyn FnMut(&Progress),
+    ) -> Self {
+        Rig {
+            config,
+            arm,
+            sensor,
+            stop,
+            progress,
+            shown: 0,
+            last_shown: Instant::now(),
         }
     }
-}
 
-#[allow(clippy::too_many_arguments)]
-pub(super) fn try_slide(
-    config: &InspectConfig,
-    arm: &mut Arm,
-    sensor: &mut Sensor,
-    id: u32,
-    a: [f64; 2],
-    b: [f64; 2],
-    speed: f64,
-    stop: &AtomicBool,
-) -> Result<Recorded, MissionError> {
-    let first_sample = sensor.samples.len();
-    arm.errors.clear();
-    // A retried slide keeps its id: forget the first attempt's end.
-    arm.done.retain(|&d| d != id);
-    let seq = arm.command(&Message::Slide(crackbot_link::Slide {
-        id,
-        start: Point2 {
-            x_mm: a[0] as f32,
-            y_mm: a[1] as f32,
-        },
-        end: Point2 {
-            x_mm: b[0] as f32,
-            y_mm: b[1] as f32,
-        },
-        speed_mm_s: speed as f32,
-        contact: Contact::DepthMm(1.0),
-    }))?;
-    let here = arm
-        .states
-        .back()
-        .map(|s| pose(&s.state))
-        .unwrap_or([0.0; 3]);
-    let travel =
-        (a[0] - here[0]).hypot(a[1] - here[1]) / config.scene.manipulator.travel_speed_mm_s;
-    let stroke = (b[0] - a[0]).hypot(b[1] - a[1]) / speed;
-    let budget = Duration::from_secs_f64((travel + stroke) / config.speedup * 1.5 + 3.0);
-    let deadline = Instant::now() + budget;
-    let stall_limit = Duration::from_millis(500);
-    loop {
-        if stop.load(Ordering::Relaxed) {
-            return Err(MissionError::Interrupted);
-        }
-        arm.pump(Duration::from_millis(2))?;
-        sensor.drain()?;
-        if let Some(e) = arm.errors.iter().find(|e| e.seq == seq) {
-            return Err(MissionError::Refused {
-                what: format!("slide {id}"),
-                reason: e.text.to_string(),
-            });
-        }
-        if arm.done.contains(&id) {
-            break;
-        }
-        if arm.restarted {
-            return Err(MissionError::ControllerRestarted);
-        }
-        if sensor.last_at.elapsed() > stall_limit {
-            // Wait for the stream to come back before sliding again, or give up.
-            wait_for_stream(arm, sensor)?;
-            arm.stop();
-            return Err(MissionError::SensorStalled {
-                port: sensor.path.clone(),
-                detail: format!("no sample for {} ms", stall_limit.as_millis()),
-            });
-        }
-        if arm
-            .last_state_at
-            .is_some_and(|t| t.elapsed() > Duration::from_secs(2))
+    /// Takes what the arm and the sensor sent (waiting up to `wait` for the arm), and shows the
+    /// front end the new samples every [`SHOW_SAMPLES_EVERY`]. Returns the samples taken.
+    pub(super) fn pump(&mut self, wait: Duration) -> Result<usize, MissionError> {
+        self.arm.pump(wait)?;
+        let n = self.sensor.drain()?;
+        if self.sensor.samples.len() > self.shown && self.last_shown.elapsed() >= SHOW_SAMPLES_EVERY
         {
-            arm.stop();
-            return Err(MissionError::ControllerUnreachable {
-                addr: arm.ep.peer_addr().to_string(),
-            });
+            let samples = self.sensor.samples[self.shown..]
+                .iter()
+                .map(|s| LiveSample {
+                    t_s: self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us) / 1e6,
+                    raw: s.raw,
+                })
+                .collect();
+            (self.progress)(&Progress::Samples { samples });
+            self.shown = self.sensor.samples.len();
+            self.last_shown = Instant::now();
         }
-        if Instant::now() > deadline {
-            arm.stop();
-            return Err(MissionError::Timeout {
-                what: format!("slide {id}"),
-                seconds: budget.as_secs_f64(),
-            });
-        }
+        Ok(n)
     }
-    // A few more states, so the end of the stroke is bracketed.
-    let settle = Instant::now() + Duration::from_millis(40);
-    while Instant::now() < settle {
-        arm.pump(Duration::from_millis(2))?;
-        sensor.drain()?;
-    }
-    // The stroke's samples: the arm down (z ≈ 0) in slide `id`.
-    let mut samples = Vec::new();
-    let mut positions = Vec::new();
-    let u = {
-        let d = [b[0] - a[0], b[1] - a[1]];
-        let l = d[0].hypot(d[1]).max(1e-9);
-        [d[0] / l, d[1] / l]
-    };
-    let mapped = mapped_states(arm);
-    let taken: Vec<TimedSample> = sensor.samples[first_sample..].to_vec();
-    // A silence of the sensor inside the stroke (a stall the stroke outlasted): slide again.
-    let nominal_us = 2500.0 / config.speedup;
-    let mut last_down: Option<f64> = None;
-    for s in taken.iter() {
-        let host = sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
-        if let Some((p, mode)) = position_at(&mapped, host) {
-            if p[2] < 0.5 && mode == (crackbot_link::Mode::Sliding { id }) {
-                // (The floor keeps scheduling hiccups of a loaded host from reading as stalls.)
-                if let Some(l) = last_down.filter(|l| host - l > (40.0 * nominal_us).max(200_000.0))
-                {
-                    return Err(MissionError::SensorStalled {
-                        port: sensor.path.clone(),
-                        detail: format!("no sample for {:.0} ms of the stroke", (host - l) / 1e3),
-                    });
+
+    /// Commands one pass and records it: the samples of the stroke (finger down, sliding) with
+    /// the position along the pass (mm from `a`) interpolated from the arm's states. Retries once
+    /// when the sensor stalled or the controller restarted.
+    pub(super) fn slide_and_record(
+        &mut self,
+        id: u32,
+        a: [f64; 2],
+        b: [f64; 2],
+        speed: f64,
+    ) -> Result<(Recorded, u32), MissionError> {
+        let mut attempts = 0;
+        loop {
+            attempts += 1;
+            match self.try_slide(id, a, b, speed) {
+                Ok(r) => return Ok((r, attempts)),
+                Err(
+                    e @ (MissionError::SensorStalled { .. } | MissionError::ControllerRestarted),
+                ) if attempts < 2 => {
+                    tracing::warn!("slide {id}: {e}; sliding again");
+                    self.arm.restarted = false;
+                    self.wait_for_stream()?;
+                    continue;
                 }
-                last_down = Some(host);
+                Err(e) => return Err(e),
             }
         }
     }
-    for s in taken {
-        let host = sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
-        let Some((p, mode)) = position_at(&mapped, host) else {
-            continue;
-        };
-        let down = p[2] < 0.5 && mode == crackbot_link::Mode::Sliding { id };
-        if down {
-            samples.push(s.raw.map(f64::from));
-            positions.push((p[0] - a[0]) * u[0] + (p[1] - a[1]) * u[1]);
+
+    /// Waits (5 s at most, keeping the link alive) until the sensor streams again: samples that
+    /// arrive now, not ones left in the queue. Stops the arm and fails when it stays silent.
+    fn wait_for_stream(&mut self) -> Result<(), MissionError> {
+        let resume = Instant::now() + Duration::from_secs(5);
+        loop {
+            let before = self.sensor.last_at;
+            if self.pump(Duration::from_millis(5))? > 0
+                && before.elapsed() < Duration::from_millis(50)
+            {
+                return Ok(());
+            }
+            if Instant::now() > resume {
+                self.arm.stop();
+                return Err(MissionError::NoSamples {
+                    port: self.sensor.path.clone(),
+                });
+            }
         }
     }
-    // Frames lost to a stall that lasted past the stroke's end: too few samples for the stroke.
-    let expected = (b[0] - a[0]).hypot(b[1] - a[1]) / speed * crackbot_sim::run::SAMPLE_RATE_HZ;
-    if (samples.len() as f64) < 0.8 * expected {
-        return Err(MissionError::SensorStalled {
-            port: sensor.path.clone(),
-            detail: format!(
-                "{} samples of the stroke, {expected:.0} expected",
-                samples.len()
-            ),
-        });
+
+    /// One attempt of [`Self::slide_and_record`].
+    fn try_slide(
+        &mut self,
+        id: u32,
+        a: [f64; 2],
+        b: [f64; 2],
+        speed: f64,
+    ) -> Result<Recorded, MissionError> {
+        let config = self.config;
+        let first_sample = self.sensor.samples.len();
+        self.arm.errors.clear();
+        // A retried slide keeps its id: forget the first attempt's end.
+        self.arm.done.retain(|&d| d != id);
+        let seq = self.arm.command(&Message::Slide(crackbot_link::Slide {
+            id,
+            start: Point2 {
+                x_mm: a[0] as f32,
+                y_mm: a[1] as f32,
+            },
+            end: Point2 {
+                x_mm: b[0] as f32,
+                y_mm: b[1] as f32,
+            },
+            speed_mm_s: speed as f32,
+            contact: Contact::DepthMm(1.0),
+        }))?;
+        let here = self
+            .arm
+            .states
+            .back()
+            .map(|s| pose(&s.state))
+            .unwrap_or([0.0; 3]);
+        let travel =
+            (a[0] - here[0]).hypot(a[1] - here[1]) / config.scene.manipulator.travel_speed_mm_s;
+        let stroke = (b[0] - a[0]).hypot(b[1] - a[1]) / speed;
+        let budget = Duration::from_secs_f64((travel + stroke) / config.speedup * 1.5 + 3.0);
+        let deadline = Instant::now() + budget;
+        let stall_limit = Duration::from_millis(500);
+        loop {
+            if self.stop.load(Ordering::Relaxed) {
+                return Err(MissionError::Interrupted);
+            }
+            self.pump(Duration::from_millis(2))?;
+            if let Some(e) = self.arm.errors.iter().find(|e| e.seq == seq) {
+                return Err(MissionError::Refused {
+                    what: format!("slide {id}"),
+                    reason: e.text.to_string(),
+                });
+            }
+            if self.arm.done.contains(&id) {
+                break;
+            }
+            if self.arm.restarted {
+                return Err(MissionError::ControllerRestarted);
+            }
+            if self.sensor.last_at.elapsed() > stall_limit {
+                // Wait for the stream to come back before sliding again, or give up.
+                self.wait_for_stream()?;
+                self.arm.stop();
+                return Err(MissionError::SensorStalled {
+                    port: self.sensor.path.clone(),
+                    detail: format!("no sample for {} ms", stall_limit.as_millis()),
+                });
+            }
+            if self
+                .arm
+                .last_state_at
+                .is_some_and(|t| t.elapsed() > Duration::from_secs(2))
+            {
+                self.arm.stop();
+                return Err(MissionError::ControllerUnreachable {
+                    addr: self.arm.ep.peer_addr().to_string(),
+                });
+            }
+            if Instant::now() > deadline {
+                self.arm.stop();
+                return Err(MissionError::Timeout {
+                    what: format!("slide {id}"),
+                    seconds: budget.as_secs_f64(),
+                });
+            }
+        }
+        // A few more states, so the end of the stroke is bracketed.
+        let settle = Instant::now() + Duration::from_millis(40);
+        while Instant::now() < settle {
+            self.pump(Duration::from_millis(2))?;
+        }
+        // The stroke's samples: the arm down (z ≈ 0) in slide `id`.
+        let mut samples = Vec::new();
+        let mut positions = Vec::new();
+        let u = {
+            let d = [b[0] - a[0], b[1] - a[1]];
+            let l = d[0].hypot(d[1]).max(1e-9);
+            [d[0] / l, d[1] / l]
+        };
+        let mapped = mapped_states(self.arm);
+        let taken: Vec<TimedSample> = self.sensor.samples[first_sample..].to_vec();
+        // A silence of the sensor inside the stroke (a stall the stroke outlasted): slide again.
+        let nominal_us = 2500.0 / config.speedup;
+        let mut last_down: Option<f64> = None;
+        for s in taken.iter() {
+            let host = self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
+            if let Some((p, mode)) = position_at(&mapped, host) {
+                if p[2] < 0.5 && mode == (crackbot_link::Mode::Sliding { id }) {
+                    // (The floor keeps scheduling hiccups of a loaded host from reading as stalls.)
+                    if let Some(l) =
+                        last_down.filter(|l| host - l > (40.0 * nominal_us).max(200_000.0))
+                    {
+                        return Err(MissionError::SensorStalled {
+                            port: self.sensor.path.clone(),
+                            detail: format!(
+                                "no sample for {:.0} ms of the stroke",
+                                (host - l) / 1e3
+                            ),
+                        });
+                    }
+                    last_down = Some(host);
+                }
+            }
+        }
+        for s in taken {
+            let host = self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
+            let Some((p, mode)) = position_at(&mapped, host) else {
+                continue;
+            };
+            let down = p[2] < 0.5 && mode == crackbot_link::Mode::Sliding { id };
+            if down {
+                samples.push(s.raw.map(f64::from));
+                positions.push((p[0] - a[0]) * u[0] + (p[1] - a[1]) * u[1]);
+            }
+        }
+        // Frames lost to a stall that lasted past the stroke's end: too few samples for the stroke.
+        let expected = (b[0] - a[0]).hypot(b[1] - a[1]) / speed * crackbot_sim::run::SAMPLE_RATE_HZ;
+        if (samples.len() as f64) < 0.8 * expected {
+            return Err(MissionError::SensorStalled {
+                port: self.sensor.path.clone(),
+                detail: format!(
+                    "{} samples of the stroke, {expected:.0} expected",
+                    samples.len()
+                ),
+            });
+        }
+        Ok((samples, positions))
     }
-    Ok((samples, positions))
 }
 
 /// Writes one pass in the recordings' CSV layout (the acquisition's columns plus the position).

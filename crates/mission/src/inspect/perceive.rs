@@ -2,8 +2,11 @@
 
 use super::*;
 
-/// Candidates in the scene's frame: rendered (simulated), detected, mapped to mm.
-pub(super) fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, MissionError> {
+/// Candidates in the scene's frame: rendered (simulated), detected, mapped to mm; and the frame
+/// itself (saved beside the report).
+pub(super) fn perceive(
+    config: &InspectConfig,
+) -> Result<(Vec<(Candidate, f64)>, FrameInfo), MissionError> {
     use crackbot_sim::render::{render, CrackAssets, RenderOptions};
     use crackbot_vision::model::{build_detector, DetectorChoice};
     use crackbot_vision::preprocess::PostprocessParams;
@@ -50,6 +53,12 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, 
     image
         .save(&frame_path)
         .map_err(|e| MissionError::Invalid(format!("{}: {e}", frame_path.display())))?;
+    let frame = FrameInfo {
+        path: frame_path.display().to_string(),
+        width: image.width(),
+        height: image.height(),
+        surface_to_image: crackbot_imaging::homography::matrix_rows(h.inverse()),
+    };
     let choice = DetectorChoice {
         model: config.detector_model.clone(),
         ..DetectorChoice::default()
@@ -92,7 +101,7 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Vec<(Candidate, f64)>, 
         };
         out.push((c, f64::from(d.score)));
     }
-    Ok(out)
+    Ok((out, frame))
 }
 
 pub(super) fn io_err(path: &Path, e: std::io::Error) -> MissionError {
