@@ -197,7 +197,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             bar.set_position(*done as u64);
             bar.set_message(format!("last pass: {class}"));
         }
-        Progress::Frame(_) | Progress::Samples { .. } => {}
+        Progress::Frame(_) | Progress::Samples { .. } | Progress::Health(_) => {}
     })
     .with_context(|| {
         format!(

@@ -276,4 +276,29 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
         })
         .collect();
     assert_eq!(passes, r.passes);
+    // The stream's health, twice a second: a rate near 400 Hz × the speed-up, counters growing.
+    let health: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            Progress::Health(h) => Some(*h),
+            _ => None,
+        })
+        .collect();
+    assert!(health.len() >= 2, "{} health events", health.len());
+    let rate = health[health.len() - 1].sample_rate_hz;
+    assert!(
+        (0.5 * 400.0 * c.speedup..1.5 * 400.0 * c.speedup).contains(&rate),
+        "{rate} Hz"
+    );
+    assert!(health.windows(2).all(|w| w[1].frames >= w[0].frames));
+    assert!(
+        // (A packet that crosses the link's start-up may be refused; none after.)
+        health
+            .iter()
+            .all(|h| h.crc_errors == 0 && h.link_rejected <= 1),
+        "{health:?}"
+    );
+    assert!(health
+        .iter()
+        .all(|h| h.state_age_ms.is_some_and(|a| a < 500.0)));
 }

@@ -220,6 +220,8 @@ pub enum Progress {
         /// The new samples, oldest first.
         samples: Vec<LiveSample>,
     },
+    /// The sensor stream's and the link's counters (every 0.5 s).
+    Health(StreamHealth),
     /// A slide pass is done and judged.
     Slid {
         /// Slides done.
@@ -245,6 +247,30 @@ pub struct FrameInfo {
     /// Surface mm → image pixels, a homography (row-major), to draw candidates and slides on
     /// the frame.
     pub surface_to_image: [[f64; 3]; 3],
+}
+
+/// How the sensor stream and the link to the controller are doing.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StreamHealth {
+    /// Sensor samples per second over the last interval (400 nominal).
+    pub sample_rate_hz: f64,
+    /// Sensor frames decoded so far.
+    pub frames: u64,
+    /// Sensor frames rejected by their CRC.
+    pub crc_errors: u64,
+    /// Gaps in the sensor's sequence numbers (runs of lost frames) and the frames lost in them.
+    pub gaps: u64,
+    /// Frames lost in those gaps.
+    pub missing_frames: u64,
+    /// Link datagrams sent to the controller.
+    pub link_sent: u64,
+    /// Link retries (commands not acknowledged in time).
+    pub link_retries: u64,
+    /// Link packets refused (bad tag, replay, unsigned, other link).
+    pub link_rejected: u64,
+    /// Age of the controller's last state, ms (its stream runs at 100 Hz: this is the link's
+    /// latency plus at most 10 ms; it grows without bound when the link is lost).
+    pub state_age_ms: Option<f64>,
 }
 
 /// One sensor sample as it arrived.

@@ -65,10 +65,14 @@ pub(super) struct Rig<'a> {
     /// Samples already shown to the front end.
     shown: usize,
     last_shown: Instant,
+    /// Samples and time at the last health event.
+    health_at: (usize, Instant),
 }
 
 /// How often the front end is shown the samples that arrived.
 const SHOW_SAMPLES_EVERY: Duration = Duration::from_millis(25);
+/// How often it is shown the stream's health.
+const SHOW_HEALTH_EVERY: Duration = Duration::from_millis(500);
 
 impl<'a> Rig<'a> {
     pub(super) fn new(
@@ -86,6 +90,7 @@ impl<'a> Rig<'a> {
             progress,
             shown: 0,
             last_shown: Instant::now(),
+            health_at: (0, Instant::now()),
         }
     }
 
@@ -106,6 +111,27 @@ impl<'a> Rig<'a> {
             (self.progress)(&Progress::Samples { samples });
             self.shown = self.sensor.samples.len();
             self.last_shown = Instant::now();
+        }
+        let (n0, t0) = self.health_at;
+        if t0.elapsed() >= SHOW_HEALTH_EVERY {
+            let now = self.sensor.samples.len();
+            let sensor = self.sensor.stream.stats();
+            let link = self.arm.ep.stats();
+            (self.progress)(&Progress::Health(StreamHealth {
+                sample_rate_hz: (now - n0) as f64 / t0.elapsed().as_secs_f64(),
+                frames: sensor.decoder.frames,
+                crc_errors: sensor.decoder.crc_errors,
+                gaps: sensor.gaps,
+                missing_frames: sensor.missing_frames,
+                link_sent: link.sent,
+                link_retries: link.retries,
+                link_rejected: link.rejected(),
+                state_age_ms: self
+                    .arm
+                    .last_state_at
+                    .map(|t| t.elapsed().as_secs_f64() * 1e3),
+            }));
+            self.health_at = (now, Instant::now());
         }
         Ok(n)
     }
