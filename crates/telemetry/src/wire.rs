@@ -1,0 +1,418 @@
+//! What travels: one [`Envelope`] per Zenoh sample, postcard-encoded (the link's compact serde
+//! format), with a version that a peer checks before anything else.
+//!
+//! ```text
+//! sample payload = postcard(Envelope { version: u16, robot, seq, sent_unix_ms, body: Telemetry })
+//! ```
+//!
+//! Postcard encodes integers as varints, strings and sequences with a varint length, enums with
+//! a varint variant index, `Option` with a 0/1 byte, `f64` as 8 little-endian bytes: the format
+//! is documented at <https://postcard.jamesmunns.com/wire-format>. A decoder that meets another
+//! `version` refuses the sample ([`WireError::Version`]) instead of misreading it.
+
+use serde::{Deserialize, Serialize};
+
+use crackbot_mission::inspect::{
+    FrameInfo, InspectMode, PassRecord, Progress, StreamHealth as MissionStreamHealth,
+};
+use crackbot_planner::{Candidate, Plan};
+
+/// Version of the telemetry encoding; bumped on any change of the types below.
+pub const WIRE_VERSION: u16 = 1;
+
+/// One published sample.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Envelope {
+    /// [`WIRE_VERSION`] of the sender.
+    pub version: u16,
+    /// The robot's name (also in the key expression).
+    pub robot: String,
+    /// Per-robot sequence number of the sample, from 1.
+    pub seq: u64,
+    /// When it was sent, ms since the Unix epoch (the robot's clock).
+    pub sent_unix_ms: u64,
+    /// What it carries.
+    pub body: Telemetry,
+}
+
+/// The topics a robot publishes (each under `crackbot/<robot>/<topic>`, see [`crate::keys`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Telemetry {
+    /// Sensor samples as they arrived (`tactile`).
+    Tactile(Vec<TactileSample>),
+    /// The frame the mission looked at (`camera`).
+    Camera(CameraFrame),
+    /// The detector's candidates in surface mm (`detections`).
+    Detections(Vec<Detection>),
+    /// The planned slides (`plan`).
+    Plan(PlannedSlides),
+    /// One judged slide pass (`verdicts`).
+    Verdict(PassVerdict),
+    /// The robot is alive, and how its streams are doing (`health`, at least every 250 ms).
+    Health(Health),
+    /// The mission's stage and, at the end, its report (`mission`).
+    Mission(MissionStatus),
+}
+
+impl Telemetry {
+    /// The topic this sample is published under.
+    pub fn topic(&self) -> crate::keys::Topic {
+        use crate::keys::Topic;
+        match self {
+            Telemetry::Tactile(_) => Topic::Tactile,
+            Telemetry::Camera(_) => Topic::Camera,
+            Telemetry::Detections(_) => Topic::Detections,
+            Telemetry::Plan(_) => Topic::Plan,
+            Telemetry::Verdict(_) => Topic::Verdicts,
+            Telemetry::Health(_) => Topic::Health,
+            Telemetry::Mission(_) => Topic::Mission,
+        }
+    }
+}
+
+/// One sensor sample.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TactileSample {
+    /// Time since the mission's link started, s.
+    pub t_s: f64,
+    /// D1, D2, D3, P, counts.
+    pub raw: [u16; 4],
+}
+
+/// A camera frame, PNG-encoded, with the homography that draws surface mm on it.
+#[derive(Clone, PartialEq, Serialize, Deserialize)]
+pub struct CameraFrame {
+    /// Width, px.
+    pub width: u32,
+    /// Height, px.
+    pub height: u32,
+    /// Surface mm → pixels (row-major homography).
+    pub surface_to_image: [[f64; 3]; 3],
+    /// The PNG file's bytes.
+    pub png: Vec<u8>,
+}
+
+impl std::fmt::Debug for CameraFrame {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CameraFrame")
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("png_bytes", &self.png.len())
+            .finish()
+    }
+}
+
+impl CameraFrame {
+    /// Where surface point `mm` lands in the frame, px (`None` behind the camera).
+    pub fn to_pixel(&self, mm: [f64; 2]) -> Option<[f64; 2]> {
+        let m = &self.surface_to_image;
+        let w = m[2][0] * mm[0] + m[2][1] * mm[1] + m[2][2];
+        if !(w.is_finite() && w > 0.0) {
+            return None;
+        }
+        Some([
+            (m[0][0] * mm[0] + m[0][1] * mm[1] + m[0][2]) / w,
+            (m[1][0] * mm[0] + m[1][1] * mm[1] + m[1][2]) / w,
+        ])
+    }
+}
+
+/// A candidate crack from the camera.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Detection {
+    /// Its id (the plan and the verdicts refer to it).
+    pub id: u64,
+    /// Centre, mm.
+    pub centre_mm: [f64; 2],
+    /// Main axis, degrees from +x.
+    pub axis_deg: f64,
+    /// Length along the axis, mm.
+    pub length_mm: f64,
+    /// Extent across it, mm, when known.
+    pub width_mm: Option<f64>,
+    /// The detector's score.
+    pub score: f64,
+}
+
+impl From<&Candidate> for Detection {
+    fn from(c: &Candidate) -> Self {
+        Detection {
+            id: c.id,
+            centre_mm: c.centre_mm,
+            axis_deg: c.axis_deg,
+            length_mm: c.length_mm,
+            width_mm: c.width_mm,
+            score: c.score,
+        }
+    }
+}
+
+/// The plan's slides.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlannedSlides {
+    /// Each slide, in order.
+    pub slides: Vec<PlannedSlide>,
+    /// The planner's time estimate, s.
+    pub estimated_s: f64,
+}
+
+/// One planned slide.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlannedSlide {
+    /// Candidates it crosses (none: a tactile-only scan row).
+    pub candidates: Vec<u64>,
+    /// Start, mm.
+    pub start_mm: [f64; 2],
+    /// End, mm.
+    pub end_mm: [f64; 2],
+    /// One-way passes.
+    pub passes: u32,
+    /// Sliding speed, mm/s.
+    pub speed_mm_s: f64,
+}
+
+impl From<&Plan> for PlannedSlides {
+    fn from(p: &Plan) -> Self {
+        PlannedSlides {
+            slides: p
+                .slides
+                .iter()
+                .map(|s| PlannedSlide {
+                    candidates: s.candidates.clone(),
+                    start_mm: s.start_mm,
+                    end_mm: s.end_mm,
+                    passes: s.passes,
+                    speed_mm_s: s.speed_mm_s,
+                })
+                .collect(),
+            estimated_s: p.estimated_s,
+        }
+    }
+}
+
+/// One judged slide pass.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PassVerdict {
+    /// Slide pass id.
+    pub id: u32,
+    /// The candidate it checked.
+    pub candidate: Option<u64>,
+    /// Start, mm.
+    pub start_mm: [f64; 2],
+    /// End, mm.
+    pub end_mm: [f64; 2],
+    /// Samples classified.
+    pub samples: u64,
+    /// The recognition verdict (`None`: too short to judge).
+    pub class: Option<String>,
+    /// Its vote, 0–1.
+    pub confidence: f64,
+    /// The width verdict, mm.
+    pub width_mm: Option<f64>,
+    /// A doubt (unknown surface, dead channel…).
+    pub doubt: Option<String>,
+    /// Where the proximity channel's dip puts the crack: centre and width, mm along the pass.
+    pub dip_mm: Option<[f64; 2]>,
+}
+
+impl From<&PassRecord> for PassVerdict {
+    fn from(p: &PassRecord) -> Self {
+        PassVerdict {
+            id: p.id,
+            candidate: p.candidate,
+            start_mm: p.start_mm,
+            end_mm: p.end_mm,
+            samples: p.samples as u64,
+            class: p.class.clone(),
+            confidence: p.confidence,
+            width_mm: p.width_mm,
+            doubt: p.doubt.clone(),
+            dip_mm: p.dip.map(|d| [d.centre_mm, d.width_mm]),
+        }
+    }
+}
+
+/// The robot's heartbeat.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Health {
+    /// Since the robot's telemetry started, s.
+    pub uptime_s: f64,
+    /// The mission's streams, while one runs.
+    pub stream: Option<StreamHealth>,
+}
+
+/// The sensor stream's and the link's counters ([`crackbot_mission::inspect::StreamHealth`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct StreamHealth {
+    /// Sensor samples per second (400 nominal, times the simulation's speed-up).
+    pub sample_rate_hz: f64,
+    /// Sensor frames decoded.
+    pub frames: u64,
+    /// Sensor frames rejected by their CRC.
+    pub crc_errors: u64,
+    /// Gaps in the sensor's sequence numbers.
+    pub gaps: u64,
+    /// Frames lost in them.
+    pub missing_frames: u64,
+    /// Link datagrams sent.
+    pub link_sent: u64,
+    /// Link retries.
+    pub link_retries: u64,
+    /// Link packets refused.
+    pub link_rejected: u64,
+    /// Age of the controller's last state, ms (the link's latency, or how long it has been lost).
+    pub state_age_ms: Option<f64>,
+}
+
+impl From<&MissionStreamHealth> for StreamHealth {
+    fn from(h: &MissionStreamHealth) -> Self {
+        StreamHealth {
+            sample_rate_hz: h.sample_rate_hz,
+            frames: h.frames,
+            crc_errors: h.crc_errors,
+            gaps: h.gaps,
+            missing_frames: h.missing_frames,
+            link_sent: h.link_sent,
+            link_retries: h.link_retries,
+            link_rejected: h.link_rejected,
+            state_age_ms: h.state_age_ms,
+        }
+    }
+}
+
+/// Where a mission stands.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Phase {
+    /// No mission: waiting for a command.
+    Idle,
+    /// Starting the controller, the sensor and the models.
+    Starting,
+    /// Looking: frame and detector.
+    Perceiving,
+    /// Sliding: `done` of `of` slides.
+    Exploring {
+        /// Slides done.
+        done: u32,
+        /// Slides planned.
+        of: u32,
+    },
+    /// Finished: the report is in [`MissionStatus::report_json`].
+    Finished,
+    /// Failed or stopped: the reason.
+    Failed(String),
+}
+
+/// The mission's stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MissionStatus {
+    /// Which mission (counts from 1 on each robot).
+    pub mission: u32,
+    /// tactile, vision or fused.
+    pub mode: String,
+    /// The scene's name.
+    pub scene: String,
+    /// Where it stands.
+    pub phase: Phase,
+    /// The report (the JSON that `crackbot run --json` prints), once finished.
+    pub report_json: Option<String>,
+}
+
+/// The mode's name as the command line spells it.
+pub fn mode_name(mode: InspectMode) -> String {
+    match mode {
+        InspectMode::Tactile => "tactile",
+        InspectMode::Vision => "vision",
+        InspectMode::Fused => "fused",
+    }
+    .to_string()
+}
+
+/// What a mission's progress event becomes on the wire (`None`: nothing to publish; stage
+/// changes are published by the robot as [`Telemetry::Mission`]).
+pub fn from_progress(p: &Progress) -> Result<Option<Telemetry>, WireError> {
+    Ok(Some(match p {
+        Progress::Frame(f) => Telemetry::Camera(camera_frame(f)?),
+        Progress::Perceived { detections, .. } => {
+            Telemetry::Detections(detections.iter().map(Detection::from).collect())
+        }
+        Progress::Planned { plan, .. } => Telemetry::Plan(PlannedSlides::from(plan)),
+        Progress::Samples { samples } => Telemetry::Tactile(
+            samples
+                .iter()
+                .map(|s| TactileSample {
+                    t_s: s.t_s,
+                    raw: s.raw,
+                })
+                .collect(),
+        ),
+        Progress::Slid { pass, .. } => Telemetry::Verdict(PassVerdict::from(pass.as_ref())),
+        Progress::Health(_) | Progress::Starting => return Ok(None),
+    }))
+}
+
+/// Reads the frame's PNG from where the mission saved it.
+pub fn camera_frame(f: &FrameInfo) -> Result<CameraFrame, WireError> {
+    let png = std::fs::read(&f.path).map_err(|e| WireError::Frame {
+        path: f.path.clone(),
+        source: e,
+    })?;
+    Ok(CameraFrame {
+        width: f.width,
+        height: f.height,
+        surface_to_image: f.surface_to_image,
+        png,
+    })
+}
+
+/// Why a sample could not be encoded or decoded.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum WireError {
+    /// The bytes are not an envelope.
+    #[error("malformed telemetry sample ({len} bytes): {source}")]
+    Malformed {
+        /// Payload length.
+        len: usize,
+        /// What postcard said.
+        source: postcard::Error,
+    },
+    /// Another version of the encoding.
+    #[error("telemetry of wire version {got} (this build speaks {WIRE_VERSION}): update one side")]
+    Version {
+        /// The version the sample claims.
+        got: u16,
+    },
+    /// Encoding failed.
+    #[error("encoding telemetry: {0}")]
+    Encode(postcard::Error),
+    /// The frame file could not be read.
+    #[error("reading the camera frame {path}: {source}")]
+    Frame {
+        /// The file.
+        path: String,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+/// The sample's bytes.
+pub fn encode(envelope: &Envelope) -> Result<Vec<u8>, WireError> {
+    postcard::to_allocvec(envelope).map_err(WireError::Encode)
+}
+
+/// An envelope from a sample's bytes: the version is checked first (it is the first field), so
+/// a sample of another version is named as such, not as garbage.
+pub fn decode(bytes: &[u8]) -> Result<Envelope, WireError> {
+    let (version, _) =
+        postcard::take_from_bytes::<u16>(bytes).map_err(|source| WireError::Malformed {
+            len: bytes.len(),
+            source,
+        })?;
+    if version != WIRE_VERSION {
+        return Err(WireError::Version { got: version });
+    }
+    postcard::from_bytes(bytes).map_err(|source| WireError::Malformed {
+        len: bytes.len(),
+        source,
+    })
+}
