@@ -416,3 +416,72 @@ pub fn decode(bytes: &[u8]) -> Result<Envelope, WireError> {
         source,
     })
 }
+
+/// Turns one mission's progress events into telemetry: the data they carry and the mission's
+/// stage as it changes. The robot publishes what it returns; the operator app applies it to a
+/// [`crate::RobotView`] for missions it runs in-process.
+#[derive(Debug, Clone)]
+pub struct MissionFeed {
+    status: MissionStatus,
+}
+
+impl MissionFeed {
+    /// Mission number `mission` (from 1 on each robot) of `mode` on scene `scene`.
+    pub fn new(mission: u32, mode: InspectMode, scene: &str) -> Self {
+        MissionFeed {
+            status: MissionStatus {
+                mission,
+                mode: mode_name(mode),
+                scene: scene.to_string(),
+                phase: Phase::Starting,
+                report_json: None,
+            },
+        }
+    }
+
+    /// The mission's status now.
+    pub fn status(&self) -> Telemetry {
+        Telemetry::Mission(self.status.clone())
+    }
+
+    /// What `p` becomes: its data, preceded by the new stage when the stage changed.
+    pub fn on_progress(&mut self, p: &Progress) -> Result<Vec<Telemetry>, WireError> {
+        let phase = match p {
+            Progress::Starting => Some(Phase::Starting),
+            Progress::Frame(_) => Some(Phase::Perceiving),
+            Progress::Planned { slides, .. } => Some(Phase::Exploring {
+                done: 0,
+                of: *slides as u32,
+            }),
+            Progress::Slid { done, of, .. } => Some(Phase::Exploring {
+                done: *done as u32,
+                of: *of as u32,
+            }),
+            _ => None,
+        };
+        let mut out = Vec::new();
+        if let Some(phase) = phase.filter(|ph| *ph != self.status.phase) {
+            self.status.phase = phase;
+            out.push(self.status());
+        }
+        out.extend(from_progress(p)?);
+        Ok(out)
+    }
+
+    /// The final status: finished with the report's JSON, or failed with the error.
+    pub fn finish<R: Serialize, E: std::fmt::Display>(
+        &mut self,
+        result: Result<&R, &E>,
+    ) -> Telemetry {
+        match result {
+            Ok(report) => {
+                self.status.phase = Phase::Finished;
+                self.status.report_json = serde_json::to_string(report).ok();
+            }
+            Err(e) => {
+                self.status.phase = Phase::Failed(e.to_string());
+            }
+        }
+        self.status()
+    }
+}
