@@ -117,6 +117,8 @@ pub struct OperatorApp {
     log_rx: Receiver<String>,
     /// Frame intervals.
     pub frames: FrameTimes,
+    /// Time spent building each frame's UI (this app's share of a frame).
+    pub ui_times: FrameTimes,
     last_frame: Option<Instant>,
     texture: Option<((u32, usize, u32, u32), egui::TextureHandle)>,
     /// Emergency stops issued.
@@ -166,6 +168,7 @@ impl OperatorApp {
             log_tx,
             log_rx,
             frames: FrameTimes::new(4096),
+            ui_times: FrameTimes::new(4096),
             last_frame: None,
             texture: None,
             estops: 0,
@@ -361,17 +364,22 @@ impl OperatorApp {
             (None, Some(l)) => l,
             (None, None) => self.window_s,
         };
-        let end = end.max(first.unwrap_or(end) + self.window_s.min(1.0));
-        (end - self.window_s, end)
+        let start = end - self.window_s;
+        match first {
+            // Less data than the window while following: the data fills the plot.
+            Some(f) if self.paused_end.is_none() && f > start => (f, end.max(f + 1.0)),
+            _ => (start, end),
+        }
     }
 
     fn snapshot(&self) -> Snapshot {
         let now = Instant::now();
+        let live = matches!(self.backend, Backend::Live(_));
         let f = lock(&self.fleet);
         let mut snap = Snapshot {
             robots: f
                 .robots()
-                .map(|r| (r.name.clone(), r.is_lost(now), r.phase().cloned()))
+                .map(|r| (r.name.clone(), live && r.is_lost(now), r.phase().cloned()))
                 .collect(),
             ..Snapshot::default()
         };
@@ -429,7 +437,11 @@ impl OperatorApp {
             *line = decimate::min_max(pts, t0, t1 + 1e-9, columns);
         }
         snap.health = r.health;
-        snap.lost = r.is_lost(now);
+        snap.lost = match &self.backend {
+            Backend::Sim(s) => s.running() && r.is_lost(now),
+            Backend::Replay { .. } => false,
+            Backend::Live(_) => r.is_lost(now),
+        };
         snap.latency_ms = r.latency_ms;
         snap.received = r.received;
         snap.out_of_order = r.out_of_order;
@@ -456,13 +468,16 @@ impl OperatorApp {
             .resizable(true)
             .default_size(150.0)
             .show(ui, |ui| self.status_panel(ui, &snap));
+        let half = (ui.available_width() * 0.45).max(200.0);
         egui::Panel::left("camera")
             .resizable(true)
-            .default_size(460.0)
+            .default_size(half.min(520.0))
+            .max_size(half)
             .show(ui, |ui| self.camera_panel(ui, &snap));
         egui::CentralPanel::default().show(ui, |ui| self.signals_panel(ui, &snap));
         self.confirm_modal(&ctx);
         self.measure_step(&ctx, &snap);
+        self.ui_times.push(now.elapsed().as_secs_f64());
         // Live data: keep drawing.
         ctx.request_repaint();
     }
@@ -614,7 +629,11 @@ impl OperatorApp {
         let avail = ui.available_width();
         match (&self.texture, &snap.camera_geom) {
             (Some((_, tex)), Some(geom)) => {
-                let size = overlay::fit(geom.width, geom.height, [avail, avail * 0.75]);
+                let size = overlay::fit(
+                    geom.width,
+                    geom.height,
+                    [avail, (ui.available_height() * 0.55).max(120.0)],
+                );
                 let (rect, _) =
                     ui.allocate_exact_size(egui::vec2(size[0], size[1]), egui::Sense::hover());
                 let painter = ui.painter_at(rect);
@@ -862,6 +881,12 @@ impl OperatorApp {
             ui.strong("Frame times");
             if self.show_debug {
                 frame_time_panel(ui, self.frames.stats());
+                if let Some(u) = self.ui_times.stats() {
+                    ui.small(format!(
+                        "UI build: median {:.1} ms, p99 {:.1} ms",
+                        u.median_ms, u.p99_ms
+                    ));
+                }
             }
 
             let ui = &mut cols[2];
@@ -1004,14 +1029,15 @@ impl OperatorApp {
             return;
         }
         let streaming = snap.lines.iter().all(|l| !l.is_empty())
-            && matches!(
+            && (matches!(
                 snap.mission.as_ref().map(|m| &m.phase),
                 Some(Phase::Exploring { .. })
-            );
+            ) || matches!(self.backend, Backend::Replay { .. }));
         match m.counted {
             None if streaming => {
                 m.counted = Some(0);
                 self.frames.clear();
+                self.ui_times.clear();
             }
             None => {
                 if m.since.elapsed().as_secs() > 300 {
@@ -1028,6 +1054,7 @@ impl OperatorApp {
                 let stats = self.frames.stats();
                 let body = serde_json::json!({
                     "frames": stats,
+                    "ui_build": self.ui_times.stats(),
                     "channels": CHANNELS.len(),
                     "window_s": self.window_s,
                     "visible_samples_last_frame": snap.visible_samples,

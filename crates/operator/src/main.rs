@@ -71,6 +71,9 @@ struct Args {
     /// The plots' time window, s (1–60).
     #[arg(long, default_value_t = 60.0)]
     window: f64,
+    /// Draw as fast as possible instead of at the display's refresh rate (measurements).
+    #[arg(long)]
+    no_vsync: bool,
     /// Window size, px.
     #[arg(long, default_value = "1280x800")]
     size: String,
@@ -156,6 +159,10 @@ fn main() -> anyhow::Result<()> {
             .with_inner_size([w, h])
             .with_title("crackbot operator"),
         renderer: eframe::Renderer::Glow,
+        glow_options: eframe::egui_glow::GlowConfiguration {
+            vsync: !args.no_vsync,
+            ..Default::default()
+        },
         ..Default::default()
     };
     eframe::run_native(

@@ -70,6 +70,12 @@ fn the_window_runs_a_simulated_mission_at_speed_and_saves_a_screenshot() {
     assert!(frames["frames"].as_u64().unwrap_or(0) >= 500, "{text}");
     assert_eq!(v["channels"], 4);
     assert!(
+        v["robot_phase"]
+            .as_str()
+            .is_some_and(|p| p.starts_with("exploring")),
+        "measured while the finger slides: {text}"
+    );
+    assert!(
         v["visible_samples_last_frame"].as_u64().unwrap_or(0) > 400,
         "four channels were streaming: {text}"
     );
