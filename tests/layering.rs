@@ -54,9 +54,15 @@ const LAYERS: &[(&str, &[&str])] = &[
         "services: missions, figures",
         &["crackbot-mission", "crackbot-plots"],
     ),
+    ("fleet: telemetry over Zenoh", &["crackbot-telemetry"]),
     (
-        "front ends: binaries and cross-crate tests",
-        &["crackbot-cli", "crackbot-lab", "crackbot-tests"],
+        "front ends: binaries, the operator app and cross-crate tests",
+        &[
+            "crackbot-cli",
+            "crackbot-lab",
+            "crackbot-operator",
+            "crackbot-tests",
+        ],
     ),
 ];
 
@@ -134,6 +140,7 @@ const ONLY_IN: &[(&str, &str)] = &[
     ("egui_plot", "crackbot-operator"),
     ("winit", "crackbot-operator"),
     ("statrs", "crackbot-tactile"),
+    ("zenoh", "crackbot-telemetry"),
 ];
 
 /// Dependencies of binaries, not of library-only crates.
@@ -322,6 +329,46 @@ fn the_robot_path_builds_without_research_gui_or_fleet_crates() {
         }
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn the_research_cli_builds_without_gui_or_fleet_crates() {
+    let tree = normal_tree("crackbot-lab");
+    assert!(tree.contains("crackbot-lab"), "cargo tree lists {tree:?}");
+    let found: Vec<_> = HEAVY
+        .iter()
+        .filter(|h| !matches!(**h, "plotters" | "statrs") && tree.contains(**h))
+        .collect();
+    assert!(found.is_empty(), "crackbot-lab compiles {found:?}");
+}
+
+#[test]
+fn the_robots_telemetry_feature_brings_zenoh_and_only_through_the_telemetry_crate() {
+    let with = run(cargo().args([
+        "tree",
+        "-p",
+        "crackbot-cli",
+        "--features",
+        "telemetry",
+        "-e",
+        "normal",
+        "--prefix",
+        "none",
+        "-i",
+        "zenoh",
+        "--depth",
+        "1",
+    ]));
+    let users: BTreeSet<&str> = with
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    assert_eq!(
+        users,
+        BTreeSet::from(["crackbot-telemetry"]),
+        "zenoh's dependants in crackbot-cli --features telemetry:\n{with}"
+    );
 }
 
 #[test]

@@ -7,7 +7,9 @@ use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::{Mutex, OnceLock};
 
 /// Path of a workspace binary, built (once per test process) with the profile of the running
-/// test, so `cargo test` alone is enough. `crackbot` comes with `crackbot-lab` beside it, which
+/// test, so `cargo test` alone is enough. Every test gets the binaries built with the robot's
+/// fleet telemetry (`crackbot-cli/telemetry`: it only adds flags), so that no two tests rebuild
+/// them with different features. `crackbot` comes with `crackbot-lab` beside it, which
 /// runs the research commands `crackbot` hands on.
 pub fn binary(name: &str) -> PathBuf {
     static BUILT: OnceLock<Mutex<Vec<String>>> = OnceLock::new();
@@ -28,6 +30,7 @@ pub fn binary(name: &str) -> PathBuf {
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
         let mut cmd = Command::new(cargo);
         cmd.args(["build", "--quiet", "--workspace", "--bin", name]);
+        cmd.args(["--features", "crackbot-cli/telemetry"]);
         if name == "crackbot" {
             cmd.args(["--bin", "crackbot-lab"]);
         }

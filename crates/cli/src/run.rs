@@ -106,10 +106,64 @@ pub struct RunArgs {
     /// Hardware: the camera's pixel → surface calibration (`crackbot homography fit`).
     #[arg(long, requires = "camera")]
     pub homography: Option<PathBuf>,
+    #[command(flatten)]
+    pub fleet: FleetArgs,
+}
+
+/// Fleet telemetry over Zenoh (builds with `--features telemetry`).
+#[derive(Debug, Args)]
+pub struct FleetArgs {
+    /// Publish the mission over Zenoh as robot NAME (crackbot/NAME/…) and take stop commands
+    /// from stations.
+    #[arg(long, value_name = "NAME")]
+    pub telemetry: Option<String>,
+    /// With --telemetry: wait for missions that stations start (signed with --command-key)
+    /// instead of running one now; runs them one after another until Ctrl-C.
+    #[arg(long, requires = "telemetry")]
+    pub serve: bool,
+    /// Zenoh endpoint to listen on, e.g. tcp/127.0.0.1:7448 (repeatable).
+    #[arg(long, value_name = "ENDPOINT", requires = "telemetry")]
+    pub zenoh_listen: Vec<String>,
+    /// Zenoh endpoint to connect to (repeatable) [default, when no endpoint is given: this
+    /// machine's station, tcp/127.0.0.1:7447].
+    #[arg(long, value_name = "ENDPOINT", requires = "telemetry")]
+    pub zenoh_connect: Vec<String>,
+    /// A site's Zenoh router: join as its client instead of as a peer.
+    #[arg(long, value_name = "ENDPOINT", requires = "telemetry")]
+    pub zenoh_router: Option<String>,
+    /// Key that signs stations' commands (the link's key format: 64–128 hex digits, mode 0600)
+    /// [default: --key]. Without one, stations can watch this robot and stop its arm, nothing
+    /// more.
+    #[arg(long, value_name = "FILE", requires = "telemetry")]
+    pub command_key: Option<PathBuf>,
 }
 
 /// Runs the mission and prints the report.
 pub fn run(args: RunArgs) -> Result<()> {
+    let config = config_from(&args)?;
+    if args.fleet.telemetry.is_some() {
+        return fleet(&args, config);
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // Ctrl-C: the mission stops the arm first, then ends with what it has recorded.
+        ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
+            .context("installing the Ctrl-C handler")?;
+    }
+    let bar = progress_bar(args.json);
+    let report = run_inspection(&config, &stop, |p| show(&bar, p)).with_context(|| {
+        format!(
+            "mission failed (recordings so far are in {})",
+            args.out.display()
+        )
+    })?;
+    bar.finish_and_clear();
+    print_report(&report, args.json)
+}
+
+/// The mission's configuration from the flags.
+fn config_from(args: &RunArgs) -> Result<InspectConfig> {
     let scene = Scene::load_or_default(args.scene.as_deref())?;
     let mut config = InspectConfig::new(scene, &args.out);
     config.mode = args.mode;
@@ -126,13 +180,13 @@ pub fn run(args: RunArgs) -> Result<()> {
         config.planner.margin_mm = v;
         config.planner.min_margin_mm = config.planner.min_margin_mm.min(v);
     }
-    if let Some(p) = args.recognition_model {
-        config.recognition_model = p;
+    if let Some(p) = &args.recognition_model {
+        config.recognition_model = p.clone();
     }
-    if let Some(p) = args.width_model {
-        config.width_model = p;
+    if let Some(p) = &args.width_model {
+        config.width_model = p.clone();
     }
-    config.detector_model = args.detector;
+    config.detector_model = args.detector.clone();
     config.clock.offset_us = args.clock_offset_us;
     config.clock.drift_ppm = args.clock_drift_ppm;
     if args.loss > 0.0 || args.reorder > 0.0 || args.duplicate > 0.0 {
@@ -152,26 +206,23 @@ pub fn run(args: RunArgs) -> Result<()> {
             duration: Duration::from_secs(1),
         });
     config.faults.restart_after = args.restart_after_s.map(Duration::from_secs_f64);
-    if let (Some(serial), Some(controller), Some(key)) = (args.serial, args.controller, args.key) {
+    if let (Some(serial), Some(controller), Some(key)) = (&args.serial, args.controller, &args.key)
+    {
         config.hardware = Some(crackbot_mission::inspect::Hardware {
-            serial,
+            serial: serial.clone(),
             controller,
             bind: args.bind,
-            key_file: key,
-            camera: args.camera,
-            homography: args.homography,
+            key_file: key.clone(),
+            camera: args.camera.clone(),
+            homography: args.homography.clone(),
         });
     }
+    Ok(config)
+}
 
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // Ctrl-C: the mission stops the arm first, then ends with what it has recorded.
-        ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
-            .context("installing the Ctrl-C handler")?;
-    }
+fn progress_bar(hidden: bool) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(0);
-    if args.json {
+    if hidden {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
     bar.set_style(
@@ -180,7 +231,12 @@ pub fn run(args: RunArgs) -> Result<()> {
         )
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let report = run_inspection(&config, &stop, |p| match p {
+    bar
+}
+
+/// A mission's progress on the bar.
+fn show(bar: &indicatif::ProgressBar, p: &Progress) {
+    match p {
         Progress::Starting => bar.set_message("starting the controller, the sensor and the models"),
         Progress::Perceived { candidates, .. } => {
             bar.set_message(format!("{candidates} candidates in the frame"))
@@ -198,20 +254,111 @@ pub fn run(args: RunArgs) -> Result<()> {
             bar.set_message(format!("last pass: {class}"));
         }
         Progress::Frame(_) | Progress::Samples { .. } | Progress::Health(_) => {}
-    })
-    .with_context(|| {
-        format!(
-            "mission failed (recordings so far are in {})",
-            args.out.display()
-        )
-    })?;
-    bar.finish_and_clear();
-    if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+    }
+}
+
+fn print_report(report: &InspectReport, json: bool) -> Result<()> {
+    if json {
+        println!("{}", serde_json::to_string(report)?);
     } else {
-        print_summary(&report);
+        print_summary(report);
     }
     Ok(())
+}
+
+/// The mission with fleet telemetry: published over Zenoh; serving, missions come from
+/// stations.
+#[cfg(feature = "telemetry")]
+fn fleet(args: &RunArgs, config: InspectConfig) -> Result<()> {
+    use crackbot_telemetry::{RobotService, ZenohOptions, DEFAULT_STATION_ENDPOINT};
+    let f = &args.fleet;
+    let name = f.telemetry.as_deref().unwrap_or_default();
+    let options = ZenohOptions {
+        listen: f.zenoh_listen.clone(),
+        // No endpoint given: join the station of this machine.
+        connect: if f.zenoh_connect.is_empty()
+            && f.zenoh_listen.is_empty()
+            && f.zenoh_router.is_none()
+        {
+            vec![DEFAULT_STATION_ENDPOINT.to_string()]
+        } else {
+            f.zenoh_connect.clone()
+        },
+        router: f.zenoh_router.clone(),
+        multicast_scouting: false,
+    };
+    let key = match f.command_key.as_ref().or(args.key.as_ref()) {
+        Some(path) => Some(
+            crackbot_link::Key::from_file(path)
+                .with_context(|| format!("the command key {}", path.display()))?,
+        ),
+        None => None,
+    };
+    let service = RobotService::open(name, &options, key.as_ref(), f.serve)
+        .with_context(|| format!("joining the fleet as robot {name}"))?;
+    ctrlc::set_handler(service.shutdown_handle()).context("installing the Ctrl-C handler")?;
+    if !f.serve {
+        let bar = progress_bar(args.json);
+        let report = service
+            .run_mission(&config, |p| show(&bar, p))
+            .with_context(|| {
+                format!(
+                    "mission failed (recordings so far are in {})",
+                    args.out.display()
+                )
+            })?;
+        bar.finish_and_clear();
+        return print_report(&report, args.json);
+    }
+    eprintln!(
+        "robot {name}: waiting for missions from stations ({}); Ctrl-C ends",
+        if key.is_some() {
+            "signed commands"
+        } else {
+            "no command key: only emergency stops"
+        }
+    );
+    let mut served = 0u32;
+    while !service.is_shut_down() {
+        let Some(start) = service.next_start(Duration::from_millis(200)) else {
+            continue;
+        };
+        served += 1;
+        let mut mission = config.clone();
+        // Each mission's report and recordings in a folder of its own.
+        mission.out_dir = args.out.join(format!("mission-{served:03}"));
+        let setup = (|| -> Result<()> {
+            mission.mode = start.mode.parse().map_err(|e: String| anyhow::anyhow!(e))?;
+            if let Some(toml) = &start.scene_toml {
+                mission.scene = Scene::from_toml_str(toml, "<scene from the station>")?;
+            }
+            Ok(())
+        })();
+        if let Err(e) = setup {
+            eprintln!("robot {name}: refused a mission: {e:#}");
+            service.refuse_start(&format!("{e:#}"))?;
+            continue;
+        }
+        let bar = progress_bar(args.json);
+        match service.run_mission(&mission, |p| show(&bar, p)) {
+            Ok(report) => {
+                bar.finish_and_clear();
+                print_report(&report, args.json)?;
+            }
+            Err(e) => {
+                bar.finish_and_clear();
+                eprintln!("robot {name}: mission failed: {e}");
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(not(feature = "telemetry"))]
+fn fleet(_: &RunArgs, _: InspectConfig) -> Result<()> {
+    anyhow::bail!(
+        "--telemetry needs a build with fleet telemetry: cargo build --release -p crackbot-cli --features telemetry"
+    )
 }
 
 fn print_summary(r: &InspectReport) {

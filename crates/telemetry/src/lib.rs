@@ -12,7 +12,8 @@
 //! * [`command`]: start, stop and emergency-stop commands, signed with the link's key and
 //!   checked against replays, stale and future timestamps and other robots (its module docs
 //!   say what the scheme does and does not protect).
-//! * [`RobotNode`]: the robot's side; [`Station`]: the station's; [`fleet`]: what a station
+//! * [`RobotService`]: a robot that runs missions and publishes them (serving, it takes its
+//!   missions from stations); [`RobotNode`]: its Zenoh side; [`Station`]: the station's; [`fleet`]: what a station
 //!   knows of each robot, also fed by the operator app from in-process missions and replays.
 //!
 //! Topology: peer mode on loopback by default. The station listens on
@@ -28,6 +29,7 @@ pub mod command;
 pub mod fleet;
 pub mod keys;
 mod robot;
+mod service;
 mod session;
 mod station;
 pub mod wire;
@@ -35,6 +37,7 @@ pub mod wire;
 pub use command::{Command, CommandReply};
 pub use fleet::{Fleet, RobotView};
 pub use robot::{CommandHandler, RobotNode, HEARTBEAT_EVERY};
+pub use service::{RobotService, StartRequest};
 pub use session::{ZenohOptions, DEFAULT_STATION_ENDPOINT};
 pub use station::Station;
 

@@ -47,8 +47,11 @@ impl ZenohOptions {
                 // robots, a robot restarted): once a second at most.
                 set(&mut c, "connect/timeout_ms", "-1".into())?;
                 set(&mut c, "connect/exit_on_failure", "false".into())?;
-                set(&mut c, "connect/retry/period_init_ms", "250".into())?;
-                set(&mut c, "connect/retry/period_max_ms", "1000".into())?;
+                set(
+                    &mut c,
+                    "connect/retry",
+                    "{period_init_ms: 250, period_max_ms: 1000, period_increase_factor: 2}".into(),
+                )?;
             }
         }
         set(
@@ -79,5 +82,34 @@ fn check_endpoint(e: &str) -> Result<(), TelemetryError> {
         Err(TelemetryError::Config(format!(
             "endpoint {e:?} is not of the form tcp/HOST:PORT"
         )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_option_makes_a_valid_zenoh_configuration() {
+        let peer = ZenohOptions {
+            listen: vec!["tcp/127.0.0.1:7448".into()],
+            connect: vec![DEFAULT_STATION_ENDPOINT.into()],
+            ..ZenohOptions::default()
+        };
+        assert!(peer.config().is_ok());
+        let client = ZenohOptions {
+            router: Some("tcp/10.0.0.1:7447".into()),
+            ..ZenohOptions::default()
+        };
+        assert!(client.config().is_ok());
+        let bad = ZenohOptions {
+            connect: vec!["127.0.0.1:7447".into()],
+            ..ZenohOptions::default()
+        };
+        let e = bad.config().unwrap_err().to_string();
+        assert!(
+            e.contains("127.0.0.1:7447") && e.contains("tcp/HOST:PORT"),
+            "{e}"
+        );
     }
 }

@@ -4,6 +4,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 use crackbot_link::Key;
+use zenoh::query::ConsolidationMode;
 use zenoh::sample::SampleKind;
 use zenoh::Wait;
 
@@ -53,17 +54,42 @@ impl Station {
         };
         let alive = {
             let fleet = fleet.clone();
+            let weak = session.clone();
             session
                 .liveliness()
                 .declare_subscriber(format!("{ROOT}/*/alive"))
                 .history(true)
                 .callback(move |sample| {
-                    if let Some(robot) = keys::robot_of(sample.key_expr().as_str()) {
-                        let up = sample.kind() == SampleKind::Put;
-                        if !up {
-                            tracing::warn!("robot {robot} lost (its liveliness token went away)");
-                        }
-                        lock(&fleet).set_alive(robot, up);
+                    let Some(robot) = keys::robot_of(sample.key_expr().as_str()) else {
+                        return;
+                    };
+                    let up = sample.kind() == SampleKind::Put;
+                    lock(&fleet).set_alive(robot, up);
+                    if !up {
+                        tracing::warn!("robot {robot} lost (its liveliness token went away)");
+                        return;
+                    }
+                    // A robot appeared (this station just joined, or it did): catch up with
+                    // its state, without blocking Zenoh's thread.
+                    let fleet = fleet.clone();
+                    let asked = weak
+                        .get(keys::state_key(robot))
+                        // Every reply: they share one key, which consolidation would reduce
+                        // to the last.
+                        .consolidation(ConsolidationMode::None)
+                        .timeout(Duration::from_secs(5))
+                        .callback(move |reply| {
+                            if let Ok(sample) = reply.result() {
+                                apply(
+                                    &fleet,
+                                    sample.key_expr().as_str(),
+                                    &sample.payload().to_bytes(),
+                                );
+                            }
+                        })
+                        .wait();
+                    if let Err(e) = asked {
+                        tracing::warn!("asking robot {robot} for its state: {e}");
                     }
                 })
                 .wait()
@@ -80,12 +106,14 @@ impl Station {
     }
 
     /// Asks every reachable robot for its current state (the latest of each topic and the
-    /// mission's verdicts so far), waiting up to `timeout` for the answers. A station calls
-    /// this when it joins, and when a robot appears.
+    /// mission's verdicts so far), waiting up to `timeout` for the answers. The station does
+    /// this by itself for each robot whose liveliness token appears (when it joins, and when a
+    /// robot starts); this call waits for it.
     pub fn catch_up(&self, timeout: Duration) -> Result<usize, TelemetryError> {
         let replies = self
             .session
             .get(format!("{ROOT}/*/state"))
+            .consolidation(ConsolidationMode::None)
             .timeout(timeout)
             .wait()
             .map_err(|e| TelemetryError::Query {
