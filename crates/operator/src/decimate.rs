@@ -11,7 +11,7 @@ where
     I: IntoIterator<Item = [f64; 2]>,
 {
     let mut out = Vec::with_capacity(2 * columns.max(1));
-    if columns == 0 || !(t1 > t0) || !t0.is_finite() || !t1.is_finite() {
+    if columns == 0 || !t0.is_finite() || !t1.is_finite() || t1 <= t0 {
         return out;
     }
     let scale = columns as f64 / (t1 - t0);
