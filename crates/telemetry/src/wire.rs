@@ -485,3 +485,103 @@ impl MissionFeed {
         self.status()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    fn samples() -> Vec<Telemetry> {
+        vec![
+            Telemetry::Tactile(vec![TactileSample {
+                t_s: 1.25,
+                raw: [1, 2, 3, u16::MAX],
+            }]),
+            Telemetry::Camera(CameraFrame {
+                width: 2,
+                height: 1,
+                surface_to_image: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                png: vec![0x89, b'P', b'N', b'G'],
+            }),
+            Telemetry::Detections(vec![Detection {
+                id: 3,
+                centre_mm: [10.0, 20.0],
+                axis_deg: 45.0,
+                length_mm: 30.0,
+                width_mm: None,
+                score: 0.9,
+            }]),
+            Telemetry::Plan(PlannedSlides {
+                slides: vec![PlannedSlide {
+                    candidates: vec![3],
+                    start_mm: [0.0, 0.0],
+                    end_mm: [16.0, 0.0],
+                    passes: 1,
+                    speed_mm_s: 4.6,
+                }],
+                estimated_s: 4.0,
+            }),
+            Telemetry::Verdict(PassVerdict {
+                id: 1,
+                candidate: Some(3),
+                start_mm: [0.0, 0.0],
+                end_mm: [16.0, 0.0],
+                samples: 1400,
+                class: Some("crack".into()),
+                confidence: 0.8,
+                width_mm: Some(5.0),
+                doubt: None,
+                dip_mm: Some([8.0, 5.1]),
+            }),
+            Telemetry::Health(Health {
+                uptime_s: 3.0,
+                stream: Some(StreamHealth::default()),
+            }),
+            Telemetry::Mission(MissionStatus {
+                mission: 1,
+                mode: "fused".into(),
+                scene: "default".into(),
+                phase: Phase::Failed("interrupted".into()),
+                report_json: Some("{}".into()),
+            }),
+        ]
+    }
+
+    #[test]
+    fn every_topic_round_trips_and_a_truncated_or_foreign_sample_is_named() {
+        for (i, body) in samples().into_iter().enumerate() {
+            let env = Envelope {
+                version: WIRE_VERSION,
+                robot: "r1".into(),
+                seq: i as u64 + 1,
+                sent_unix_ms: 1_790_000_000_000,
+                body,
+            };
+            let bytes = encode(&env).unwrap();
+            assert_eq!(decode(&bytes).unwrap(), env);
+            for cut in 0..bytes.len() {
+                assert!(
+                    matches!(decode(&bytes[..cut]), Err(WireError::Malformed { .. })),
+                    "{i}: {cut} of {} bytes decoded",
+                    bytes.len()
+                );
+            }
+            let mut other = bytes.clone();
+            other[0] = 2; // version 2
+            assert!(matches!(decode(&other), Err(WireError::Version { got: 2 })));
+        }
+    }
+
+    #[test]
+    fn the_frame_maps_surface_points_to_pixels_and_refuses_points_behind_the_camera() {
+        let mut f = CameraFrame {
+            width: 640,
+            height: 480,
+            surface_to_image: [[2.0, 0.0, 10.0], [0.0, 2.0, 20.0], [0.0, 0.0, 1.0]],
+            png: Vec::new(),
+        };
+        assert_eq!(f.to_pixel([5.0, 5.0]), Some([20.0, 30.0]));
+        f.surface_to_image[2] = [0.0, 0.0, -1.0];
+        assert_eq!(f.to_pixel([5.0, 5.0]), None);
+    }
+}

@@ -1,0 +1,107 @@
+//! A site's topology: a Zenoh router, and a robot and a station that are both its clients
+//! (`ZenohOptions::router`), over real TCP on loopback.
+#![allow(clippy::unwrap_used)]
+
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use crackbot_link::Key;
+use crackbot_telemetry::wire::{Phase, Telemetry};
+use crackbot_telemetry::{Command, CommandReply, RobotNode, Station, ZenohOptions};
+use zenoh::Wait;
+
+fn free_tcp_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|s| s.local_addr())
+        .map(|a| a.port())
+        .unwrap()
+}
+
+#[test]
+fn a_robot_and_a_station_meet_through_a_router() {
+    let endpoint = format!("tcp/127.0.0.1:{}", free_tcp_port());
+    let mut c = zenoh::Config::default();
+    c.insert_json5("mode", "\"router\"").unwrap();
+    c.insert_json5("listen/endpoints", &format!("[\"{endpoint}\"]"))
+        .unwrap();
+    c.insert_json5("scouting/multicast/enabled", "false")
+        .unwrap();
+    let _router = zenoh::open(c).wait().unwrap();
+
+    let site = ZenohOptions {
+        router: Some(endpoint),
+        ..ZenohOptions::default()
+    };
+    let key = Key::from_bytes(&[0x42; 32]).unwrap();
+    let stops = Arc::new(AtomicU32::new(0));
+    let robot = {
+        let stops = stops.clone();
+        RobotNode::open(
+            "site-robot",
+            &site,
+            Some(&key),
+            Box::new(move |c| {
+                if *c == Command::Stop {
+                    stops.fetch_add(1, Ordering::SeqCst);
+                }
+                Ok(())
+            }),
+        )
+        .unwrap()
+    };
+    robot
+        .publish(Telemetry::Mission(
+            crackbot_telemetry::wire::MissionStatus {
+                mission: 3,
+                mode: "fused".into(),
+                scene: "tank wall".into(),
+                phase: Phase::Exploring { done: 2, of: 5 },
+                report_json: None,
+            },
+        ))
+        .unwrap();
+    let station = Station::open(&site, Some(&key)).unwrap();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        let seen = station
+            .fleet()
+            .robot("site-robot")
+            .is_some_and(|r| r.alive == Some(true) && r.health.is_some() && r.mission.is_some());
+        if seen {
+            break;
+        }
+        assert!(Instant::now() < deadline, "the station never saw the robot");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(
+        station.fleet().robot("site-robot").unwrap().phase(),
+        Some(&Phase::Exploring { done: 2, of: 5 })
+    );
+    assert_eq!(
+        station
+            .command("site-robot", Command::Stop, Duration::from_secs(5))
+            .unwrap(),
+        CommandReply::Accepted
+    );
+    assert_eq!(stops.load(Ordering::SeqCst), 1);
+    // A robot that does not exist does not answer: a clear error, not a hang.
+    let e = station
+        .command("nobody", Command::Stop, Duration::from_millis(500))
+        .unwrap_err();
+    assert!(e.to_string().contains("nobody"), "{e}");
+    drop(robot);
+    let deadline = Instant::now() + Duration::from_secs(2);
+    while !station
+        .fleet()
+        .robot("site-robot")
+        .unwrap()
+        .is_lost(Instant::now())
+    {
+        assert!(
+            Instant::now() < deadline,
+            "the closed robot is not shown lost"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
