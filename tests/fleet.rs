@@ -302,34 +302,23 @@ fn two_robots_and_stations_watch_command_and_lose_them_over_zenoh() {
 #[test]
 fn bad_fleet_settings_are_named_before_the_robot_starts() {
     let dir = tempfile::tempdir().unwrap();
-    let out = Process::new(binary("crackbot-robot"))
-        .args([
-            "--telemetry",
-            "bad/name",
-            "--zenoh-listen",
-            "tcp/127.0.0.1:1",
-        ])
-        .arg("--out")
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("'/'"), "{err}");
-    let out = Process::new(binary("crackbot-robot"))
-        .args(["--telemetry", "r9", "--zenoh-connect", "127.0.0.1"])
-        .arg("--out")
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("tcp/HOST:PORT"), "{err}");
+    let fails_saying = |args: &[&str], says: &str| {
+        let out = Process::new(binary("crackbot-robot"))
+            .args(args)
+            .arg("--out")
+            .arg(dir.path())
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+    };
+    let listen = ["--zenoh-listen", "tcp/127.0.0.1:1"];
+    fails_saying(&[&["--telemetry", "bad/name"][..], &listen].concat(), "'/'");
+    fails_saying(
+        &["--telemetry", "r9", "--zenoh-connect", "127.0.0.1"],
+        "tcp/HOST:PORT",
+    );
     // --serve without --telemetry is a usage error.
-    let out = Process::new(binary("crackbot-robot"))
-        .arg("--serve")
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--telemetry"));
+    fails_saying(&["--serve"], "--telemetry");
 }
