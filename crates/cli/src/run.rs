@@ -318,39 +318,27 @@ fn fleet(args: &RunArgs, config: InspectConfig) -> Result<()> {
             "no command key: only emergency stops"
         }
     );
-    let mut served = 0u32;
-    while !service.is_shut_down() {
-        let Some(start) = service.next_start(Duration::from_millis(200)) else {
-            continue;
-        };
-        served += 1;
-        let mut mission = config.clone();
-        // Each mission's report and recordings in a folder of its own.
-        mission.out_dir = args.out.join(format!("mission-{served:03}"));
-        let setup = (|| -> Result<()> {
-            mission.mode = start.mode.parse().map_err(|e: String| anyhow::anyhow!(e))?;
-            if let Some(toml) = &start.scene_toml {
-                mission.scene = Scene::from_toml_str(toml, "<scene from the station>")?;
+    let bar = progress_bar(args.json);
+    service.serve(
+        &config,
+        |p| {
+            if matches!(p, Progress::Starting) {
+                bar.reset();
             }
-            Ok(())
-        })();
-        if let Err(e) = setup {
-            eprintln!("robot {name}: refused a mission: {e:#}");
-            service.refuse_start(&format!("{e:#}"))?;
-            continue;
-        }
-        let bar = progress_bar(args.json);
-        match service.run_mission(&mission, |p| show(&bar, p)) {
-            Ok(report) => {
-                bar.finish_and_clear();
-                print_report(&report, args.json)?;
-            }
-            Err(e) => {
-                bar.finish_and_clear();
-                eprintln!("robot {name}: mission failed: {e}");
-            }
-        }
-    }
+            show(&bar, p)
+        },
+        |n, result| {
+            bar.suspend(|| match result {
+                Ok(report) => {
+                    if let Err(e) = print_report(&report, args.json) {
+                        eprintln!("robot {name}: mission {n}: {e:#}");
+                    }
+                }
+                Err(e) => eprintln!("robot {name}: mission {n} failed: {e}"),
+            })
+        },
+    );
+    bar.finish_and_clear();
     Ok(())
 }
 

@@ -457,6 +457,15 @@ impl OperatorApp {
         }
         let ctx = ui.ctx().clone();
         self.init(&ctx);
+        // Live: once the station is up, the views show its fleet (fed by its Zenoh threads).
+        if let Backend::Live(l) = &self.backend {
+            if let Some(st) = l.station() {
+                let theirs = st.fleet_handle();
+                if !Arc::ptr_eq(&theirs, &self.fleet) {
+                    self.fleet = theirs;
+                }
+            }
+        }
         while let Ok(msg) = self.log_rx.try_recv() {
             self.say(msg);
         }
@@ -1040,9 +1049,18 @@ impl OperatorApp {
                 self.ui_times.clear();
             }
             None => {
-                if m.since.elapsed().as_secs() > 300 {
+                // A mission that failed before streaming (no ONNX Runtime, a bad scene…) ends
+                // the measurement at once, with its reason.
+                let failed = match snap.mission.as_ref().map(|m| &m.phase) {
+                    Some(Phase::Failed(why)) => Some(why.clone()),
+                    _ => None,
+                };
+                if failed.is_some() || m.since.elapsed().as_secs() > 300 {
                     m.done = true;
-                    let msg = "measure: no data streamed within 300 s".to_string();
+                    let msg = match failed {
+                        Some(why) => format!("measure: the mission failed before streaming: {why}"),
+                        None => "measure: no data streamed within 300 s".to_string(),
+                    };
                     let _ =
                         export::write_file(&m.out, format!("{{\"error\": {msg:?}}}").as_bytes());
                     self.say(msg);

@@ -289,11 +289,20 @@ fn a_simulated_mission_streams_is_stopped_by_the_estop_and_replays() {
     h.run_steps(2);
     h.get_by_label("Confirm").click();
     h.run_steps(2);
+    // (Until mission 2's own status arrives, the fleet still shows mission 1's failure.)
     step_until(
         &mut h,
-        "the mission to finish",
+        "the second mission to finish",
         Duration::from_secs(600),
-        |a| matches!(local_phase(a), Some(Phase::Finished | Phase::Failed(_))),
+        |a| {
+            let f = a.fleet();
+            let f = f.lock().unwrap();
+            f.robot(LOCAL_ROBOT)
+                .and_then(|r| r.mission.as_ref())
+                .is_some_and(|m| {
+                    m.mission == 2 && matches!(m.phase, Phase::Finished | Phase::Failed(_))
+                })
+        },
     );
     assert_eq!(
         local_phase(h.state()),

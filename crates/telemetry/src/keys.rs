@@ -107,11 +107,11 @@ pub fn alive_key(robot: &str) -> String {
     format!("{ROOT}/{robot}/alive")
 }
 
-/// The robot named by a key under [`ROOT`].
+/// The robot named by a key under [`ROOT`] (`None` for a wildcard or an unusable name).
 pub fn robot_of(key: &str) -> Option<&str> {
     let rest = key.strip_prefix(ROOT)?.strip_prefix('/')?;
     let robot = rest.split('/').next()?;
-    (!robot.is_empty()).then_some(robot)
+    check_robot_name(robot).is_ok().then_some(robot)
 }
 
 #[cfg(test)]
@@ -137,5 +137,7 @@ mod tests {
         assert_eq!(robot_of("crackbot/r2/alive"), Some("r2"));
         assert_eq!(robot_of("other/r1/tactile"), None);
         assert_eq!(robot_of("crackbot"), None);
+        assert_eq!(robot_of("crackbot/*/state"), None);
+        assert_eq!(robot_of("crackbot/**"), None);
     }
 }

@@ -87,12 +87,14 @@ impl RobotNode {
             .map_err(|e| declare("the liveliness token", e))?;
         let state = {
             let shared = shared.clone();
+            // Replies name this robot's key, not the query's (which may be `crackbot/*/state`).
+            let key = keys::state_key(robot);
             session
                 .declare_queryable(keys::state_key(robot))
                 .callback(move |query| {
                     for env in shared.snapshot() {
                         if let Ok(bytes) = wire::encode(&env) {
-                            let _ = query.reply(query.key_expr().clone(), bytes).wait();
+                            let _ = query.reply(key.clone(), bytes).wait();
                         }
                     }
                 })
@@ -100,6 +102,7 @@ impl RobotNode {
                 .map_err(|e| declare("the state queryable", e))?
         };
         let guard = Mutex::new(CommandGuard::new(robot, key));
+        let command_key = keys::command_key(robot);
         let commands = session
             .declare_queryable(keys::command_key(robot))
             .callback(move |query| {
@@ -125,7 +128,7 @@ impl RobotNode {
                     }
                 };
                 let bytes = postcard::to_allocvec(&reply).unwrap_or_default();
-                let _ = query.reply(query.key_expr().clone(), bytes).wait();
+                let _ = query.reply(command_key.clone(), bytes).wait();
             })
             .wait()
             .map_err(|e| declare("the command queryable", e))?;

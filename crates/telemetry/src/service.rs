@@ -155,7 +155,7 @@ impl RobotService {
 
     /// Marks the robot idle again without running a mission (a start request that could not
     /// become a mission: its error is published as the mission's failure).
-    pub fn refuse_start(&self, config_error: &str) -> Result<(), TelemetryError> {
+    fn refuse_start(&self, config_error: &str) -> Result<(), TelemetryError> {
         let n = self.missions.fetch_add(1, Ordering::SeqCst) + 1;
         let r = self.node.publish(Telemetry::Mission(MissionStatus {
             mission: n,
@@ -204,9 +204,64 @@ impl RobotService {
         result
     }
 
+    /// Serves until [`Self::shutdown`]: each mission a station starts runs with `base`'s
+    /// settings, the station's mode and scene, and its report and recordings in
+    /// `base.out_dir/mission-NNN`. `progress` sees every event of every mission (each starts with
+    /// [`Progress::Starting`]); `done` gets each mission's number and result. A start whose mode
+    /// or scene is unusable is published as a failed mission and answered by nothing more.
+    pub fn serve(
+        &self,
+        base: &InspectConfig,
+        mut progress: impl FnMut(&Progress),
+        mut done: impl FnMut(u32, Result<InspectReport, MissionError>),
+    ) {
+        let mut served = 0u32;
+        while !self.is_shut_down() {
+            let Some(start) = self.next_start(Duration::from_millis(200)) else {
+                continue;
+            };
+            served += 1;
+            let mut config = base.clone();
+            config.out_dir = base.out_dir.join(format!("mission-{served:03}"));
+            match start_config(&mut config, &start) {
+                Ok(()) => {
+                    let result = self.run_mission(&config, &mut progress);
+                    done(self.missions.load(Ordering::SeqCst), result);
+                }
+                Err(e) => {
+                    tracing::warn!("refused a mission: {e}");
+                    self.publish_logged_failure(&e);
+                    done(
+                        self.missions.load(Ordering::SeqCst),
+                        Err(MissionError::Invalid(e)),
+                    );
+                }
+            }
+        }
+    }
+
+    fn publish_logged_failure(&self, e: &str) {
+        if let Err(err) = self.refuse_start(e) {
+            tracing::warn!("telemetry: {err}");
+        }
+    }
+
     fn publish_logged(&self, body: Telemetry) {
         if let Err(e) = self.node.publish(body) {
             tracing::warn!("telemetry: {e}");
         }
     }
+}
+
+/// A station's mode and scene on top of the robot's settings.
+fn start_config(config: &mut InspectConfig, start: &StartRequest) -> Result<(), String> {
+    config.mode = start
+        .mode
+        .parse()
+        .map_err(|e: String| format!("mode {:?}: {e}", start.mode))?;
+    if let Some(toml) = &start.scene_toml {
+        config.scene = crackbot_sim::Scene::from_toml_str(toml, "<scene from the station>")
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }
