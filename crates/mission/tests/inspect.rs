@@ -222,6 +222,7 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
             _ => None,
         })
         .expect("no frame event");
+    assert_eq!(r.frame.as_ref(), Some(&frame), "the report keeps the frame");
     let img = image::open(&frame.path).unwrap();
     assert_eq!((img.width(), img.height()), (frame.width, frame.height));
     // The overlay's homography puts each candidate's centre inside the frame.

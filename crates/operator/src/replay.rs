@@ -79,16 +79,31 @@ pub fn load(dir: &Path) -> Result<Replay, OperatorError> {
             .map_err(|e| bad(&frame_path, e))?
             .into_dimensions()
             .map_err(|e| bad(&frame_path, e))?;
-        approximate_overlay = true;
+        // The mission's own homography (reports since the frame was saved in them), else the
+        // workspace fitted to the frame.
+        let saved = report["frame"]["surface_to_image"]
+            .as_array()
+            .and_then(|rows| {
+                let mut m = [[0.0; 3]; 3];
+                for (i, row) in rows.iter().enumerate().take(3) {
+                    for (j, v) in row.as_array()?.iter().enumerate().take(3) {
+                        m[i][j] = v.as_f64()?;
+                    }
+                }
+                (rows.len() == 3).then_some(m)
+            });
+        approximate_overlay = saved.is_none();
         out.push(status(Phase::Perceiving, None));
         out.push(Telemetry::Camera(CameraFrame {
             width,
             height,
-            surface_to_image: crate::overlay::workspace_to_frame(
-                workspace.unwrap_or([0.0, 200.0, 0.0, 100.0]),
-                width,
-                height,
-            ),
+            surface_to_image: saved.unwrap_or_else(|| {
+                crate::overlay::workspace_to_frame(
+                    workspace.unwrap_or([0.0, 200.0, 0.0, 100.0]),
+                    width,
+                    height,
+                )
+            }),
             png,
         }));
     }

@@ -316,6 +316,16 @@ fn a_simulated_mission_streams_is_stopped_by_the_estop_and_replays() {
         let m = f.robot(LOCAL_ROBOT).unwrap().mission.clone().unwrap();
         serde_json::from_str(&m.report_json.unwrap()).unwrap()
     };
+    let live_homography = {
+        let f = h.state().fleet();
+        let f = f.lock().unwrap();
+        f.robot(LOCAL_ROBOT)
+            .unwrap()
+            .camera
+            .as_ref()
+            .unwrap()
+            .surface_to_image
+    };
     let saved = PathBuf::from(report["out_dir"].as_str().unwrap());
     let passes = report["passes"].as_array().unwrap().len();
     assert!(passes > 0);
@@ -336,4 +346,14 @@ fn a_simulated_mission_streams_is_stopped_by_the_estop_and_replays() {
     assert_eq!(robot.verdicts.len(), passes);
     assert_eq!(robot.phase(), Some(&Phase::Finished));
     assert!(robot.tactile.len() > 100);
+    // The overlay is the mission's own: the report keeps the frame's homography.
+    assert_eq!(
+        robot.camera.as_ref().unwrap().surface_to_image,
+        live_homography
+    );
+    assert!(!r
+        .state()
+        .log
+        .iter()
+        .any(|l| l.contains("fits the workspace")));
 }

@@ -400,6 +400,9 @@ pub struct InspectReport {
     pub rejected: Vec<RejectedCandidate>,
     /// Candidates from the camera.
     pub candidates: Vec<Candidate>,
+    /// The camera frame (saved as `frame.png`) and its surface → pixel homography, when the
+    /// mission looked.
+    pub frame: Option<FrameInfo>,
     /// Every slide pass.
     pub passes: Vec<PassRecord>,
     /// The plan.
@@ -613,6 +616,7 @@ fn mission(
         cracks: Vec::new(),
         rejected: Vec::new(),
         candidates: candidates.iter().map(|(c, _)| c.clone()).collect(),
+        frame: frame.clone(),
         passes: Vec::new(),
         plan: None,
         elapsed_s: 0.0,
