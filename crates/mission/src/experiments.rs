@@ -400,6 +400,7 @@ mod tests {
             cracks: Vec::new(),
             rejected: Vec::new(),
             candidates: Vec::new(),
+            frame: None,
             passes: Vec::new(),
             plan: None,
             elapsed_s: 0.0,
