@@ -56,7 +56,7 @@ struct Args {
     #[arg(long)]
     key: Option<PathBuf>,
     /// Where exports (CSV, report, screenshots) and in-process missions' files go.
-    #[arg(long, default_value = "crackbot-operator-out")]
+    #[arg(long, default_value = "out/operator")]
     out: PathBuf,
     /// Measure N frames once four channels stream, write the frame-time summary to
     /// `--measure-out`, and exit.
