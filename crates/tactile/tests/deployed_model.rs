@@ -252,3 +252,21 @@ fn width_of_an_unseen_repetition_is_measured_with_a_covering_uncertainty() {
     assert!(regressor <= 1.2, "regressor MAE {regressor}");
     assert!(covered * 10 >= n * 9, "{covered}/{n} within 2 std");
 }
+
+/// Model headers are JSON: every number must read back exactly (serde_json's
+/// `float_roundtrip`). This training time once read back one ulp off and failed the round trip
+/// above.
+#[test]
+fn header_numbers_read_back_exactly() {
+    for x in [
+        7.396451812_f64,
+        0.1,
+        1.0 / 3.0,
+        1e-300,
+        1.7976931348623157e308,
+    ] {
+        let back: f64 =
+            serde_json::from_str(&serde_json::to_string(&x).expect("json")).expect("a number");
+        assert_eq!(back.to_bits(), x.to_bits(), "{x}");
+    }
+}
