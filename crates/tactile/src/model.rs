@@ -413,7 +413,9 @@ impl TactileModel {
                     .filter(|s| !s.windows.is_empty())
                     .count(),
                 config: config.clone(),
-                seconds: started.elapsed().as_secs_f64(),
+                // To the millisecond: a number of few digits reads back from the JSON header
+                // exactly (serde_json's default parser can miss a 17-digit one by an ulp).
+                seconds: (started.elapsed().as_secs_f64() * 1e3).round() / 1e3,
                 crackbot_version: env!("CARGO_PKG_VERSION").to_string(),
             },
             sections: Vec::new(),
