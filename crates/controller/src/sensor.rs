@@ -15,6 +15,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use crackbot_emulator::{run, EmulatorConfig, EmulatorError, EmulatorReport, Pty, SignalSource};
+use serialport::SerialPort as _;
 
 use crate::world::{Tick, World};
 
@@ -150,7 +151,13 @@ impl SimSensor {
         let thread = std::thread::Builder::new()
             .name(format!("sim-sensor {path}"))
             .spawn(move || {
-                let (master, slave) = pty.into_parts();
+                let (mut master, slave) = pty.into_parts();
+                // A board never waits for its reader: with the port's default timeout a write
+                // into a full pseudo-terminal held each tick for 100 ms, and the world fell
+                // behind while nobody read, then caught up in a burst.
+                if let Err(e) = master.set_timeout(Duration::ZERO) {
+                    tracing::warn!("the sensor's line keeps its write timeout: {e}");
+                }
                 let mut line = StallableLine {
                     inner: master,
                     stalled_until_us: thread_control.stalled_until_us.clone(),
@@ -200,5 +207,39 @@ impl Drop for SimSensor {
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crackbot_sim::scene::Scene;
+
+    /// Nobody reads the port (the robot has not opened it yet): the board streams regardless,
+    /// its bytes are lost, and the world keeps its pace. A write that waited for a reader once
+    /// held each tick for the port's 100 ms timeout; the world then fell behind and caught up
+    /// in a burst when a reader arrived, so a mission ran its simulated seconds in milliseconds.
+    #[test]
+    fn an_unread_port_does_not_hold_the_world_back() {
+        let world = World::new(&Scene::builtin_default(), 3).expect("default scene");
+        let shared: SharedWorld = Arc::new(Mutex::new(Shared {
+            world,
+            last: None,
+            finished: Vec::new(),
+            fault: None,
+        }));
+        // 20 000 ticks per second fill the pseudo-terminal's buffer within a fraction of it.
+        let speedup = 50.0;
+        let sensor = SimSensor::spawn(shared.clone(), speedup).expect("sensor");
+        let started = Instant::now();
+        std::thread::sleep(Duration::from_secs(2));
+        let ticks = lock(&shared).world.tick_count();
+        let elapsed = started.elapsed().as_secs_f64();
+        sensor.stop().expect("report");
+        let expected = crackbot_sim::run::SAMPLE_RATE_HZ * speedup * elapsed;
+        assert!(
+            ticks as f64 > 0.8 * expected,
+            "{ticks} world ticks in {elapsed:.2} s with nobody reading, expected about {expected:.0}"
+        );
     }
 }
