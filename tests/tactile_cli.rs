@@ -297,3 +297,18 @@ fn eval_rejects_mixed_experiments_and_missing_paths() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("neither"), "{err}");
 }
+
+/// `crackbot tactile …` runs the research binary under the name the user typed, so its help
+/// and its errors say `crackbot tactile`, not the binary behind it.
+#[test]
+fn forwarded_commands_speak_under_the_name_the_user_typed() {
+    let o = crackbot(&["tactile", "eval", "--help"]);
+    let out = text(&o.stdout);
+    assert!(o.status.success(), "{out}{}", text(&o.stderr));
+    assert!(out.contains("Usage: crackbot tactile eval"), "{out}");
+    let o = crackbot(&["sim", "dataset", "--no-such-flag"]);
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(err.contains("crackbot sim dataset"), "{err}");
+    assert!(!err.contains("crackbot-lab"), "{err}");
+}

@@ -46,6 +46,11 @@ pub fn run(command: &str, forwarded: Forwarded) -> Result<()> {
              `crackbot {command} …` or `{LAB} {command} …`"
         );
     };
-    let error = Command::new(&lab).arg(command).args(&forwarded.args).exec();
+    // argv[0] is what the user typed, so help and errors say `crackbot tactile eval`.
+    let error = Command::new(&lab)
+        .arg0("crackbot")
+        .arg(command)
+        .args(&forwarded.args)
+        .exec();
     Err(error).with_context(|| format!("running {}", lab.display()))
 }
