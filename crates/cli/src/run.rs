@@ -253,6 +253,18 @@ fn show(bar: &indicatif::ProgressBar, p: &Progress) {
             bar.set_position(*done as u64);
             bar.set_message(format!("last pass: {class}"));
         }
+        Progress::Feeling(f) => {
+            let width = match f.width_mm {
+                Some(w) if f.class == "crack" => format!(", about {w} mm wide"),
+                _ => String::new(),
+            };
+            bar.set_message(format!(
+                "sliding, {:.0} mm in: feels like {} ({:.0} %{width})",
+                f.along_mm,
+                f.class,
+                100.0 * f.confidence
+            ));
+        }
         Progress::Frame(_) | Progress::Samples { .. } | Progress::Health(_) => {}
     }
 }

@@ -277,6 +277,51 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
         })
         .collect();
     assert_eq!(passes, r.passes);
+    // While each pass is under way, its running verdict every 0.1 s: before its own verdict,
+    // after the one before, over more and more windows, with the finger along the stroke.
+    let mut current = None;
+    let mut feelings: Vec<(u32, Vec<crackbot_mission::inspect::Feeling>)> = Vec::new();
+    for e in &events {
+        match e {
+            Progress::Feeling(f) => {
+                assert!(
+                    current.is_none_or(|c| c < f.slide),
+                    "{f:?} after its own verdict"
+                );
+                match feelings.last_mut() {
+                    Some((id, v)) if *id == f.slide => v.push(f.clone()),
+                    _ => feelings.push((f.slide, vec![f.clone()])),
+                }
+            }
+            Progress::Slid { pass, .. } => current = Some(pass.id),
+            _ => {}
+        }
+    }
+    let ids: Vec<u32> = feelings.iter().map(|(id, _)| *id).collect();
+    let pass_ids: Vec<u32> = r.passes.iter().map(|p| p.id).collect();
+    assert_eq!(ids, pass_ids, "one run of running verdicts per pass");
+    for ((_, fs), pass) in feelings.iter().zip(&r.passes) {
+        assert!(
+            fs.len() >= 3,
+            "{} running verdicts for pass {}",
+            fs.len(),
+            pass.id
+        );
+        assert!(fs.windows(2).all(|w| w[1].windows > w[0].windows));
+        let stroke = (pass.end_mm[0] - pass.start_mm[0]).hypot(pass.end_mm[1] - pass.start_mm[1]);
+        for f in fs {
+            assert!((0.0..=1.0).contains(&f.confidence), "{f:?}");
+            assert!(
+                (-1.0..=stroke + 1.0).contains(&f.along_mm),
+                "{f:?}, stroke {stroke}"
+            );
+            assert!(
+                ["no crack", "crack", "bump", "wavy"].contains(&f.class.as_str()),
+                "{f:?}"
+            );
+        }
+        assert!(fs.last().unwrap().along_mm > 0.5 * stroke, "{fs:?}");
+    }
     // The stream's health, twice a second: a rate near 400 Hz × the speed-up, counters growing.
     let health: Vec<_> = events
         .iter()

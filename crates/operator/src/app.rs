@@ -15,7 +15,8 @@ use std::time::Instant;
 use crackbot_mission::inspect::InspectMode;
 use crackbot_telemetry::fleet::RobotView;
 use crackbot_telemetry::wire::{
-    CameraFrame, Detection, Health, MissionStatus, PassVerdict, Phase, PlannedSlide, TactileSample,
+    CameraFrame, Detection, Feeling, Health, MissionStatus, PassVerdict, Phase, PlannedSlide,
+    TactileSample,
 };
 use crackbot_telemetry::{Command, Fleet};
 use egui::{Color32, RichText, Stroke};
@@ -80,6 +81,7 @@ struct Snapshot {
     slides: Vec<PlannedSlide>,
     estimated_s: Option<f64>,
     verdicts: Vec<PassVerdict>,
+    feeling: Option<Feeling>,
     lines: [Vec<[f64; 2]>; 4],
     visible_samples: usize,
     t_first: Option<f64>,
@@ -419,6 +421,7 @@ impl OperatorApp {
             snap.estimated_s = Some(p.estimated_s);
         }
         snap.verdicts = r.verdicts.clone();
+        snap.feeling = r.feeling.clone();
         snap.t_first = r.tactile.front().map(|s| s.t_s);
         snap.t_last = r.tactile.back().map(|s| s.t_s);
         let (t0, t1) = self.window(snap.t_first, snap.t_last);
@@ -801,7 +804,16 @@ impl OperatorApp {
         // Verdicts along the slides, newest first.
         ui.horizontal_wrapped(|ui| {
             ui.strong("Verdicts:");
-            if snap.verdicts.is_empty() {
+            if let Some(f) = &snap.feeling {
+                // The pass under way: what it feels like so far.
+                let txt = format!(
+                    "pass {} so far ({:.1} mm): {} {:.2}",
+                    f.id, f.along_mm, f.class, f.confidence
+                );
+                ui.colored_label(class_colour(Some(&f.class)), txt)
+                    .on_hover_text("running verdict of the stroke under way; the pass's verdict comes when it ends");
+            }
+            if snap.verdicts.is_empty() && snap.feeling.is_none() {
                 ui.weak("none yet");
             }
             for v in snap.verdicts.iter().rev().take(8) {

@@ -259,6 +259,17 @@ fn a_simulated_mission_streams_is_stopped_by_the_estop_and_replays() {
     }
     h.get_by_label("#1");
     h.get_by_label_contains("samples in view");
+    // While a stroke is under way, its running verdict is shown beside the passes judged.
+    let t = Instant::now();
+    while h.query_by_label_contains("so far (").is_none() {
+        assert!(
+            t.elapsed() < Duration::from_secs(120),
+            "no running verdict shown; log: {:?}",
+            h.state().log
+        );
+        std::thread::sleep(Duration::from_millis(10));
+        h.step();
+    }
     h.get_by_label(ESTOP_LABEL).click();
     h.run_steps(2);
     step_until(

@@ -7,8 +7,8 @@ use std::collections::{BTreeMap, VecDeque};
 use std::time::{Duration, Instant};
 
 use crate::wire::{
-    CameraFrame, Detection, Envelope, Health, MissionStatus, PassVerdict, Phase, PlannedSlides,
-    TactileSample, Telemetry,
+    CameraFrame, Detection, Envelope, Feeling, Health, MissionStatus, PassVerdict, Phase,
+    PlannedSlides, TactileSample, Telemetry,
 };
 
 /// A robot not heard from for this long is shown as lost (its heartbeat runs at ≥ 4 Hz).
@@ -38,6 +38,8 @@ pub struct RobotView {
     pub plan: Option<PlannedSlides>,
     /// Judged passes so far, by id.
     pub verdicts: Vec<PassVerdict>,
+    /// The running verdict of the pass under way (cleared when its verdict arrives).
+    pub feeling: Option<Feeling>,
     /// The latest tactile samples, oldest first.
     pub tactile: VecDeque<TactileSample>,
     /// Tactile samples received in all.
@@ -66,6 +68,7 @@ impl RobotView {
             detections: Vec::new(),
             plan: None,
             verdicts: Vec::new(),
+            feeling: None,
             tactile: VecDeque::new(),
             tactile_total: 0,
             received: 0,
@@ -104,13 +107,24 @@ impl RobotView {
             Telemetry::Camera(f) => self.camera = Some(f),
             Telemetry::Detections(d) => self.detections = d,
             Telemetry::Plan(p) => self.plan = Some(p),
-            Telemetry::Verdict(v) => match self.verdicts.iter_mut().find(|x| x.id == v.id) {
-                Some(x) => *x = v,
-                None => {
-                    self.verdicts.push(v);
-                    self.verdicts.sort_by_key(|x| x.id);
+            Telemetry::Verdict(v) => {
+                if self.feeling.as_ref().is_some_and(|f| f.id <= v.id) {
+                    self.feeling = None;
                 }
-            },
+                match self.verdicts.iter_mut().find(|x| x.id == v.id) {
+                    Some(x) => *x = v,
+                    None => {
+                        self.verdicts.push(v);
+                        self.verdicts.sort_by_key(|x| x.id);
+                    }
+                }
+            }
+            Telemetry::Feeling(f) => {
+                // A late running verdict of a pass already judged is not shown again.
+                if !self.verdicts.iter().any(|v| v.id >= f.id) {
+                    self.feeling = Some(f);
+                }
+            }
             Telemetry::Health(h) => self.health = Some(h),
             Telemetry::Mission(m) => {
                 let new_mission = self.mission.as_ref().is_none_or(|o| o.mission != m.mission);
@@ -119,6 +133,7 @@ impl RobotView {
                     self.detections.clear();
                     self.plan = None;
                     self.verdicts.clear();
+                    self.feeling = None;
                     self.tactile.clear();
                 }
                 self.mission = Some(m);
@@ -245,6 +260,54 @@ mod tests {
         let r = f.robot("r1").expect("r1");
         assert!(r.plan.is_none() && r.tactile.is_empty());
         assert_eq!(r.received, 5);
+    }
+
+    #[test]
+    fn a_running_verdict_shows_until_its_pass_is_judged_and_never_after() {
+        let mut f = Fleet::new();
+        let t = Instant::now();
+        let feeling = |id: u32, windows: u64| {
+            Telemetry::Feeling(Feeling {
+                id,
+                class: "crack".into(),
+                confidence: 0.7,
+                width_mm: Some(5.0),
+                windows,
+                along_mm: 3.0,
+            })
+        };
+        let verdict = |id: u32| {
+            Telemetry::Verdict(PassVerdict {
+                id,
+                candidate: Some(1),
+                start_mm: [0.0, 0.0],
+                end_mm: [16.0, 0.0],
+                samples: 1400,
+                class: Some("crack".into()),
+                confidence: 0.8,
+                width_mm: Some(5.0),
+                doubt: None,
+                dip_mm: None,
+            })
+        };
+        f.apply(env(1, status(1, Phase::Starting)), t);
+        f.apply(env(2, feeling(1, 10)), t);
+        f.apply(env(3, feeling(1, 20)), t);
+        let r = f.robot("r1").expect("r1");
+        assert_eq!(r.feeling.as_ref().map(|x| x.windows), Some(20));
+        f.apply(env(4, verdict(1)), t);
+        assert!(f.robot("r1").expect("r1").feeling.is_none());
+        // A running verdict of the judged pass that arrives late is not shown again.
+        f.apply(env(5, feeling(1, 30)), t);
+        assert!(f.robot("r1").expect("r1").feeling.is_none());
+        f.apply(env(6, feeling(2, 10)), t);
+        assert_eq!(
+            f.robot("r1").expect("r1").feeling.as_ref().map(|x| x.id),
+            Some(2)
+        );
+        // A new mission starts with none.
+        f.apply(env(7, status(2, Phase::Starting)), t);
+        assert!(f.robot("r1").expect("r1").feeling.is_none());
     }
 
     #[test]

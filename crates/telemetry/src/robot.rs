@@ -206,6 +206,8 @@ impl Shared {
             let mut latest = self.latest.lock().unwrap_or_else(|p| p.into_inner());
             match topic {
                 Topic::Tactile => {}
+                // A running verdict is stale once its pass is judged: not kept for catch-up.
+                Topic::Verdicts if matches!(env.body, Telemetry::Feeling(_)) => {}
                 Topic::Verdicts => latest.verdicts.push(env),
                 Topic::Mission => {
                     let new = latest.by_topic.get(&Topic::Mission).is_none_or(|old| {

@@ -13,12 +13,14 @@
 use serde::{Deserialize, Serialize};
 
 use crackbot_mission::inspect::{
-    FrameInfo, InspectMode, PassRecord, Progress, StreamHealth as MissionStreamHealth,
+    Feeling as MissionFeeling, FrameInfo, InspectMode, PassRecord, Progress,
+    StreamHealth as MissionStreamHealth,
 };
 use crackbot_planner::{Candidate, Plan};
 
-/// Version of the telemetry encoding; bumped on any change of the types below.
-pub const WIRE_VERSION: u16 = 1;
+/// Version of the telemetry encoding; bumped on any change of the types below (2: the running
+/// verdict, [`Telemetry::Feeling`]).
+pub const WIRE_VERSION: u16 = 2;
 
 /// One published sample.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -52,6 +54,9 @@ pub enum Telemetry {
     Health(Health),
     /// The mission's stage and, at the end, its report (`mission`).
     Mission(MissionStatus),
+    /// What the finger feels so far in the stroke under way (`verdicts`, every 0.1 s while it
+    /// is down): shown only; the pass's verdict follows as [`Telemetry::Verdict`].
+    Feeling(Feeling),
 }
 
 impl Telemetry {
@@ -63,7 +68,7 @@ impl Telemetry {
             Telemetry::Camera(_) => Topic::Camera,
             Telemetry::Detections(_) => Topic::Detections,
             Telemetry::Plan(_) => Topic::Plan,
-            Telemetry::Verdict(_) => Topic::Verdicts,
+            Telemetry::Verdict(_) | Telemetry::Feeling(_) => Topic::Verdicts,
             Telemetry::Health(_) => Topic::Health,
             Telemetry::Mission(_) => Topic::Mission,
         }
@@ -232,6 +237,36 @@ impl From<&PassRecord> for PassVerdict {
     }
 }
 
+/// The running verdict of the stroke under way ([`crackbot_mission::inspect::Feeling`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Feeling {
+    /// The slide pass (its id, as in [`PassVerdict::id`]).
+    pub id: u32,
+    /// The recognition model's class so far.
+    pub class: String,
+    /// Its vote so far, 0–1.
+    pub confidence: f64,
+    /// The width model's class so far, mm.
+    pub width_mm: Option<f64>,
+    /// Windows classified so far.
+    pub windows: u64,
+    /// Where the finger is along the pass, mm from its start.
+    pub along_mm: f64,
+}
+
+impl From<&MissionFeeling> for Feeling {
+    fn from(f: &MissionFeeling) -> Self {
+        Feeling {
+            id: f.slide,
+            class: f.class.clone(),
+            confidence: f.confidence,
+            width_mm: f.width_mm,
+            windows: f.windows as u64,
+            along_mm: f.along_mm,
+        }
+    }
+}
+
 /// The robot's heartbeat.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Health {
@@ -346,6 +381,7 @@ pub fn from_progress(p: &Progress) -> Result<Option<Telemetry>, WireError> {
                 .collect(),
         ),
         Progress::Slid { pass, .. } => Telemetry::Verdict(PassVerdict::from(pass.as_ref())),
+        Progress::Feeling(f) => Telemetry::Feeling(Feeling::from(f)),
         Progress::Health(_) | Progress::Starting => return Ok(None),
     }))
 }
@@ -544,6 +580,14 @@ mod tests {
                 phase: Phase::Failed("interrupted".into()),
                 report_json: Some("{}".into()),
             }),
+            Telemetry::Feeling(Feeling {
+                id: 2,
+                class: "crack".into(),
+                confidence: 0.6,
+                width_mm: Some(2.0),
+                windows: 57,
+                along_mm: 7.5,
+            }),
         ]
     }
 
@@ -567,8 +611,8 @@ mod tests {
                 );
             }
             let mut other = bytes.clone();
-            other[0] = 2; // version 2
-            assert!(matches!(decode(&other), Err(WireError::Version { got: 2 })));
+            other[0] = 1; // the version before the running verdict
+            assert!(matches!(decode(&other), Err(WireError::Version { got: 1 })));
         }
     }
 

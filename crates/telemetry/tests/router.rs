@@ -61,13 +61,41 @@ fn a_robot_and_a_station_meet_through_a_router() {
             },
         ))
         .unwrap();
+    // A judged pass and the running verdict of the next: a joining station catches up with
+    // the verdict only (a running verdict is stale by the time anyone asks).
+    robot
+        .publish(Telemetry::Verdict(crackbot_telemetry::wire::PassVerdict {
+            id: 2,
+            candidate: Some(1),
+            start_mm: [0.0, 0.0],
+            end_mm: [16.0, 0.0],
+            samples: 1400,
+            class: Some("crack".into()),
+            confidence: 0.8,
+            width_mm: Some(5.0),
+            doubt: None,
+            dip_mm: None,
+        }))
+        .unwrap();
+    robot
+        .publish(Telemetry::Feeling(crackbot_telemetry::wire::Feeling {
+            id: 3,
+            class: "crack".into(),
+            confidence: 0.5,
+            width_mm: None,
+            windows: 12,
+            along_mm: 2.0,
+        }))
+        .unwrap();
     let station = Station::open(&site, Some(&key)).unwrap();
     let deadline = Instant::now() + Duration::from_secs(10);
     loop {
-        let seen = station
-            .fleet()
-            .robot("site-robot")
-            .is_some_and(|r| r.alive == Some(true) && r.health.is_some() && r.mission.is_some());
+        let seen = station.fleet().robot("site-robot").is_some_and(|r| {
+            r.alive == Some(true)
+                && r.health.is_some()
+                && r.mission.is_some()
+                && !r.verdicts.is_empty()
+        });
         if seen {
             break;
         }
@@ -78,6 +106,12 @@ fn a_robot_and_a_station_meet_through_a_router() {
         station.fleet().robot("site-robot").unwrap().phase(),
         Some(&Phase::Exploring { done: 2, of: 5 })
     );
+    assert!(station
+        .fleet()
+        .robot("site-robot")
+        .unwrap()
+        .feeling
+        .is_none());
     assert_eq!(
         station
             .command("site-robot", Command::Stop, Duration::from_secs(5))

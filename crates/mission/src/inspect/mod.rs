@@ -46,11 +46,14 @@ use crate::sync::{ClockFit, ClockSync};
 use crate::MissionError;
 
 mod arm;
+mod feel;
 mod passes;
 mod perceive;
 mod sensor;
 
 use arm::*;
+use feel::Feel;
+pub use feel::Feeling;
 use passes::*;
 use perceive::*;
 use sensor::*;
@@ -222,6 +225,9 @@ pub enum Progress {
     },
     /// The sensor stream's and the link's counters (every 0.5 s).
     Health(StreamHealth),
+    /// What the finger feels so far in the stroke under way (every 0.1 s while it is down):
+    /// shown only, the pass's verdict comes with [`Progress::Slid`].
+    Feeling(Feeling),
     /// A slide pass is done and judged.
     Slid {
         /// Slides done.
@@ -687,6 +693,7 @@ fn mission(
     let mut felt: Vec<(u64, Felt)> = Vec::new();
     let mut online = OnlineClassifier::new(recognition)?;
     let mut online_width = OnlineClassifier::new(width)?;
+    let mut feel = Feel::new(recognition, width)?;
     for (si, slide) in plan.slides.iter().enumerate() {
         if rig.stop.load(Ordering::Relaxed) {
             return Err(MissionError::Interrupted);
@@ -721,8 +728,9 @@ fn mission(
                 };
                 let id = next_id;
                 next_id += 1;
-                let ((s, x), attempts) = rig.slide_and_record(id, a, b, slide.speed_mm_s)?;
                 let dir = u8::from(!forth);
+                let ((s, x), attempts) =
+                    rig.slide_and_record(id, (a, b), slide.speed_mm_s, dir, &mut feel)?;
                 let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
                 save_pass(&rec_path, &s, &x, dir)?;
                 records.push((id, a, b, s.len(), rec_path, attempts));

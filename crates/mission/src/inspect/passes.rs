@@ -142,14 +142,15 @@ impl<'a> Rig<'a> {
     pub(super) fn slide_and_record(
         &mut self,
         id: u32,
-        a: [f64; 2],
-        b: [f64; 2],
+        (a, b): ([f64; 2], [f64; 2]),
         speed: f64,
+        dir: u8,
+        feel: &mut Feel<'_>,
     ) -> Result<(Recorded, u32), MissionError> {
         let mut attempts = 0;
         loop {
             attempts += 1;
-            match self.try_slide(id, a, b, speed) {
+            match self.try_slide(id, (a, b), speed, dir, feel) {
                 Ok(r) => return Ok((r, attempts)),
                 Err(
                     e @ (MissionError::SensorStalled { .. } | MissionError::ControllerRestarted),
@@ -188,12 +189,14 @@ impl<'a> Rig<'a> {
     fn try_slide(
         &mut self,
         id: u32,
-        a: [f64; 2],
-        b: [f64; 2],
+        (a, b): ([f64; 2], [f64; 2]),
         speed: f64,
+        dir: u8,
+        feel: &mut Feel<'_>,
     ) -> Result<Recorded, MissionError> {
         let config = self.config;
         let first_sample = self.sensor.samples.len();
+        feel.begin(id, (a, b), dir, first_sample);
         self.arm.errors.clear();
         // A retried slide keeps its id: forget the first attempt's end.
         self.arm.done.retain(|&d| d != id);
@@ -227,6 +230,10 @@ impl<'a> Rig<'a> {
                 return Err(MissionError::Interrupted);
             }
             self.pump(Duration::from_millis(2))?;
+            let latest = self.arm.states.back().map(|s| &s.state);
+            if let Some(f) = feel.update(&self.sensor.samples, latest)? {
+                (self.progress)(&Progress::Feeling(f));
+            }
             if let Some(e) = self.arm.errors.iter().find(|e| e.seq == seq) {
                 return Err(MissionError::Refused {
                     what: format!("slide {id}"),

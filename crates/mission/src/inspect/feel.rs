@@ -1,0 +1,130 @@
+//! What the finger feels while a stroke is still under way: the deployed models' running
+//! verdict, for the front ends ([`Progress::Feeling`]). The pass's verdict is still taken when
+//! the stroke ends, from positions interpolated at every sample
+//! ([`super::passes::classify`]); this one uses the arm's latest state, is only shown, and
+//! never decides anything.
+
+use super::*;
+use crackbot_tactile::online::RunningVerdict;
+
+/// How often a running verdict is shown.
+const SHOW_FEELING_EVERY: Duration = Duration::from_millis(100);
+
+/// The verdict so far of the stroke under way.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Feeling {
+    /// The slide (its id on the link).
+    pub slide: u32,
+    /// The recognition model's class so far.
+    pub class: String,
+    /// Its vote so far (mean of both forests' window probabilities), 0–1.
+    pub confidence: f64,
+    /// The width model's class so far, mm (read it only when `class` is a crack).
+    pub width_mm: Option<f64>,
+    /// Windows classified so far in this stroke.
+    pub windows: usize,
+    /// Where the finger is along the stroke, mm from its start.
+    pub along_mm: f64,
+}
+
+/// Both deployed models fed sample by sample during a stroke.
+pub(super) struct Feel<'m> {
+    recognition: OnlineClassifier<'m>,
+    width: OnlineClassifier<'m>,
+    recognition_model: &'m TactileModel,
+    width_model: &'m TactileModel,
+    /// The stroke under way: its id, start, unit direction and direction column.
+    stroke: Option<(u32, [f64; 2], [f64; 2], u8)>,
+    /// Sensor samples (index into the mission's) looked at so far.
+    seen: usize,
+    last: (Option<RunningVerdict>, Option<RunningVerdict>),
+    along_mm: f64,
+    shown_at: Instant,
+}
+
+impl<'m> Feel<'m> {
+    pub(super) fn new(
+        recognition: &'m TactileModel,
+        width: &'m TactileModel,
+    ) -> Result<Self, MissionError> {
+        Ok(Feel {
+            recognition: OnlineClassifier::new(recognition)?,
+            width: OnlineClassifier::new(width)?,
+            recognition_model: recognition,
+            width_model: width,
+            stroke: None,
+            seen: 0,
+            last: (None, None),
+            along_mm: 0.0,
+            shown_at: Instant::now(),
+        })
+    }
+
+    /// A stroke `id` from `a` to `b` (direction column `dir`) starts; sensor samples from index
+    /// `first_sample` on are its candidates.
+    pub(super) fn begin(&mut self, id: u32, (a, b): ([f64; 2], [f64; 2]), dir: u8, first: usize) {
+        for c in [&mut self.recognition, &mut self.width] {
+            c.reset();
+            c.begin_slide();
+        }
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let l = d[0].hypot(d[1]).max(1e-9);
+        self.stroke = Some((id, a, [d[0] / l, d[1] / l], dir));
+        self.seen = first;
+        self.last = (None, None);
+        self.along_mm = 0.0;
+    }
+
+    /// Feeds the samples that arrived since the last call while the arm, by its latest state,
+    /// was down in the stroke; returns the feeling to show every [`SHOW_FEELING_EVERY`].
+    pub(super) fn update(
+        &mut self,
+        samples: &[TimedSample],
+        latest: Option<&crackbot_link::State>,
+    ) -> Result<Option<Feeling>, MissionError> {
+        let Some((id, a, u, dir)) = self.stroke else {
+            return Ok(None);
+        };
+        let new = samples.get(self.seen..).unwrap_or_default();
+        self.seen = samples.len();
+        let down = latest.filter(|s| {
+            s.mode == crackbot_link::Mode::Sliding { id } && f64::from(s.pose.z_mm) < 0.5
+        });
+        let Some(state) = down else {
+            return Ok(None);
+        };
+        let p = pose(state);
+        self.along_mm = (p[0] - a[0]) * u[0] + (p[1] - a[1]) * u[1];
+        for s in new {
+            let raw = s.raw.map(f64::from);
+            if let Some(v) = self.recognition.push(raw, dir, self.along_mm)? {
+                self.last.0 = Some(v);
+            }
+            if let Some(v) = self.width.push(raw, dir, self.along_mm)? {
+                self.last.1 = Some(v);
+            }
+        }
+        let Some(r) = self.last.0.as_ref() else {
+            return Ok(None);
+        };
+        if self.shown_at.elapsed() < SHOW_FEELING_EVERY {
+            return Ok(None);
+        }
+        self.shown_at = Instant::now();
+        let name = |m: &TactileModel, c: u32| m.header.classes.get(c as usize).cloned();
+        Ok(Some(Feeling {
+            slide: id,
+            class: name(self.recognition_model, r.class).unwrap_or_else(|| r.class.to_string()),
+            confidence: r.confidence,
+            width_mm: self.last.1.as_ref().and_then(|w| {
+                self.width_model
+                    .header
+                    .labels
+                    .get(w.class as usize)
+                    .copied()
+            }),
+            windows: r.windows,
+            along_mm: self.along_mm,
+        }))
+    }
+}
