@@ -1027,18 +1027,10 @@ impl OperatorApp {
         let wake = ctx.clone();
         self.say(format!("screenshot -> {}", path.display()));
         ctx.request_screenshot(move |img| {
-            std::thread::spawn(move || {
-                let [w, h] = img.size;
-                let rgba: Vec<u8> = img
-                    .pixels
-                    .iter()
-                    .flat_map(|c| c.to_srgba_unmultiplied())
-                    .collect();
-                match export::png(w, h, &rgba) {
-                    Ok(bytes) => export::write_in_background(path, bytes, log, Some(wake)),
-                    Err(e) => {
-                        let _ = log.send(e.to_string());
-                    }
+            std::thread::spawn(move || match export::screenshot_png(&img) {
+                Ok(bytes) => export::write_in_background(path, bytes, log, Some(wake)),
+                Err(e) => {
+                    let _ = log.send(e.to_string());
                 }
             });
         });
@@ -1102,13 +1094,7 @@ impl OperatorApp {
                     Some(path) => {
                         let wake = ctx.clone();
                         ctx.request_screenshot(move |img| {
-                            let [w, h] = img.size;
-                            let rgba: Vec<u8> = img
-                                .pixels
-                                .iter()
-                                .flat_map(|c| c.to_srgba_unmultiplied())
-                                .collect();
-                            if let Ok(bytes) = export::png(w, h, &rgba) {
+                            if let Ok(bytes) = export::screenshot_png(&img) {
                                 let _ = export::write_file(&path, &bytes);
                             }
                             wake.send_viewport_cmd(egui::ViewportCommand::Close);

@@ -44,6 +44,17 @@ pub fn png(width: usize, height: usize, rgba: &[u8]) -> Result<Vec<u8>, Operator
     Ok(out.into_inner())
 }
 
+/// A window screenshot (egui's premultiplied colours) as PNG bytes.
+pub fn screenshot_png(img: &egui::ColorImage) -> Result<Vec<u8>, OperatorError> {
+    let [w, h] = img.size;
+    let rgba: Vec<u8> = img
+        .pixels
+        .iter()
+        .flat_map(|c| c.to_srgba_unmultiplied())
+        .collect();
+    png(w, h, &rgba)
+}
+
 /// Writes `bytes` to `path` (creating its folder), atomically: a temporary file renamed.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OperatorError> {
     let io = |e: std::io::Error| OperatorError::Io {
@@ -114,5 +125,22 @@ mod tests {
         let img = image::load_from_memory(&bytes).unwrap().to_rgba8();
         assert_eq!(img.dimensions(), (2, 1));
         assert!(png(3, 3, &[0; 4]).is_err());
+    }
+
+    #[test]
+    fn a_screenshot_keeps_its_size_and_colours() {
+        let img = egui::ColorImage::new(
+            [2, 1],
+            vec![
+                egui::Color32::from_rgb(200, 10, 30),
+                egui::Color32::from_rgba_unmultiplied(0, 0, 255, 255),
+            ],
+        );
+        let back = image::load_from_memory(&screenshot_png(&img).unwrap())
+            .unwrap()
+            .to_rgba8();
+        assert_eq!(back.dimensions(), (2, 1));
+        assert_eq!(back.get_pixel(0, 0).0, [200, 10, 30, 255]);
+        assert_eq!(back.get_pixel(1, 0).0, [0, 0, 255, 255]);
     }
 }

@@ -5,8 +5,10 @@
 //! sends the emergency stop.
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use crackbot_link::Key;
 use crackbot_mission::inspect::InspectConfig;
@@ -16,30 +18,13 @@ use crackbot_telemetry::{RobotService, ZenohOptions};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 
+use common::step_until;
+
 fn free_tcp_port() -> u16 {
     std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|s| s.local_addr())
         .map(|a| a.port())
         .unwrap()
-}
-
-fn step_until(
-    h: &mut Harness<'_, OperatorApp>,
-    what: &str,
-    limit: Duration,
-    done: impl Fn(&OperatorApp) -> bool,
-) {
-    let t = Instant::now();
-    while !done(h.state()) {
-        assert!(
-            t.elapsed() < limit,
-            "timed out after {limit:?} waiting for {what}; log: {:?}",
-            h.state().log
-        );
-        h.step();
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    h.step();
 }
 
 fn phase(app: &OperatorApp, robot: &str) -> Option<Phase> {

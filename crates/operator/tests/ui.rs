@@ -3,6 +3,8 @@
 //! streaming into the views, exports, and the replay of the mission it saved.
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -12,6 +14,8 @@ use crackbot_operator::{Backend, OperatorApp, Pending};
 use crackbot_telemetry::wire::Phase;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
+
+use common::step_until;
 
 fn harness(app: OperatorApp) -> Harness<'static, OperatorApp> {
     Harness::builder()
@@ -31,26 +35,6 @@ fn stop_raised(app: &OperatorApp) -> bool {
         Backend::Sim(s) => s.stop_raised(),
         _ => false,
     }
-}
-
-/// Steps the UI until `done` holds (the mission runs on its own thread meanwhile).
-fn step_until(
-    h: &mut Harness<'_, OperatorApp>,
-    what: &str,
-    limit: Duration,
-    done: impl Fn(&OperatorApp) -> bool,
-) {
-    let t = Instant::now();
-    while !done(h.state()) {
-        assert!(
-            t.elapsed() < limit,
-            "timed out after {limit:?} waiting for {what}; log: {:?}",
-            h.state().log
-        );
-        h.step();
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    h.step();
 }
 
 fn local_phase(app: &OperatorApp) -> Option<Phase> {
