@@ -276,20 +276,7 @@ mod tests {
                 along_mm: 3.0,
             })
         };
-        let verdict = |id: u32| {
-            Telemetry::Verdict(PassVerdict {
-                id,
-                candidate: Some(1),
-                start_mm: [0.0, 0.0],
-                end_mm: [16.0, 0.0],
-                samples: 1400,
-                class: Some("crack".into()),
-                confidence: 0.8,
-                width_mm: Some(5.0),
-                doubt: None,
-                dip_mm: None,
-            })
-        };
+        let verdict = |id: u32| Telemetry::Verdict(crate::wire::example_verdict(id));
         f.apply(env(1, status(1, Phase::Starting)), t);
         f.apply(env(2, feeling(1, 10)), t);
         f.apply(env(3, feeling(1, 20)), t);

@@ -522,6 +522,23 @@ impl MissionFeed {
     }
 }
 
+/// A judged pass for the crate's tests.
+#[cfg(test)]
+pub(crate) fn example_verdict(id: u32) -> PassVerdict {
+    PassVerdict {
+        id,
+        candidate: Some(3),
+        start_mm: [0.0, 0.0],
+        end_mm: [16.0, 0.0],
+        samples: 1400,
+        class: Some("crack".into()),
+        confidence: 0.8,
+        width_mm: Some(5.0),
+        doubt: None,
+        dip_mm: Some([8.0, 5.1]),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]
@@ -557,18 +574,7 @@ mod tests {
                 }],
                 estimated_s: 4.0,
             }),
-            Telemetry::Verdict(PassVerdict {
-                id: 1,
-                candidate: Some(3),
-                start_mm: [0.0, 0.0],
-                end_mm: [16.0, 0.0],
-                samples: 1400,
-                class: Some("crack".into()),
-                confidence: 0.8,
-                width_mm: Some(5.0),
-                doubt: None,
-                dip_mm: Some([8.0, 5.1]),
-            }),
+            Telemetry::Verdict(example_verdict(1)),
             Telemetry::Health(Health {
                 uptime_s: 3.0,
                 stream: Some(StreamHealth::default()),

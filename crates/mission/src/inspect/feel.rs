@@ -31,14 +31,11 @@ pub struct Feeling {
 pub(super) struct Feel<'m> {
     recognition: OnlineClassifier<'m>,
     width: OnlineClassifier<'m>,
-    recognition_model: &'m TactileModel,
-    width_model: &'m TactileModel,
     /// The stroke under way: its id, start, unit direction and direction column.
     stroke: Option<(u32, [f64; 2], [f64; 2], u8)>,
     /// Sensor samples (index into the mission's) looked at so far.
     seen: usize,
     last: (Option<RunningVerdict>, Option<RunningVerdict>),
-    along_mm: f64,
     shown_at: Instant,
 }
 
@@ -50,12 +47,9 @@ impl<'m> Feel<'m> {
         Ok(Feel {
             recognition: OnlineClassifier::new(recognition)?,
             width: OnlineClassifier::new(width)?,
-            recognition_model: recognition,
-            width_model: width,
             stroke: None,
             seen: 0,
             last: (None, None),
-            along_mm: 0.0,
             shown_at: Instant::now(),
         })
     }
@@ -63,16 +57,11 @@ impl<'m> Feel<'m> {
     /// A stroke `id` from `a` to `b` (direction column `dir`) starts; sensor samples from index
     /// `first_sample` on are its candidates.
     pub(super) fn begin(&mut self, id: u32, (a, b): ([f64; 2], [f64; 2]), dir: u8, first: usize) {
-        for c in [&mut self.recognition, &mut self.width] {
-            c.reset();
-            c.begin_slide();
-        }
-        let d = [b[0] - a[0], b[1] - a[1]];
-        let l = d[0].hypot(d[1]).max(1e-9);
-        self.stroke = Some((id, a, [d[0] / l, d[1] / l], dir));
+        self.recognition.reset();
+        self.width.reset();
+        self.stroke = Some((id, a, unit(a, b), dir));
         self.seen = first;
         self.last = (None, None);
-        self.along_mm = 0.0;
     }
 
     /// Feeds the samples that arrived since the last call while the arm, by its latest state,
@@ -93,14 +82,13 @@ impl<'m> Feel<'m> {
         let Some(state) = down else {
             return Ok(None);
         };
-        let p = pose(state);
-        self.along_mm = (p[0] - a[0]) * u[0] + (p[1] - a[1]) * u[1];
+        let along_mm = along(a, u, pose(state));
         for s in new {
             let raw = s.raw.map(f64::from);
-            if let Some(v) = self.recognition.push(raw, dir, self.along_mm)? {
+            if let Some(v) = self.recognition.push(raw, dir, along_mm)? {
                 self.last.0 = Some(v);
             }
-            if let Some(v) = self.width.push(raw, dir, self.along_mm)? {
+            if let Some(v) = self.width.push(raw, dir, along_mm)? {
                 self.last.1 = Some(v);
             }
         }
@@ -114,17 +102,14 @@ impl<'m> Feel<'m> {
         let name = |m: &TactileModel, c: u32| m.header.classes.get(c as usize).cloned();
         Ok(Some(Feeling {
             slide: id,
-            class: name(self.recognition_model, r.class).unwrap_or_else(|| r.class.to_string()),
+            class: name(self.recognition.model(), r.class).unwrap_or_else(|| r.class.to_string()),
             confidence: r.confidence,
             width_mm: self.last.1.as_ref().and_then(|w| {
-                self.width_model
-                    .header
-                    .labels
-                    .get(w.class as usize)
-                    .copied()
+                let labels = &self.width.model().header.labels;
+                labels.get(w.class as usize).copied()
             }),
             windows: r.windows,
-            along_mm: self.along_mm,
+            along_mm,
         }))
     }
 }

@@ -32,6 +32,18 @@ pub(super) fn split_by_travel(positions: &[f64], stroke_mm: f64) -> Vec<(usize, 
     out
 }
 
+/// The unit vector from `a` towards `b` (mm on the plate).
+pub(super) fn unit(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let l = d[0].hypot(d[1]).max(1e-9);
+    [d[0] / l, d[1] / l]
+}
+
+/// How far the arm's pose `p` is along the line from `a` with unit direction `u`, mm.
+pub(super) fn along(a: [f64; 2], u: [f64; 2], p: [f64; 3]) -> f64 {
+    (p[0] - a[0]) * u[0] + (p[1] - a[1]) * u[1]
+}
+
 /// Both models over one pass: the recognition verdict and the width verdict.
 pub(super) fn classify(
     online: &mut OnlineClassifier<'_>,
@@ -281,11 +293,7 @@ impl<'a> Rig<'a> {
         // The stroke's samples: the arm down (z ≈ 0) in slide `id`.
         let mut samples = Vec::new();
         let mut positions = Vec::new();
-        let u = {
-            let d = [b[0] - a[0], b[1] - a[1]];
-            let l = d[0].hypot(d[1]).max(1e-9);
-            [d[0] / l, d[1] / l]
-        };
+        let u = unit(a, b);
         let mapped = mapped_states(self.arm);
         let taken: Vec<TimedSample> = self.sensor.samples[first_sample..].to_vec();
         // A silence of the sensor inside the stroke (a stall the stroke outlasted): slide again.
@@ -319,7 +327,7 @@ impl<'a> Rig<'a> {
             let down = p[2] < 0.5 && mode == crackbot_link::Mode::Sliding { id };
             if down {
                 samples.push(s.raw.map(f64::from));
-                positions.push((p[0] - a[0]) * u[0] + (p[1] - a[1]) * u[1]);
+                positions.push(along(a, u, p));
             }
         }
         // Frames lost to a stall that lasted past the stroke's end: too few samples for the stroke.
