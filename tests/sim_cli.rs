@@ -289,3 +289,59 @@ fn detector_set_writes_images_masks_and_tight_crack_boxes() {
         text(&o.stderr)
     );
 }
+
+/// A start whose proximity fibre traces a cone (`proximity_cone_deg` > 0) gets its cone fitted
+/// with the rest of the optics, and a start's lateral end stop is kept: both written to
+/// `--params-out`, which `sim dataset --params` takes back.
+#[test]
+fn calibrate_fits_the_cone_and_keeps_the_end_stop_of_its_start() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let start = tmp.path().join("start.toml");
+    std::fs::write(
+        &start,
+        "[sensor.finger]\nlateral_travel_mm = 1.5\n[sensor.optics]\nproximity_cone_deg = 20.0\n",
+    )
+    .expect("write");
+    let fitted = tmp.path().join("fitted.toml");
+    let o = crackbot(&[
+        "sim",
+        "calibrate",
+        "--real",
+        utf8(&data().join("type")),
+        "--repetition",
+        "1",
+        "--evaluations",
+        "30",
+        "--mechanics-evaluations",
+        "1",
+        "--start",
+        utf8(&start),
+        "--params-out",
+        utf8(&fitted),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let params: toml::Value =
+        toml::from_str(&std::fs::read_to_string(&fitted).expect("fitted")).expect("toml");
+    let cone = params["sensor"]["optics"]["proximity_cone_deg"]
+        .as_float()
+        .expect("cone");
+    assert!((1.0..=60.0).contains(&cone) && cone != 20.0, "cone {cone}");
+    assert_eq!(
+        params["sensor"]["finger"]["lateral_travel_mm"].as_float(),
+        Some(1.5)
+    );
+    let out = tmp.path().join("set");
+    let o = crackbot(&[
+        "sim",
+        "dataset",
+        "--experiment",
+        "recognition",
+        "--recordings",
+        "1",
+        "--params",
+        utf8(&fitted),
+        "--out",
+        utf8(&out),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+}

@@ -736,15 +736,23 @@ fn fit_proximity(
     max_evals: usize,
     rules: ProximityRules,
 ) -> (OpticsParams, f64) {
-    // x = [peak counts, peak distance, height, look-ahead, spot] (+ the dark level when fitted).
+    // x = [peak counts, peak distance, height, look-ahead, spot] (+ the dark level when fitted)
+    // (+ the cone's half-angle when the start traces rays, `proximity_cone_deg` > 0).
+    let fit_dark = !rules.measured_dark;
+    let fit_cone = start.proximity_cone_deg > 0.0;
     let apply = |o: &mut OpticsParams, x: &[f64]| {
         o.proximity_peak_counts = x[0];
         o.proximity_peak_mm = x[1].max(0.05);
         o.proximity_height_mm = x[2];
         o.proximity_offset_mm = x[3];
         o.proximity_spot_mm = x[4].abs();
-        if let Some(&dark) = x.get(5) {
-            o.proximity_dark_counts = dark;
+        let mut next = 5;
+        if fit_dark {
+            o.proximity_dark_counts = x[next];
+            next += 1;
+        }
+        if fit_cone {
+            o.proximity_cone_deg = x[next].clamp(1.0, 60.0);
         }
     };
     let mut best = (start.clone(), f64::INFINITY);
@@ -758,9 +766,13 @@ fn fit_proximity(
             start.proximity_spot_mm,
         ];
         let mut steps = vec![50.0, 0.3, 0.5, 0.5, 0.3];
-        if !rules.measured_dark {
+        if fit_dark {
             x0.push(start.proximity_dark_counts);
             steps.push(20.0);
+        }
+        if fit_cone {
+            x0.push(start.proximity_cone_deg);
+            steps.push(8.0);
         }
         let (x, v) = nelder_mead(
             |x| {

@@ -8,7 +8,9 @@
 //! * Proximity fibre P: a reflective fibre pair, whose intensity over distance `d` rises from
 //!   zero, peaks at `d_pk` and falls off as `1/d²`: `I(u) = 2u²/(1+u⁴)` with `u = d/d_pk`,
 //!   scaled by the surface's reflectivity (colour, printed decoys). The fibre looks at the surface
-//!   a fixed offset ahead of the tip, from a fixed height above the tip's lowest point.
+//!   a fixed offset ahead of the tip, from a fixed height above the tip's lowest point: straight
+//!   down over its spot, or (`proximity_cone_deg` > 0) along rays fanned across a cone, each
+//!   traced to the first surface it meets and weighted by the cosine of its incidence there.
 //! * Transducers saturate softly at `saturation_counts`; the ADC clamps to 0..=1023 and
 //!   quantises. White noise, a slow random-walk drift, and a per-recording offset and gain change
 //!   (the paper found the fibre cables' position and twisting shifted the data between sessions)
@@ -49,6 +51,10 @@ pub struct OpticsParams {
     pub proximity_height_mm: f64,
     /// Where the proximity fibre looks, ahead of the tip along the slide's +x, mm.
     pub proximity_offset_mm: f64,
+    /// Half-angle of the proximity fibre's cone, degrees: 0 averages the distance curve over
+    /// the spot straight below; above 0 the spot's rays fan out and are traced to the first
+    /// surface they meet, so a crack's walls shade its floor (see `run::ProximityGeometry`).
+    pub proximity_cone_deg: f64,
     /// Transducer output ceiling, counts (the soft knee starts 10 % below).
     pub saturation_counts: f64,
     /// White-noise standard deviation per channel (D1, D2, D3, P), counts.
@@ -79,6 +85,7 @@ impl Default for OpticsParams {
             proximity_peak_mm: 0.454,
             proximity_height_mm: 1.026,
             proximity_offset_mm: 1.799,
+            proximity_cone_deg: 0.0,
             saturation_counts: 1000.0,
             noise_counts: [1.384, 2.781, 5.189, 0.418],
             // Spread between repetitions of one plate (medians of repetitions 1-3: about a
@@ -107,6 +114,7 @@ impl OpticsParams {
             proximity_peak_mm: 3.0,
             proximity_height_mm: 1.5,
             proximity_offset_mm: 2.0,
+            proximity_cone_deg: 0.0,
             saturation_counts: 1000.0,
             noise_counts: [1.0, 1.0, 1.5, 2.0],
             drift_counts_per_sqrt_s: 0.3,
@@ -142,6 +150,13 @@ impl OpticsParams {
             return Err(SimError::Invalid(format!(
                 "sensor.optics.proximity_peak_mm must be positive, got {}",
                 self.proximity_peak_mm
+            )));
+        }
+        if !(self.proximity_cone_deg.is_finite() && (0.0..80.0).contains(&self.proximity_cone_deg))
+        {
+            return Err(SimError::Invalid(format!(
+                "sensor.optics.proximity_cone_deg must be in [0, 80) degrees, got {}",
+                self.proximity_cone_deg
             )));
         }
         if !(1..=16).contains(&self.adc_bits) {

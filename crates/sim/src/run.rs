@@ -93,6 +93,10 @@ pub struct ProximityGeometry {
     pub spot: f64,
     /// Distance of the intensity curve's peak, mm.
     pub peak_mm: f64,
+    /// Half-angle of the fibre's cone, radians: 0 looks straight down from every point of the
+    /// spot; above 0 the spot's rays fan out and are traced to the first surface they meet
+    /// (walls shade a crack's floor, and a surface seen at a grazing angle returns less light).
+    pub cone: f64,
 }
 
 impl ProximityGeometry {
@@ -103,6 +107,7 @@ impl ProximityGeometry {
             offset: optics.proximity_offset_mm * 1e-3,
             spot: optics.proximity_spot_mm.max(0.0) * 1e-3,
             peak_mm: optics.proximity_peak_mm,
+            cone: optics.proximity_cone_deg.to_radians(),
         }
     }
 
@@ -117,6 +122,9 @@ impl ProximityGeometry {
     ) -> Scene1d {
         let fibre_x = tip_x + self.offset;
         let fibre_z = tip_z + self.height;
+        if self.cone > 0.0 {
+            return self.traced_view(model, fibre_x, fibre_z, plate_reflectivity);
+        }
         let mut intensity = 0.0;
         let mut distance = 0.0;
         for k in 0..SPOT_POINTS {
@@ -131,6 +139,80 @@ impl ProximityGeometry {
             intensity: plate_reflectivity * intensity / SPOT_POINTS as f64,
         }
     }
+
+    /// The cone's view: [`CONE_RAYS`] rays, from across the spot and tilted across the cone,
+    /// each traced to the first surface it meets; each returns the distance curve at its
+    /// length times the reflectivity there times the cosine between the ray and the surface's
+    /// normal (a matt surface), and nothing if it meets no surface within [`MAX_RAY`].
+    fn traced_view(
+        &self,
+        model: &FingerModel,
+        fibre_x: f64,
+        fibre_z: f64,
+        plate_reflectivity: f64,
+    ) -> Scene1d {
+        let mut intensity = 0.0;
+        let mut distance = 0.0;
+        for k in 0..CONE_RAYS {
+            let u = (k as f64 + 0.5) / CONE_RAYS as f64 - 0.5;
+            let angle = 2.0 * u * self.cone;
+            let x0 = fibre_x + u * self.spot;
+            match trace_ray(model, x0, fibre_z, angle) {
+                Some((x, length, cosine)) => {
+                    let d_mm = length * 1e3;
+                    distance += d_mm;
+                    intensity +=
+                        proximity_intensity(d_mm, self.peak_mm) * model.reflectivity_at(x) * cosine;
+                }
+                None => distance += MAX_RAY * 1e3,
+            }
+        }
+        Scene1d {
+            proximity_distance_mm: distance / CONE_RAYS as f64,
+            intensity: plate_reflectivity * intensity / CONE_RAYS as f64,
+        }
+    }
+}
+
+/// Rays across the proximity fibre's cone.
+pub const CONE_RAYS: usize = 9;
+
+/// Longest proximity ray traced, m (the curve is below 1 % of its peak well before).
+pub const MAX_RAY: f64 = 0.012;
+
+/// The first point where the ray from `(x0, z0)`, tilted `angle` from straight down (towards
+/// +x for a positive angle), meets `model`'s surface: `(x, length, cosine)`, with the cosine
+/// between the reversed ray and the surface's normal there (0 for a surface seen edge-on).
+/// A start at or below the surface meets it at once.
+fn trace_ray(model: &FingerModel, x0: f64, z0: f64, angle: f64) -> Option<(f64, f64, f64)> {
+    const MIN_STEP: f64 = 5e-6;
+    const MAX_STEP: f64 = 5e-4;
+    let (sin, cos) = angle.sin_cos();
+    let gap_at = |s: f64| {
+        let x = x0 + s * sin;
+        (x, z0 - s * cos - model.surface_at(x))
+    };
+    let (_, mut gap) = gap_at(0.0);
+    if gap <= 0.0 {
+        return Some((x0, 0.0, 1.0));
+    }
+    let mut s = 0.0;
+    while s < MAX_RAY {
+        let step = (0.5 * gap).clamp(MIN_STEP, MAX_STEP);
+        let (_, next_gap) = gap_at(s + step);
+        if next_gap <= 0.0 {
+            let hit = s + step * gap / (gap - next_gap);
+            let (x, _) = gap_at(hit);
+            let h = 2e-5;
+            let slope = (model.surface_at(x + h) - model.surface_at(x - h)) / (2.0 * h);
+            // Normal (-slope, 1); reversed ray (-sin, cos).
+            let cosine = ((slope * sin + cos) / (1.0 + slope * slope).sqrt()).max(0.0);
+            return Some((x, hit, cosine));
+        }
+        s += step;
+        gap = next_gap;
+    }
+    None
 }
 
 impl SlideSim {

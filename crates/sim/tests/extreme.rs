@@ -4,8 +4,10 @@
 //! follows the arm (whose path is continuous), saturated channels clamp to the ADC's range, zero
 //! friction leaves no lateral deflection, a 1e9 N/m contact agrees with the default one under the
 //! implicit integrator while an explicit step at the output rate blows up, the mechanical energy
-//! never grows without input, invalid inputs are refused with the field named, and random
-//! cracks, tips, speeds and frictions always give finite samples inside the ADC's range.
+//! never grows without input, invalid inputs are refused with the field named, a lateral end
+//! stop drags the fitted finger out of the paper's 10 mm crack (where it jams without one), the
+//! traced proximity cone matches a flat plate and is shaded in a slot, and random cracks, tips,
+//! speeds, frictions, end stops and cones always give finite samples inside the ADC's range.
 //!
 //! Every sample of every run is checked: all fields finite, ADC counts whole numbers in
 //! `0..=1023`. The sensor is the calibrated one (its tip radius unless a case sets one).
@@ -629,7 +631,8 @@ fn perturbed(model: &FingerModel, x: f64) -> State {
 /// envelope's kink where the tip touches both edges), on a 45° wall (the tip slides into the
 /// wall–floor corner) and against a vertical wall (1 mm tip), holds the arm still and checks
 /// that the mechanical energy never rises by more than 1e-9 J from one output sample to the
-/// next over 2 s, and that some is dissipated. All cases run; the failures are listed together.
+/// next over 2 s, and that some is dissipated; each case also with a lateral end stop the
+/// perturbation reaches. All cases run; the failures are listed together.
 fn assert_energy_never_grows(integrator: Integrator) {
     // The line runs 80..120 mm on the plate, the crack at 100 mm (20 mm along the line). On the
     // cracks the arm stands where the envelope is steepest.
@@ -641,14 +644,28 @@ fn assert_energy_never_grows(integrator: Integrator) {
     ];
     let label = integrator.label();
     let mut failures = Vec::new();
-    for (name, surface, tip) in &cases {
+    // Each case without and with a lateral end stop that the perturbation reaches (0.005 mm; it swings the tip ≈ 0.019 mm).
+    let cases = cases
+        .iter()
+        .flat_map(|(name, surface, tip)| {
+            [None, Some(0.005)].map(|travel| {
+                let name = match travel {
+                    Some(_) => format!("{name}, end stop"),
+                    None => name.to_string(),
+                };
+                (name, surface.clone(), *tip, travel)
+            })
+        })
+        .collect::<Vec<_>>();
+    for (name, surface, tip, travel) in &cases {
         let params = FingerParams {
             tip_radius_mm: *tip,
+            lateral_travel_mm: *travel,
             ..FingerParams::default()
         };
         let profile = surface.profile([80.0, 50.0], [120.0, 50.0], 0.01);
         let model = FingerModel::new(&params, Envelope::new(&profile, params.tip_radius_mm));
-        let x = if *name == "flat" {
+        let x = if name.starts_with("flat") {
             0.020
         } else {
             let slope = |x: f64| model.envelope().at(x).1.abs();
@@ -835,6 +852,18 @@ fn invalid_inputs_are_refused_naming_the_field() {
     s.optics.proximity_peak_mm = f64::NAN;
     let message = invalid_message(new(&good, &s));
     assert!(message.contains("proximity_peak_mm"), "{message:?}");
+    for cone in [f64::NAN, -1.0, 80.0] {
+        let mut s = sensor.clone();
+        s.optics.proximity_cone_deg = cone;
+        let message = invalid_message(new(&good, &s));
+        assert!(message.contains("proximity_cone_deg"), "{message:?}");
+    }
+    for travel in [f64::NAN, 0.0, -1.0, f64::INFINITY] {
+        let mut s = sensor.clone();
+        s.finger.lateral_travel_mm = Some(travel);
+        let message = invalid_message(new(&good, &s));
+        assert!(message.contains("lateral_travel_mm"), "{message:?}");
+    }
     let message = invalid_message(SlideSim::new(
         &surface,
         1.0,
@@ -890,6 +919,115 @@ fn tip_stays_above_the_floor_against_a_vertical_wall() {
     );
 }
 
+/// The paper's 10 mm plate as calibrated (2.53 mm deep, walls at 73°): the fitted finger
+/// without an end stop jams in it (the arm pulls 10 mm ahead and the tip stays on the floor);
+/// with `lateral_travel_mm` the arm drags the tip up the far rim within the stroke, and the
+/// tip never lags the body by much more than the travel.
+#[test]
+fn end_stop_drags_the_fitted_finger_out_of_the_paper_ten_mm_crack() {
+    let samples_of = |travel: Option<f64>| {
+        let mut sensor = calibrated_sensor();
+        sensor.finger.lateral_travel_mm = travel;
+        // Edges at 95 and 105 mm; the stroke runs 92..108 mm and back.
+        run(
+            &crack(10.0, 2.53, 73.1),
+            &line(92.0, STROKE, SPEED),
+            &sensor,
+            Integrator::default(),
+            3,
+            1.0,
+        )
+    };
+    // Where the tip is when the arm reaches the far end of the stroke.
+    let at_far_end = |samples: &[Sample]| {
+        samples
+            .iter()
+            .filter(|s| s.arm_mm > STROKE - 0.3)
+            .map(|s| s.tip_z_mm)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let jammed = samples_of(None);
+    assert!(
+        at_far_end(&jammed) < -2.0,
+        "without an end stop the tip was expected to stay in the crack, it is at {} mm",
+        at_far_end(&jammed)
+    );
+    assert!(max_abs(jammed.iter().map(|s| s.lateral_mm)) > 5.0);
+
+    let travel = 1.5;
+    let dragged = samples_of(Some(travel));
+    let deepest = min_of(dragged.iter().map(|s| s.tip_z_mm));
+    assert!(deepest < -2.0, "the tip never dropped in: {deepest} mm");
+    assert!(
+        at_far_end(&dragged) > -0.05,
+        "the tip is still in the crack at the stroke's end: {} mm",
+        at_far_end(&dragged)
+    );
+    let lag = max_abs(dragged.iter().map(|s| s.lateral_mm));
+    assert!(
+        lag < travel + 1.0,
+        "the tip lagged {lag} mm behind a {travel} mm end stop"
+    );
+}
+
+/// The traced proximity view over a flat plate is the mean over its rays of the distance curve
+/// at the ray's slanted length times the cosine of its tilt; a narrow slot returns well under
+/// half of it; a buried fibre sees nothing; and a zero cone is the spot model.
+#[test]
+fn traced_proximity_view_matches_a_flat_plate_and_is_shaded_in_a_slot() {
+    use crackbot_sim::optics::proximity_intensity;
+    use crackbot_sim::run::{ProximityGeometry, CONE_RAYS};
+    let params = FingerParams::default();
+    let model_of = |surface: &Surface| {
+        let profile = surface.profile([80.0, 50.0], [120.0, 50.0], 0.01);
+        FingerModel::new(&params, Envelope::new(&profile, params.tip_radius_mm))
+    };
+    let cone_deg: f64 = 20.0;
+    let geometry = ProximityGeometry {
+        height: 1.0e-3,
+        offset: 0.0,
+        spot: 1.0e-3,
+        peak_mm: 0.45,
+        cone: cone_deg.to_radians(),
+    };
+    let flat_model = model_of(&flat());
+    let x = 0.020;
+    let traced = geometry.view(&flat_model, x, 0.0, 1.0);
+    let expected = (0..CONE_RAYS)
+        .map(|k| {
+            let u = (k as f64 + 0.5) / CONE_RAYS as f64 - 0.5;
+            let a = 2.0 * u * cone_deg.to_radians();
+            proximity_intensity(1.0 / a.cos(), 0.45) * a.cos()
+        })
+        .sum::<f64>()
+        / CONE_RAYS as f64;
+    assert!(
+        (traced.intensity - expected).abs() < 1e-3 * expected,
+        "flat plate: traced {} against {expected}",
+        traced.intensity
+    );
+    // A 1 mm slot 3 mm deep under the fibre: its floor is far and its walls are seen nearly
+    // edge-on, so it returns well under half of what the plate does.
+    let slot = model_of(&crack(1.0, 3.0, 90.0));
+    let over_slot = geometry.view(&slot, 0.020, 0.0, 1.0);
+    assert!(
+        over_slot.intensity < 0.5 * traced.intensity,
+        "slot {} against the plate {}",
+        over_slot.intensity,
+        traced.intensity
+    );
+    // A fibre at or below the surface sees nothing.
+    let buried = geometry.view(&flat_model, x, -1.5e-3, 1.0);
+    assert_eq!(buried.intensity, 0.0);
+    // No cone: the spot model (straight down from every point, no cosine).
+    let spot = ProximityGeometry {
+        cone: 0.0,
+        ..geometry
+    };
+    let straight = spot.view(&flat_model, x, 0.0, 1.0);
+    assert!((straight.intensity - proximity_intensity(1.0, 0.45)).abs() < 1e-12);
+}
+
 proptest! {
     #![proptest_config(ProptestConfig {
         cases: 16,
@@ -905,9 +1043,13 @@ proptest! {
         speed in 1.0f64..40.0,
         friction in 0.0f64..0.8,
         seed in 0u64..1000,
+        travel in prop::option::of(0.2f64..4.0),
+        cone in prop_oneof![Just(0.0f64), 1.0f64..45.0],
     ) {
         let mut sensor = sensor_with_tip(tip);
         sensor.finger.friction = friction;
+        sensor.finger.lateral_travel_mm = travel;
+        sensor.optics.proximity_cone_deg = cone;
         let samples = run(
             &crack(width, depth, 90.0),
             &line(FEATURE_X - STROKE / 2.0, STROKE, speed),

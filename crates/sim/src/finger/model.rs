@@ -41,7 +41,21 @@ pub struct FingerParams {
     pub friction_velocity_mm_s: f64,
     /// Viscous damping of the arm's vertical axis carrying the body, N·s/m.
     pub arm_damping_n_s_m: f64,
+    /// How far the tip can lag or lead the body before the compliant part meets its end stop,
+    /// mm; beyond it the arm drags the tip through a spring [`END_STOP_FACTOR`] times stiffer,
+    /// up to [`END_STOP_MAX_FORCE_N`] (a position-controlled arm drags the finger out of a
+    /// crack whose rim the compliant part alone cannot pull it over). Absent: no end stop.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lateral_travel_mm: Option<f64>,
 }
+
+/// Stiffness of the lateral end stop relative to the compliant part's.
+pub const END_STOP_FACTOR: f64 = 50.0;
+
+/// Most the end stop pushes, N (the arm's force limit): against a wall the tip cannot climb
+/// (taller than its radius, or steeper than friction allows) the tip stays and the arm goes on,
+/// rather than the stop's force growing without bound until the contact gives way.
+pub const END_STOP_MAX_FORCE_N: f64 = 20.0;
 
 impl Default for FingerParams {
     fn default() -> Self {
@@ -58,6 +72,7 @@ impl Default for FingerParams {
             friction: 0.330,
             friction_velocity_mm_s: 0.5,
             arm_damping_n_s_m: 8.0,
+            lateral_travel_mm: None,
         }
     }
 }
@@ -90,6 +105,13 @@ impl FingerParams {
             if !(v.is_finite() && v > 0.0) {
                 return Err(SimError::Invalid(format!(
                     "{name} must be a positive number, got {v}"
+                )));
+            }
+        }
+        if let Some(t) = self.lateral_travel_mm {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(SimError::Invalid(format!(
+                    "sensor.finger.lateral_travel_mm must be a positive number, got {t}"
                 )));
             }
         }
@@ -356,6 +378,7 @@ pub struct FingerModel {
     v_eps: f64,
     c_arm: f64,
     radius: f64,
+    travel: f64,
 }
 
 /// Forces and deflections at one state: what the optics read.
@@ -398,7 +421,36 @@ impl FingerModel {
             v_eps: params.friction_velocity_mm_s * 1e-3,
             c_arm: params.arm_damping_n_s_m,
             radius: params.tip_radius_mm * 1e-3,
+            travel: params.lateral_travel_mm.map_or(f64::INFINITY, |t| t * 1e-3),
         }
+    }
+
+    /// Energy stored in the end stop `beyond` metres past the travel (the integral of its
+    /// capped force).
+    fn end_stop_energy(&self, beyond: f64) -> f64 {
+        if beyond <= 0.0 {
+            return 0.0;
+        }
+        let k = END_STOP_FACTOR * self.kx;
+        let knee = END_STOP_MAX_FORCE_N / k;
+        if beyond <= knee {
+            0.5 * k * beyond * beyond
+        } else {
+            0.5 * k * knee * knee + END_STOP_MAX_FORCE_N * (beyond - knee)
+        }
+    }
+
+    /// The lateral spring's force on the tip at deflection `d` (m): linear, and
+    /// [`END_STOP_FACTOR`] times stiffer beyond the travel.
+    #[inline]
+    fn lateral_spring(&self, d: f64) -> f64 {
+        let beyond = d.abs() - self.travel;
+        let stop = if beyond > 0.0 {
+            (END_STOP_FACTOR * self.kx * beyond).min(END_STOP_MAX_FORCE_N) * d.signum()
+        } else {
+            0.0
+        };
+        -self.kx * d - stop
     }
 
     /// The envelope the tip rides on.
@@ -458,7 +510,7 @@ impl FingerModel {
         let (fcx, fcz, _, _) = self.contact(y);
         // Finger springs: lateral towards the body; the normal compression δz = zt - zb (the
         // tip pushed up towards the body's reference point) pushes the tip down and the body up.
-        let fsx = -self.kx * (xt - xb) - self.cx * (vx - vb);
+        let fsx = self.lateral_spring(xt - xb) - self.cx * (vx - vb);
         let fsz = self.kz * (zt - zb) + self.cz * (vz - vzb);
         let ax = (fsx + fcx) / self.m;
         let az = (-fsz + fcz) / self.m - G;
@@ -490,6 +542,7 @@ impl FingerModel {
         0.5 * self.m * (vx * vx + vz * vz)
             + 0.5 * self.big_m * vzb * vzb
             + 0.5 * self.kx * (xt - arm_x).powi(2)
+            + self.end_stop_energy((xt - arm_x).abs() - self.travel)
             + 0.5 * self.kz * (zt - zb).powi(2)
             + 0.5 * self.kc * pen * pen
             + G * (self.m * zt + self.big_m * zb)
