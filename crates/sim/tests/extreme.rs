@@ -919,7 +919,7 @@ fn tip_stays_above_the_floor_against_a_vertical_wall() {
     );
 }
 
-/// The paper's 10 mm plate as calibrated (2.53 mm deep, walls at 73°): the fitted finger
+/// The paper's 10 mm plate as calibrated (2.53 mm deep, vertical walls): the fitted finger
 /// without an end stop jams in it (the arm pulls 10 mm ahead and the tip stays on the floor);
 /// with `lateral_travel_mm` the arm drags the tip up the far rim within the stroke, and the
 /// tip never lags the body by much more than the travel.
@@ -930,7 +930,7 @@ fn end_stop_drags_the_fitted_finger_out_of_the_paper_ten_mm_crack() {
         sensor.finger.lateral_travel_mm = travel;
         // Edges at 95 and 105 mm; the stroke runs 92..108 mm and back.
         run(
-            &crack(10.0, 2.53, 73.1),
+            &crack(10.0, 2.53, 90.0),
             &line(92.0, STROKE, SPEED),
             &sensor,
             Integrator::default(),
