@@ -107,7 +107,18 @@ fn the_app_starts_watches_and_stops_a_live_robot_over_zenoh() {
         &mut h,
         "the robot's mission, streaming",
         Duration::from_secs(60),
-        |a| matches!(phase(a, "tank-1"), Some(Phase::Exploring { done, .. }) if done >= 1),
+        |a| {
+            // Zenoh orders messages per key, not across keys: the frame, plan and detections
+            // may land after the first progress report.
+            let seen = {
+                let f = a.fleet();
+                let f = f.lock().unwrap();
+                f.robot("tank-1").is_some_and(|r| {
+                    r.camera.is_some() && r.plan.is_some() && !r.detections.is_empty()
+                })
+            };
+            seen && matches!(phase(a, "tank-1"), Some(Phase::Exploring { done, .. }) if done >= 1)
+        },
     );
     assert!(h.state().log.iter().any(|l| l.contains("start accepted")));
     {
