@@ -312,3 +312,117 @@ fn forwarded_commands_speak_under_the_name_the_user_typed() {
     assert!(err.contains("crackbot sim dataset"), "{err}");
     assert!(!err.contains("crackbot-lab"), "{err}");
 }
+
+#[test]
+fn convert_reads_width_recordings_as_surface_types_and_names_a_bad_width() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("as-type");
+    let inputs = [
+        data("width/crack_mm0_complete_3.mat"),
+        data("width/crack_mm8_complete_3.mat"),
+    ];
+    let result = crackbot(&[
+        "tactile",
+        "convert",
+        "--width-as-recognition",
+        utf8(&inputs[0]),
+        utf8(&inputs[1]),
+        "--out",
+        utf8(&out),
+    ]);
+    assert!(result.status.success(), "{}", text(&result.stderr));
+    let label = |name: &str| read_csv(&out.join(name)).expect("read").label();
+    assert_eq!(label("crack_mm0_complete_3.csv"), Some(0.0));
+    assert_eq!(label("crack_mm8_complete_3.csv"), Some(1.0));
+    // A surface-type recording of the wavy plate (label 3) is no width: named, nothing written.
+    let wavy = data("type/crack_pattern_complete_1.mat");
+    let target = dir.path().join("wavy.csv");
+    let result = crackbot(&[
+        "tactile",
+        "convert",
+        "--width-as-recognition",
+        utf8(&wavy),
+        "--out",
+        utf8(&target),
+    ]);
+    assert!(!result.status.success());
+    let err = text(&result.stderr);
+    assert!(
+        err.contains("crack_pattern_complete_1.mat") && err.contains("3 is no width"),
+        "{err}"
+    );
+    assert!(!target.exists());
+}
+
+/// `tactile train` with `--trees 8 --max-depth 8` into `out`, `extra` appended.
+fn train_small(recognition: &[String], width: &[String], out: &Path, extra: &[&str]) {
+    let mut args: Vec<&str> = vec!["tactile", "train", "--trees", "8", "--max-depth", "8"];
+    args.push("--recognition");
+    args.extend(recognition.iter().map(String::as_str));
+    args.push("--width");
+    args.extend(width.iter().map(String::as_str));
+    args.extend(["--out", utf8(out)]);
+    args.extend_from_slice(extra);
+    let r = crackbot(&args);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+}
+
+#[test]
+fn the_recognition_model_learns_every_crack_width_unless_told_not_to() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (pooled, type_only) = (dir.path().join("pooled"), dir.path().join("type-only"));
+    let (types, widths) = (tactile_data("type", 1), tactile_data("width", 1));
+    train_small(&types, &widths, &pooled, &[]);
+    train_small(&types, &widths, &type_only, &["--recognition-type-only"]);
+    let listed = |d: &Path| -> Vec<String> {
+        let json: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(d.join("recognition.json")).expect("summary"),
+        )
+        .expect("JSON");
+        json["training"]["recordings"]
+            .as_array()
+            .expect("recordings")
+            .iter()
+            .map(|r| r.as_str().expect("name").to_string())
+            .collect()
+    };
+    assert_eq!(listed(&pooled).len(), 4 + 6);
+    assert!(listed(&pooled)
+        .iter()
+        .any(|r| r.contains("crack_mm10_complete_1")));
+    assert_eq!(listed(&type_only).len(), 4);
+    // The thinnest and the widest crack of another session, read as surface types.
+    let test = dir.path().join("test");
+    let result = crackbot(&[
+        "tactile",
+        "convert",
+        "--width-as-recognition",
+        utf8(&data("width/crack_mm1_complete_2.mat")),
+        utf8(&data("width/crack_mm10_complete_2.mat")),
+        "--out",
+        utf8(&test),
+    ]);
+    assert!(result.status.success(), "{}", text(&result.stderr));
+    let slides = |model: &Path| -> f64 {
+        let r = crackbot(&[
+            "tactile",
+            "eval",
+            "--json",
+            "--model",
+            utf8(&model.join("recognition.ctm")),
+            "--test",
+            utf8(&test),
+        ]);
+        assert!(r.status.success(), "{}", text(&r.stderr));
+        let json: serde_json::Value = serde_json::from_slice(&r.stdout).expect("JSON");
+        json["slide_accuracy"].as_f64().expect("slide_accuracy")
+    };
+    // Measured with 32 trees on repetitions 1–2: the type-only model calls all 24 of these
+    // slides "bump", the pooled one calls every one a crack.
+    let (with, without) = (slides(&pooled), slides(&type_only));
+    assert!(
+        with >= 0.9,
+        "pooled model: {with} of the 1 and 10 mm slides are cracks"
+    );
+    assert!(without <= 0.5, "type-only model: {without}");
+}

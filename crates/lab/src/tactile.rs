@@ -13,7 +13,7 @@
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use crackbot_recording::{collect_recordings, conversion_targets, write_recording, Recording};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -64,6 +64,12 @@ pub struct TrainArgs {
     /// Seed of the forests.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Train the recognition model on the surface-type recordings only. By default it also
+    /// learns from the `--width` recordings (0 mm as "no crack", every other width as "crack"):
+    /// the surface-type experiment has a single crack plate, and a model that never felt the
+    /// others calls the authors' 1, 8 and 10 mm cracks "bump".
+    #[arg(long)]
+    recognition_type_only: bool,
 }
 
 /// Arguments of `crackbot tactile tradeoff`.
@@ -299,6 +305,11 @@ pub struct ConvertArgs {
     /// Form of the files written into an output folder.
     #[arg(long, value_enum, default_value_t = FormatArg::Csv)]
     format: FormatArg,
+    /// The inputs are width-experiment recordings: write them relabelled for the surface-type
+    /// experiment (0 mm as "no crack", every other width as "crack"), e.g. to test a recognition
+    /// model on every crack width with `tactile eval --model`.
+    #[arg(long)]
+    width_as_recognition: bool,
 }
 
 /// Runs a `crackbot tactile` subcommand.
@@ -314,7 +325,14 @@ pub fn run(cmd: TactileCommand) -> Result<()> {
 
 fn convert(args: ConvertArgs) -> Result<()> {
     // Everything is read (and checked) before anything is written.
-    let recordings = collect_recordings(&args.inputs)?;
+    let mut recordings = collect_recordings(&args.inputs)?;
+    if args.width_as_recognition {
+        for (path, rec) in &mut recordings {
+            *rec = rec
+                .width_as_recognition()
+                .with_context(|| format!("{}", path.display()))?;
+        }
+    }
     let inputs: Vec<PathBuf> = recordings.iter().map(|(p, _)| p.clone()).collect();
     let targets = conversion_targets(&inputs, &args.out, args.format.into())?;
     let mut stdout = std::io::stdout().lock();
@@ -707,7 +725,15 @@ fn train(args: TrainArgs) -> Result<()> {
         if paths.is_empty() {
             continue;
         }
-        let recordings = collect_recordings(paths)?;
+        let mut recordings = collect_recordings(paths)?;
+        if experiment == Experiment::Recognition && !args.recognition_type_only {
+            for (path, rec) in collect_recordings(&args.width)? {
+                let relabelled = rec
+                    .width_as_recognition()
+                    .with_context(|| format!("{} (a --width recording)", path.display()))?;
+                recordings.push((path, relabelled));
+            }
+        }
         eprintln!(
             "{}: {} recordings, training the context forest, the window forest{} ({} trees each)",
             experiment.name(),

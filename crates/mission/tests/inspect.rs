@@ -87,7 +87,11 @@ fn a_fused_mission_finds_the_crack_with_synchronised_positions_and_saves_everyth
     // (A few seconds of 100 Hz states with millisecond jitter bound the rate to a few hundred
     // ppm; crate::sync's tests check the estimator over longer runs.)
     assert!((fit.rate_ppm + 150.0).abs() < 400.0, "{fit:?}");
-    assert!((fit.offset_us + 3.2e6).abs() < 5e4, "{fit:?}");
+    // The fitted line lies below every (sent, received) point, so its offset is only as tight as
+    // the fastest message in the window. On a loaded 2-core CI machine every state of a stretch
+    // can wait tens of ms for the robot's thread (a run saw the fit 76 ms off); 0.2 s is 0.9 mm at
+    // the slide speed, and the dip check below bounds what that costs the localisation.
+    assert!((fit.offset_us + 3.2e6).abs() < 2e5, "{fit:?}");
     // Every pass's dip (where the proximity channel sees the crack) lies on the crack.
     let mut dips = 0;
     for p in &r.passes {

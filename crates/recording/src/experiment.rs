@@ -78,6 +78,19 @@ impl Experiment {
         }
     }
 
+    /// The surface-type label of a crack-width label: 0 mm is flat (`0`, "no crack") and every
+    /// other width of the width experiment is a crack (`1`). `None` for a label that is no width
+    /// of the experiment.
+    ///
+    /// The surface-type experiment's only crack is one plate, so a recognition model trained on
+    /// it alone calls the authors' own 1, 8 and 10 mm cracks "bump"; the width recordings, read
+    /// this way, teach it what else a crack feels like.
+    pub fn recognition_label_of_width(width_mm: f64) -> Option<f64> {
+        Experiment::Width
+            .class_of(width_mm)
+            .map(|_| if width_mm == 0.0 { 0.0 } else { 1.0 })
+    }
+
     /// Recognises the experiment from the labels found: widths 5, 8 or 10 mm mean the width
     /// experiment, a wavy pattern (3) means recognition; labels that fit both (only 0, 1, 2) or
     /// neither are an error that says so.
@@ -99,6 +112,17 @@ impl Experiment {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn widths_read_as_surface_types() {
+        assert_eq!(Experiment::recognition_label_of_width(0.0), Some(0.0));
+        for w in [1.0, 2.0, 5.0, 8.0, 10.0] {
+            assert_eq!(Experiment::recognition_label_of_width(w), Some(1.0));
+        }
+        for w in [3.0, -1.0, 0.5, f64::NAN] {
+            assert_eq!(Experiment::recognition_label_of_width(w), None);
+        }
+    }
 
     #[test]
     fn experiments_are_recognised_from_labels() {

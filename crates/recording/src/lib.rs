@@ -205,6 +205,26 @@ impl Recording {
             .then_some(first)
     }
 
+    /// The recording of the width experiment relabelled for the surface-type one
+    /// ([`Experiment::recognition_label_of_width`]): 0 mm as flat, any other width as a crack.
+    /// A label that is no width of the experiment is an error naming its row.
+    pub fn width_as_recognition(&self) -> Result<Recording, RecordingError> {
+        let mut out = self.clone();
+        for (index, row) in out.rows.iter_mut().enumerate() {
+            row.label = Experiment::recognition_label_of_width(row.label).ok_or_else(|| {
+                RecordingError::InvalidRow {
+                    index,
+                    column: "label",
+                    reason: format!(
+                        "{} is no width of the width experiment (0, 1, 2, 5, 8, 10 mm)",
+                        row.label
+                    ),
+                }
+            })?;
+        }
+        Ok(out)
+    }
+
     /// The repetition number ([`Row::repetition`]) when every row has the same one; `None` when it varies or there
     /// are no rows.
     pub fn repetition(&self) -> Option<u32> {
@@ -384,6 +404,42 @@ fn create_folder(dir: &Path) -> Result<(), RecordingError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn width_recordings_read_as_surface_types_and_bad_widths_are_named() {
+        let row = |label| Row {
+            x_mm: 0.0,
+            d1: 1.0,
+            d2: 1.0,
+            d3: 1.0,
+            p: 1.0,
+            direction: 0,
+            slide: 1,
+            label,
+            repetition: 1,
+        };
+        let rec = Recording {
+            rows: vec![row(0.0), row(2.0), row(10.0)],
+            extra: None,
+        };
+        let labels: Vec<f64> = rec
+            .width_as_recognition()
+            .unwrap()
+            .rows
+            .iter()
+            .map(|r| r.label)
+            .collect();
+        assert_eq!(labels, [0.0, 1.0, 1.0]);
+        let bad = Recording {
+            rows: vec![row(5.0), row(3.0)],
+            extra: None,
+        };
+        let err = bad.width_as_recognition().unwrap_err().to_string();
+        assert!(
+            err.contains("row 1") && err.contains("3 is no width"),
+            "{err}"
+        );
+    }
 
     #[test]
     fn row_channels_are_the_sample_layout() {
