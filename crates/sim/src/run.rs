@@ -111,8 +111,14 @@ impl ProximityGeometry {
         }
     }
 
-    /// The proximity view with the tip at `(tip_x, tip_z)` (m) on `model`'s line: the distance
-    /// curve averaged over the spot's [`SPOT_POINTS`] points, times the reflectivity there.
+    /// The proximity view with the tip at `(tip_x, tip_z)` (m) on `model`'s line.
+    ///
+    /// Points across the spot each look at the surface and return the distance curve at the
+    /// length of their look, times the reflectivity where it lands, times the cosine between
+    /// the look and the surface's normal there; the view is their mean. With no cone,
+    /// [`SPOT_POINTS`] points look straight down (cosine 1). With a cone, [`CONE_RAYS`] rays,
+    /// tilted across it, are traced to the first surface they meet ([`trace_ray`]; a matt
+    /// surface), and a ray that meets none within [`MAX_RAY`] returns nothing.
     pub fn view(
         &self,
         model: &FingerModel,
@@ -122,42 +128,19 @@ impl ProximityGeometry {
     ) -> Scene1d {
         let fibre_x = tip_x + self.offset;
         let fibre_z = tip_z + self.height;
-        if self.cone > 0.0 {
-            return self.traced_view(model, fibre_x, fibre_z, plate_reflectivity);
-        }
+        let traced = self.cone > 0.0;
+        let n = if traced { CONE_RAYS } else { SPOT_POINTS };
         let mut intensity = 0.0;
         let mut distance = 0.0;
-        for k in 0..SPOT_POINTS {
-            let u = (k as f64 + 0.5) / SPOT_POINTS as f64 - 0.5;
-            let x = fibre_x + u * self.spot;
-            let d_mm = (fibre_z - model.surface_at(x)) * 1e3;
-            distance += d_mm;
-            intensity += proximity_intensity(d_mm, self.peak_mm) * model.reflectivity_at(x);
-        }
-        Scene1d {
-            proximity_distance_mm: distance / SPOT_POINTS as f64,
-            intensity: plate_reflectivity * intensity / SPOT_POINTS as f64,
-        }
-    }
-
-    /// The cone's view: [`CONE_RAYS`] rays, from across the spot and tilted across the cone,
-    /// each traced to the first surface it meets; each returns the distance curve at its
-    /// length times the reflectivity there times the cosine between the ray and the surface's
-    /// normal (a matt surface), and nothing if it meets no surface within [`MAX_RAY`].
-    fn traced_view(
-        &self,
-        model: &FingerModel,
-        fibre_x: f64,
-        fibre_z: f64,
-        plate_reflectivity: f64,
-    ) -> Scene1d {
-        let mut intensity = 0.0;
-        let mut distance = 0.0;
-        for k in 0..CONE_RAYS {
-            let u = (k as f64 + 0.5) / CONE_RAYS as f64 - 0.5;
-            let angle = 2.0 * u * self.cone;
+        for k in 0..n {
+            let u = (k as f64 + 0.5) / n as f64 - 0.5;
             let x0 = fibre_x + u * self.spot;
-            match trace_ray(model, x0, fibre_z, angle) {
+            let look = if traced {
+                trace_ray(model, x0, fibre_z, 2.0 * u * self.cone)
+            } else {
+                Some((x0, fibre_z - model.surface_at(x0), 1.0))
+            };
+            match look {
                 Some((x, length, cosine)) => {
                     let d_mm = length * 1e3;
                     distance += d_mm;
@@ -168,8 +151,8 @@ impl ProximityGeometry {
             }
         }
         Scene1d {
-            proximity_distance_mm: distance / CONE_RAYS as f64,
-            intensity: plate_reflectivity * intensity / CONE_RAYS as f64,
+            proximity_distance_mm: distance / n as f64,
+            intensity: plate_reflectivity * intensity / n as f64,
         }
     }
 }
