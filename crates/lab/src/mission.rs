@@ -56,6 +56,10 @@ pub struct Common {
     /// report from 0.3).
     #[arg(long, default_value_t = 0.3)]
     proposal_min_score: f32,
+    /// ONNX crack detector (default: models/detector/crack-detector-320.onnx), e.g. the
+    /// 416-pixel export of the same weights.
+    #[arg(long)]
+    detector: Option<PathBuf>,
 }
 
 /// `mission trials`.
@@ -101,6 +105,9 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
     }
     if let Some(p) = &common.width_model {
         template.width_model = p.clone();
+    }
+    if common.detector.is_some() {
+        template.detector_model = common.detector.clone();
     }
     if let Some(v) = common.stroke_mm {
         template.planner.min_stroke_mm = v;
