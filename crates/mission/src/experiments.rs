@@ -154,8 +154,9 @@ pub struct TrialsReport {
     pub vision_correct: f64,
     /// Mean correct detections, vision + tactile, 0–1.
     pub fused_correct: f64,
-    /// Mean localisation error of the fused mission's correct reports, mm.
-    pub fused_localisation_mm: f64,
+    /// Mean localisation error of the fused mission's correct reports, mm (`None` when it made
+    /// none).
+    pub fused_localisation_mm: Option<f64>,
     /// The paper's figures: vision only, vision + tactile.
     pub paper: [f64; 2],
 }
@@ -182,12 +183,13 @@ impl TrialsReport {
             );
         }
         out += &format!(
-            "\n| | vision only | vision + tactile |\n|---|---|---|\n| correct detections (this run) | {:.1} % | {:.1} % |\n| the paper | {:.2} % | {:.2} % |\n| localisation error of confirmed cracks | – | {:.2} mm |\n",
+            "\n| | vision only | vision + tactile |\n|---|---|---|\n| correct detections (this run) | {:.1} % | {:.1} % |\n| the paper | {:.2} % | {:.2} % |\n| localisation error of confirmed cracks | – | {} |\n",
             100.0 * self.vision_correct,
             100.0 * self.fused_correct,
             self.paper[0],
             self.paper[1],
             self.fused_localisation_mm
+                .map_or_else(|| "– (no crack confirmed)".to_string(), |v| format!("{v:.2} mm"))
         );
         out
     }
@@ -272,11 +274,8 @@ pub fn detection_trials(
     Ok(TrialsReport {
         vision_correct: mean(&|t| t.vision.correct_fraction()),
         fused_correct: mean(&|t| t.fused.correct_fraction()),
-        fused_localisation_mm: if locs.is_empty() {
-            f64::NAN
-        } else {
-            locs.iter().sum::<f64>() / locs.len() as f64
-        },
+        fused_localisation_mm: (!locs.is_empty())
+            .then(|| locs.iter().sum::<f64>() / locs.len() as f64),
         trials,
         paper: [46.66, 92.85],
     })
@@ -391,6 +390,24 @@ pub fn exploration_markdown(rows: &[ExplorationRow]) -> String {
 mod tests {
     use super::*;
     use crate::inspect::{Evidence, ReportedCrack};
+
+    #[test]
+    fn a_table_without_confirmed_cracks_says_so_instead_of_nan() {
+        let mut t = TrialsReport {
+            trials: Vec::new(),
+            vision_correct: 0.5,
+            fused_correct: 0.0,
+            fused_localisation_mm: None,
+            paper: [46.66, 92.85],
+        };
+        let md = t.markdown();
+        assert!(
+            md.contains("– (no crack confirmed)") && !md.contains("NaN"),
+            "{md}"
+        );
+        t.fused_localisation_mm = Some(1.234);
+        assert!(t.markdown().contains("| 1.23 mm |"));
+    }
 
     fn report_with(positions: &[[f64; 2]]) -> InspectReport {
         let scene = Scene::builtin_default();
