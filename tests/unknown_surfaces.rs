@@ -3,8 +3,10 @@
 //! unlike any in training (screw heads, a 10 mm bump), with simulated known surfaces as control.
 //!
 //! Protocol: a model of the deployed configuration (32 trees, depth ≤ 10, as committed) is
-//! trained on repetitions 1 and 2 of the surface-type recordings; everything is tested on
-//! repetition 3 (or on its altered copies) and on simulated recordings.
+//! trained as `crackbot tactile train` trains it, on repetitions 1 and 2 of the surface-type
+//! recordings and of the width recordings read as surface types (0 mm "no crack", any other
+//! width "crack"); everything is tested on repetition 3 of both (or on altered copies) and on
+//! simulated recordings.
 //!
 //! `cargo test --release --test unknown_surfaces -- --nocapture` prints the table.
 
@@ -39,14 +41,19 @@ fn unlike_surfaces_and_broken_channels_come_out_unknown() -> Result<(), Box<dyn 
 {
     let dir = crackbot_datasets::require(crackbot_datasets::TACTILE_TYPE);
     let all = collect_recordings(&[dir])?;
-    let rep = |r: u32| -> Vec<(PathBuf, Recording)> {
-        all.iter()
+    let widths =
+        collect_recordings(&[crackbot_datasets::require(crackbot_datasets::TACTILE_WIDTH)])?
+            .into_iter()
+            .map(|(p, r)| Ok((p, r.width_as_recognition()?)))
+            .collect::<Result<Vec<_>, crackbot_recording::RecordingError>>()?;
+    let rep = |set: &[(PathBuf, Recording)], r: u32| -> Vec<(PathBuf, Recording)> {
+        set.iter()
             .filter(|(p, _)| p.to_string_lossy().ends_with(&format!("_{r}.mat")))
             .cloned()
             .collect()
     };
-    let train: Vec<_> = rep(1).into_iter().chain(rep(2)).collect();
-    let test = rep(3);
+    let train: Vec<_> = [rep(&all, 1), rep(&all, 2), rep(&widths, 1), rep(&widths, 2)].concat();
+    let test = rep(&all, 3);
     let config = TrainConfig {
         n_trees: 32,
         max_depth: Some(10),
@@ -118,6 +125,17 @@ fn unlike_surfaces_and_broken_channels_come_out_unknown() -> Result<(), Box<dyn 
         })
         .collect();
     let real = report("real, repetition 3 (known surfaces)", &known)?;
+    let width_plates: Vec<_> = rep(&widths, 3)
+        .into_iter()
+        .map(|(p, r)| {
+            let truth = r.label().map(|l| l as u32);
+            (p.display().to_string(), r, truth)
+        })
+        .collect();
+    let plates = report(
+        "real, width plates of repetition 3 (0–10 mm, as no crack / crack)",
+        &width_plates,
+    )?;
     let altered =
         |f: &dyn Fn(&mut crackbot_recording::Row)| -> Vec<(String, Recording, Option<u32>)> {
             known
@@ -196,11 +214,13 @@ fn unlike_surfaces_and_broken_channels_come_out_unknown() -> Result<(), Box<dyn 
         "simulated 10 mm bump",
         &[("bump10".into(), simulate(&bump10, 92.0, 22)?, None)],
     )?;
-    println!("{real:?} {clipped:?} {control:?} {screw:?} {bump:?}");
-    assert!(
-        real.unknown_fraction() <= 0.10,
-        "known real surfaces called unknown: {real:?}"
-    );
+    println!("{real:?} {plates:?} {clipped:?} {control:?} {screw:?} {bump:?}");
+    for known in [real, plates] {
+        assert!(
+            known.unknown_fraction() <= 0.10,
+            "known real surfaces called unknown: {known:?}"
+        );
+    }
     for b in broken {
         assert!(
             b.unknown_fraction() >= 0.95,
