@@ -726,16 +726,26 @@ fn train(args: TrainArgs) -> Result<()> {
             continue;
         }
         let mut recordings = collect_recordings(paths)?;
+        let mut pooled = 0;
         if experiment == Experiment::Recognition && !args.recognition_type_only {
             for (path, rec) in collect_recordings(&args.width)? {
                 let relabelled = rec
                     .width_as_recognition()
                     .with_context(|| format!("{} (a --width recording)", path.display()))?;
                 recordings.push((path, relabelled));
+                pooled += 1;
             }
         }
+        let of_them = if pooled > 0 {
+            format!(
+                " ({pooled} of them width plates read as no crack / crack; \
+                 --recognition-type-only leaves them out)"
+            )
+        } else {
+            String::new()
+        };
         eprintln!(
-            "{}: {} recordings, training the context forest, the window forest{} ({} trees each)",
+            "{}: {} recordings{of_them}, training the context forest, the window forest{} ({} trees each)",
             experiment.name(),
             recordings.len(),
             if experiment == Experiment::Width {
