@@ -114,27 +114,20 @@ fn unlike_surfaces_and_broken_channels_come_out_unknown() -> Result<(), Box<dyn 
         })
     };
 
-    let known: Vec<_> = test
-        .iter()
-        .map(|(p, r)| {
-            (
-                p.display().to_string(),
-                r.clone(),
-                r.label().map(|l| l as u32),
-            )
-        })
-        .collect();
+    // Recordings with their own labels as the truth.
+    let labelled = |set: Vec<(PathBuf, Recording)>| -> Vec<(String, Recording, Option<u32>)> {
+        set.into_iter()
+            .map(|(p, r)| {
+                let truth = r.label().map(|l| l as u32);
+                (p.display().to_string(), r, truth)
+            })
+            .collect()
+    };
+    let known = labelled(test);
     let real = report("real, repetition 3 (known surfaces)", &known)?;
-    let width_plates: Vec<_> = rep(&widths, 3)
-        .into_iter()
-        .map(|(p, r)| {
-            let truth = r.label().map(|l| l as u32);
-            (p.display().to_string(), r, truth)
-        })
-        .collect();
     let plates = report(
         "real, width plates of repetition 3 (0–10 mm, as no crack / crack)",
-        &width_plates,
+        &labelled(rep(&widths, 3)),
     )?;
     let altered =
         |f: &dyn Fn(&mut crackbot_recording::Row)| -> Vec<(String, Recording, Option<u32>)> {

@@ -327,11 +327,7 @@ fn convert(args: ConvertArgs) -> Result<()> {
     // Everything is read (and checked) before anything is written.
     let mut recordings = collect_recordings(&args.inputs)?;
     if args.width_as_recognition {
-        for (path, rec) in &mut recordings {
-            *rec = rec
-                .width_as_recognition()
-                .with_context(|| format!("{}", path.display()))?;
-        }
+        recordings = widths_as_recognition(&recordings)?;
     }
     let inputs: Vec<PathBuf> = recordings.iter().map(|(p, _)| p.clone()).collect();
     let targets = conversion_targets(&inputs, &args.out, args.format.into())?;
@@ -348,6 +344,20 @@ fn convert(args: ConvertArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Width-experiment recordings relabelled for the surface-type experiment
+/// ([`Recording::width_as_recognition`]); a label that is no width names its file.
+fn widths_as_recognition(recordings: &[(PathBuf, Recording)]) -> Result<Vec<(PathBuf, Recording)>> {
+    recordings
+        .iter()
+        .map(|(path, rec)| {
+            let relabelled = rec
+                .width_as_recognition()
+                .with_context(|| format!("{} (read as a width recording)", path.display()))?;
+            Ok((path.clone(), relabelled))
+        })
+        .collect()
 }
 
 /// One line about a recording: rows, slides, label and repetition.
@@ -718,6 +728,9 @@ fn train(args: TrainArgs) -> Result<()> {
         max_depth: args.max_depth,
         seed: args.seed,
     };
+    // Each set is read once: the width recordings serve both models (recognition first, then
+    // the width model takes them).
+    let mut widths = collect_recordings(&args.width)?;
     for (experiment, paths) in [
         (Experiment::Recognition, &args.recognition),
         (Experiment::Width, &args.width),
@@ -725,17 +738,20 @@ fn train(args: TrainArgs) -> Result<()> {
         if paths.is_empty() {
             continue;
         }
-        let mut recordings = collect_recordings(paths)?;
-        let mut pooled = 0;
-        if experiment == Experiment::Recognition && !args.recognition_type_only {
-            for (path, rec) in collect_recordings(&args.width)? {
-                let relabelled = rec
-                    .width_as_recognition()
-                    .with_context(|| format!("{} (a --width recording)", path.display()))?;
-                recordings.push((path, relabelled));
-                pooled += 1;
+        let (recordings, pooled) = match experiment {
+            Experiment::Recognition => {
+                let mut recordings = collect_recordings(paths)?;
+                let pooled = if args.recognition_type_only {
+                    Vec::new()
+                } else {
+                    widths_as_recognition(&widths)?
+                };
+                let n = pooled.len();
+                recordings.extend(pooled);
+                (recordings, n)
             }
-        }
+            Experiment::Width => (std::mem::take(&mut widths), 0),
+        };
         let of_them = if pooled > 0 {
             format!(
                 " ({pooled} of them width plates read as no crack / crack; \
