@@ -11,6 +11,7 @@ use crackbot_recording::Recording;
 use serde::{Deserialize, Serialize};
 
 use crate::context::{context_row, ContextConfig, WindowPlace};
+use crate::stream::StreamingContext;
 use crate::TactileError;
 
 /// Which of the paper's two experiments a set of recordings belongs to: defined with the label column it
@@ -102,6 +103,7 @@ impl PipelineConfig {
             normalisation: self.normalisation,
             min_slide_len: self.min_slide_len,
             context: self.context.clone(),
+            reference_context: false,
         })
     }
 
@@ -230,6 +232,9 @@ pub struct Pipeline {
     normalisation: Normalisation,
     min_slide_len: usize,
     context: Option<ContextConfig>,
+    /// Computes the context rows window by window with [`context_row`] (the reference) instead
+    /// of streaming them ([`ContextRows`]).
+    reference_context: bool,
 }
 
 impl Pipeline {
@@ -237,6 +242,18 @@ impl Pipeline {
     pub fn without_context(&self) -> Pipeline {
         Pipeline {
             context: None,
+            ..self.clone()
+        }
+    }
+
+    /// The same pipeline computing every context row from scratch with [`context_row`], O(span)
+    /// per window, instead of streaming the recording through [`StreamingContext`] (O(1) per
+    /// sample). The rows are equal bit for bit; this is the reference the tests hold the fast
+    /// path to.
+    #[doc(hidden)]
+    pub fn with_reference_context(&self) -> Pipeline {
+        Pipeline {
+            reference_context: true,
             ..self.clone()
         }
     }
@@ -289,6 +306,15 @@ impl Pipeline {
                     source,
                 })?;
             }
+            // The fast path streams the recording once; the shape values have no streaming form.
+            let mut streamed = match context {
+                Some(c) if !c.shape && !self.reference_context => Some(ContextRows::new(
+                    c,
+                    spec.set.channels(),
+                    self.extractor.window().len,
+                )?),
+                _ => None,
+            };
             for range in rec.slides() {
                 if range.len() < self.min_slide_len.max(1) {
                     continue;
@@ -334,13 +360,16 @@ impl Pipeline {
                                 slide_start: range.start,
                                 end: range.start + end,
                             };
-                            context_row(
-                                c,
-                                place,
-                                spec.set.channels(),
-                                self.extractor.window().len,
-                                &mut set.x,
-                            );
+                            match streamed.as_mut() {
+                                Some(streamed) => streamed.extend(place, &mut set.x)?,
+                                None => context_row(
+                                    c,
+                                    place,
+                                    spec.set.channels(),
+                                    self.extractor.window().len,
+                                    &mut set.x,
+                                ),
+                            }
                         }
                     }
                 }
@@ -359,6 +388,68 @@ impl Pipeline {
             return Err(TactileError::NoWindows);
         }
         Ok(set)
+    }
+}
+
+/// The context rows of one recording's windows, from a [`StreamingContext`] that the recording's
+/// samples stream through in order (each pushed once): O(1) per sample where [`context_row`] is
+/// O(span) per window, and equal to it bit for bit (`tests/streaming_context.rs`). A window that
+/// ends before the samples already pushed (never, for windows in slide order) gets the
+/// reference row.
+struct ContextRows {
+    stream: StreamingContext,
+    config: ContextConfig,
+    channels: Vec<usize>,
+    window_len: usize,
+    /// Samples of the recording pushed so far.
+    pushed: usize,
+    /// Start of the slide the stream is in.
+    slide_start: usize,
+    row: Vec<f32>,
+}
+
+impl ContextRows {
+    fn new(
+        config: &ContextConfig,
+        channels: &[usize],
+        window_len: usize,
+    ) -> Result<Self, TactileError> {
+        let stream = StreamingContext::new(config, channels, window_len)?;
+        let row = vec![0.0; stream.n_values()];
+        Ok(ContextRows {
+            stream,
+            config: config.clone(),
+            channels: channels.to_vec(),
+            window_len,
+            pushed: 0,
+            slide_start: 0,
+            row,
+        })
+    }
+
+    /// Appends the context row of the window at `place` (`place.samples` must be the whole
+    /// recording, the same on every call) to `out`.
+    fn extend(&mut self, place: WindowPlace<'_>, out: &mut Vec<f32>) -> Result<(), TactileError> {
+        let end = place.end.min(place.samples.len().saturating_sub(1));
+        let behind = end + 1 < self.pushed;
+        let elsewhere = self.pushed > place.slide_start && self.slide_start != place.slide_start;
+        if place.samples.is_empty() || behind || elsewhere {
+            context_row(&self.config, place, &self.channels, self.window_len, out);
+            return Ok(());
+        }
+        while self.pushed <= end {
+            let i = self.pushed;
+            if i == place.slide_start {
+                self.stream.begin_slide();
+                self.slide_start = i;
+            }
+            let direction = place.directions.get(i).copied().unwrap_or(0);
+            self.stream.push(place.samples[i], direction)?;
+            self.pushed += 1;
+        }
+        self.stream.row_into(&mut self.row)?;
+        out.extend_from_slice(&self.row);
+        Ok(())
     }
 }
 

@@ -230,3 +230,142 @@ fn bad_samples_and_configurations_are_refused_clearly() {
     assert!(StreamingContext::new(&ContextConfig::default(), &[4], 10).is_err());
     assert!(StreamingContext::new(&ContextConfig::default(), &CHANNELS, 0).is_err());
 }
+
+/// Windows of `recs` built by `config`'s fast (streaming) pipeline and by its reference
+/// (`context_row` per window): equal bit for bit, with the same labels and slides.
+fn assert_fast_equals_reference(config: &PipelineConfig, recs: &[(PathBuf, Recording)]) -> usize {
+    let pipeline = config.check().unwrap();
+    let experiment = Experiment::detect(
+        &recs
+            .iter()
+            .filter_map(|(_, r)| r.label())
+            .collect::<Vec<_>>(),
+    )
+    .unwrap_or(Experiment::Recognition);
+    let fast = pipeline.build_windows(recs, experiment);
+    let reference = pipeline
+        .with_reference_context()
+        .build_windows(recs, experiment);
+    let (fast, reference) = match (fast, reference) {
+        (Ok(f), Ok(r)) => (f, r),
+        (Err(f), Err(r)) => {
+            assert_eq!(f.to_string(), r.to_string());
+            return 0;
+        }
+        (f, r) => panic!("fast {:?} but reference {:?}", f.err(), r.err()),
+    };
+    assert_eq!(fast.n_features, reference.n_features);
+    assert_eq!(fast.y, reference.y);
+    assert_eq!(fast.slides.len(), reference.slides.len());
+    assert_eq!(fast.x.len(), reference.x.len());
+    for (i, (a, b)) in fast.x.iter().zip(&reference.x).enumerate() {
+        assert!(
+            a.to_bits() == b.to_bits(),
+            "value {i} (row {}): fast {a} != reference {b}",
+            i / fast.n_features.max(1)
+        );
+    }
+    fast.n_rows()
+}
+
+#[test]
+fn the_fast_pipeline_builds_the_reference_windows_bit_for_bit_on_real_recordings() {
+    let recs = recordings();
+    let recs: Vec<_> = recs
+        .into_iter()
+        .filter(|(p, _)| {
+            let p = p.to_string_lossy();
+            p.contains("crack_bump_complete_3") || p.contains("crack_mm10_complete_1")
+        })
+        .collect();
+    assert_eq!(recs.len(), 2);
+    let robust = Segmentation::Method(crackbot_dsp::SegmentationMethod::Robust(
+        crackbot_dsp::RobustSegmentation::default(),
+    ));
+    let configs = [
+        // The deployed pipeline.
+        PipelineConfig {
+            context: Some(ContextConfig::default()),
+            ..PipelineConfig::default()
+        },
+        // Whole slides, spans confined to each slide, medians removed, the window kept.
+        PipelineConfig {
+            segmentation: Segmentation::None,
+            normalisation: Normalisation::RecordingMedian,
+            context: Some(ContextConfig {
+                across_slides: false,
+                keep_window: true,
+                prefix: false,
+                ..ContextConfig::default()
+            }),
+            ..PipelineConfig::default()
+        },
+        PipelineConfig {
+            segmentation: robust,
+            context: Some(ContextConfig {
+                scales: vec![7, 333],
+                baseline_len: 1,
+                direction: false,
+                ..ContextConfig::default()
+            }),
+            ..PipelineConfig::default()
+        },
+    ];
+    let rows: usize = configs
+        .par_iter()
+        .flat_map(|c| recs.par_iter().map(move |r| (c, r)))
+        .map(|(c, r)| assert_fast_equals_reference(c, std::slice::from_ref(r)))
+        .sum();
+    assert!(rows > 5_000, "{rows} windows compared");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Random recordings (slides of random lengths, some shorter than the pipeline keeps, random
+    /// levels and dips) through random pipelines: the fast windows are the reference's.
+    #[test]
+    fn random_recordings_build_the_reference_windows(
+        context in config_strategy(),
+        keep_window in any::<bool>(),
+        whole_slides in any::<bool>(),
+        median in any::<bool>(),
+        min_slide_len in 1usize..40,
+        slides in prop::collection::vec((5usize..120, 300.0f64..700.0, 0usize..30), 1..6),
+    ) {
+        let mut rows = Vec::new();
+        for (k, &(len, level, dip)) in slides.iter().enumerate() {
+            for i in 0..len {
+                let p = if i >= dip && i < dip + 8 { level - 150.0 } else { level };
+                rows.push(crackbot_recording::Row {
+                    x_mm: i as f64 * 0.01,
+                    d1: 650.0 + (i % 7) as f64,
+                    d2: 430.0 - (i % 5) as f64,
+                    d3: 700.0,
+                    p,
+                    direction: u8::from(i >= len / 2),
+                    slide: 1 + k as u32,
+                    label: 1.0,
+                    repetition: 1,
+                });
+            }
+        }
+        let recs = vec![(PathBuf::from("random.csv"), Recording { rows, extra: None })];
+        let config = PipelineConfig {
+            segmentation: if whole_slides {
+                Segmentation::None
+            } else {
+                PipelineConfig::default().segmentation
+            },
+            normalisation: if median { Normalisation::RecordingMedian } else { Normalisation::None },
+            min_slide_len,
+            context: Some(ContextConfig { keep_window, ..context }),
+            ..PipelineConfig::default()
+        };
+        let n = assert_fast_equals_reference(&config, &recs);
+        // Whole slides of at least a window (10 samples) that the pipeline keeps give windows.
+        if whole_slides && slides.iter().any(|s| s.0 >= min_slide_len.max(10)) {
+            prop_assert!(n > 0);
+        }
+    }
+}
