@@ -82,6 +82,16 @@ fn main() -> Result<()> {
             .collect()
     };
     let (real1, real23) = (pick(&[1]), pick(&[2, 3]));
+    let real_width =
+        collect_recordings(&[crackbot_datasets::require(crackbot_datasets::TACTILE_WIDTH)])?;
+    let pick_width = |reps: &[u32]| -> Recs {
+        real_width
+            .iter()
+            .filter(|(p, _)| rep_of(p).is_some_and(|r| reps.contains(&r)))
+            .cloned()
+            .collect()
+    };
+    let (real_width1, real_width23) = (pick_width(&[1]), pick_width(&[2, 3]));
     let train = TrainConfig {
         n_trees: 16,
         max_depth: Some(10),
@@ -148,12 +158,20 @@ fn main() -> Result<()> {
             let sim = collect_recordings(&[dir.path().to_path_buf()])?;
             let a = evaluate_model_recordings(fit_w, &sim)?;
             let b = evaluate_model_recordings(deployed_w, &sim)?;
+            let model =
+                TactileModel::train(&sim, Some(Experiment::Width), &train, &mut |_, _, _| {})?;
+            let w1 = evaluate_model_recordings(&model, &real_width1)?;
+            let w23 = evaluate_model_recordings(&model, &real_width23)?;
             println!(
-                "| {name} width | {seed} | {:.1} % (MAE {:.2} mm) | {:.1} % (MAE {:.2} mm) | | | |",
+                "| {name} width | {seed} | {:.1} % (MAE {:.2} mm) | {:.1} % (MAE {:.2} mm) | {:.1} % / {:.1} % | {:.1} % / {:.1} % | |",
                 100.0 * a.slide_accuracy,
                 a.slide_width_mae_mm.unwrap_or(f64::NAN),
                 100.0 * b.slide_accuracy,
                 b.slide_width_mae_mm.unwrap_or(f64::NAN),
+                100.0 * w1.window_accuracy,
+                100.0 * w1.slide_accuracy,
+                100.0 * w23.window_accuracy,
+                100.0 * w23.slide_accuracy,
             );
             eprintln!(
                 "{name} width: rep-1 model {:?}; deployed {:?}",

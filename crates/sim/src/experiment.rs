@@ -155,6 +155,20 @@ impl ExperimentConfig {
                 self.position_rate_hz
             )));
         }
+        let depths = [
+            ("samples.crack_depth_mm", Some(self.samples.crack_depth_mm)),
+            (
+                "samples.width_crack_depth_mm",
+                self.samples.width_crack_depth_mm,
+            ),
+        ];
+        for (name, depth) in depths {
+            if let Some(d) = depth.filter(|d| !(d.is_finite() && *d > 0.0)) {
+                return Err(SimError::Invalid(format!(
+                    "{name} must be a positive depth in mm, got {d}"
+                )));
+            }
+        }
         let n = self.surfaces().len();
         if !self.mounts.is_empty() && self.mounts.len() != n {
             return Err(SimError::Invalid(format!(
@@ -186,13 +200,15 @@ impl ExperimentConfig {
     /// edge in mm)`. The feature runs across the plate at x = 100 mm.
     pub fn surfaces(&self) -> Vec<(String, f64, Surface, f64)> {
         let s = &self.samples;
-        let crack = |w: f64| Feature::Crack {
+        let crack_of_depth = |w: f64, depth_mm: f64| Feature::Crack {
             path: vec![[100.0, 0.0], [100.0, 100.0]],
             width_mm: w,
-            depth_mm: s.crack_depth_mm,
+            depth_mm,
             edge_radius_mm: 0.5,
             wall_angle_deg: s.crack_wall_angle_deg,
         };
+        let crack = |w: f64| crack_of_depth(w, s.crack_depth_mm);
+        let width_depth = s.width_crack_depth_mm.unwrap_or(s.crack_depth_mm);
         let plate = |features: Vec<Feature>| Surface {
             size_mm: [200.0, 100.0],
             features,
@@ -236,7 +252,7 @@ impl ExperimentConfig {
                     (
                         format!("crack_mm{}", fmt_width(w)),
                         w,
-                        plate(vec![crack(w)]),
+                        plate(vec![crack_of_depth(w, width_depth)]),
                         100.0 - w / 2.0,
                     )
                 })

@@ -67,6 +67,42 @@ fn bad_mounts_are_named() {
 }
 
 #[test]
+fn the_width_plates_have_their_own_crack_depth() {
+    use crackbot_sim::surface::Feature;
+    let depth_of = |c: &ExperimentConfig, k: usize| match c.surfaces()[k].2.features.first() {
+        Some(Feature::Crack { depth_mm, .. }) => Some(*depth_mm),
+        _ => None,
+    };
+    let mut width = ExperimentConfig::paper(Experiment::Width, 7);
+    let mut recognition = ExperimentConfig::paper(Experiment::Recognition, 7);
+    // The calibrated plates: 2.8 mm deep width cracks, 2.53 mm deep surface-type crack.
+    assert_eq!(depth_of(&width, 1), Some(2.8));
+    assert_eq!(depth_of(&recognition, 1), Some(2.53));
+    width
+        .apply_params_toml("[samples]\nwidth_crack_depth_mm = 3.5\n")
+        .unwrap();
+    assert_eq!(depth_of(&width, 5), Some(3.5));
+    recognition
+        .apply_params_toml("[samples]\nwidth_crack_depth_mm = 3.5\ncrack_depth_mm = 2.0\n")
+        .unwrap();
+    assert_eq!(depth_of(&recognition, 1), Some(2.0));
+    // Without its own depth, the width plates take the common one.
+    let mut common = ExperimentConfig::paper(Experiment::Width, 7);
+    common.samples.width_crack_depth_mm = None;
+    common.samples.crack_depth_mm = 1.5;
+    assert_eq!(depth_of(&common, 2), Some(1.5));
+    for bad in ["-1.0", "0.0", "nan"] {
+        let mut c = ExperimentConfig::paper(Experiment::Width, 7);
+        let err = c
+            .apply_params_toml(&format!("[samples]\nwidth_crack_depth_mm = {bad}\n"))
+            .and_then(|()| c.validate())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("width_crack_depth_mm"), "{bad}: {err}");
+    }
+}
+
+#[test]
 fn speed_quantiles_see_a_steady_tip_and_a_stuck_one() {
     // 4.6 mm/s at 400 Hz: every quantile is 4.6 mm/s.
     let steady: Vec<f64> = (0..4000).map(|i| 4.6 * i as f64 / 400.0).collect();
