@@ -42,6 +42,34 @@ fn rep_of(p: &Path) -> Option<u32> {
         .ok()
 }
 
+/// Simulates `experiment` (seed `seed`, parameters `params` over the calibrated ones, `recordings`
+/// per plate when given) and reads the recordings back.
+fn simulate(
+    experiment: Experiment,
+    seed: u64,
+    params: Option<&str>,
+    recordings: Option<u32>,
+) -> Result<Recs> {
+    let mut config = ExperimentConfig::paper(experiment, seed);
+    if let Some(text) = params {
+        config.apply_params_toml(text)?;
+    }
+    if let Some(n) = recordings {
+        config.recordings = n;
+    }
+    let dir = tempfile::tempdir()?;
+    generate(&config, dir.path(), "csv", |_, _| {})?;
+    Ok(collect_recordings(&[dir.path().to_path_buf()])?)
+}
+
+/// The recordings of `all` whose repetition is one of `reps`.
+fn pick(all: &Recs, reps: &[u32]) -> Recs {
+    all.iter()
+        .filter(|(p, _)| rep_of(p).is_some_and(|r| reps.contains(&r)))
+        .cloned()
+        .collect()
+}
+
 fn slides_right(model: &TactileModel, test: &Recs) -> Result<(f64, Vec<Vec<u64>>)> {
     let r = evaluate_model_recordings(model, test)?;
     Ok((r.slide_accuracy, r.slide_confusion))
@@ -75,23 +103,10 @@ fn main() -> Result<()> {
         None => None,
     };
     let real = collect_recordings(&[crackbot_datasets::require(crackbot_datasets::TACTILE_TYPE)])?;
-    let pick = |reps: &[u32]| -> Recs {
-        real.iter()
-            .filter(|(p, _)| rep_of(p).is_some_and(|r| reps.contains(&r)))
-            .cloned()
-            .collect()
-    };
-    let (real1, real23) = (pick(&[1]), pick(&[2, 3]));
+    let (real1, real23) = (pick(&real, &[1]), pick(&real, &[2, 3]));
     let real_width =
         collect_recordings(&[crackbot_datasets::require(crackbot_datasets::TACTILE_WIDTH)])?;
-    let pick_width = |reps: &[u32]| -> Recs {
-        real_width
-            .iter()
-            .filter(|(p, _)| rep_of(p).is_some_and(|r| reps.contains(&r)))
-            .cloned()
-            .collect()
-    };
-    let (real_width1, real_width23) = (pick_width(&[1]), pick_width(&[2, 3]));
+    let (real_width1, real_width23) = (pick(&real_width, &[1]), pick(&real_width, &[2, 3]));
     let train = TrainConfig {
         n_trees: 16,
         max_depth: Some(10),
@@ -110,16 +125,7 @@ fn main() -> Result<()> {
             Some(p) => Some(std::fs::read_to_string(p).with_context(|| p.display().to_string())?),
             None => None,
         };
-        let mut config = ExperimentConfig::paper(Experiment::Recognition, seed);
-        if let Some(text) = &text {
-            config.apply_params_toml(text)?;
-        }
-        if let Some(n) = recordings {
-            config.recordings = n;
-        }
-        let dir = tempfile::tempdir()?;
-        generate(&config, dir.path(), "csv", |_, _| {})?;
-        let sim = collect_recordings(&[dir.path().to_path_buf()])?;
+        let sim = simulate(Experiment::Recognition, seed, text.as_deref(), recordings)?;
         let (r1, c1) = slides_right(&fit_model, &sim)?;
         let (rd, cd) = slides_right(&deployed, &sim)?;
         let model = TactileModel::train(
@@ -146,16 +152,7 @@ fn main() -> Result<()> {
             s1.slide_confusion
         );
         if let Some((fit_w, deployed_w)) = &width_models {
-            let mut config = ExperimentConfig::paper(Experiment::Width, seed);
-            if let Some(text) = &text {
-                config.apply_params_toml(text)?;
-            }
-            if let Some(n) = recordings {
-                config.recordings = n;
-            }
-            let dir = tempfile::tempdir()?;
-            generate(&config, dir.path(), "csv", |_, _| {})?;
-            let sim = collect_recordings(&[dir.path().to_path_buf()])?;
+            let sim = simulate(Experiment::Width, seed, text.as_deref(), recordings)?;
             let a = evaluate_model_recordings(fit_w, &sim)?;
             let b = evaluate_model_recordings(deployed_w, &sim)?;
             let model =
