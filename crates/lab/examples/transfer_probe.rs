@@ -33,15 +33,6 @@ use crackbot_tactile::model::{TactileModel, TrainConfig};
 
 type Recs = Vec<(PathBuf, Recording)>;
 
-fn rep_of(p: &Path) -> Option<u32> {
-    p.file_stem()?
-        .to_string_lossy()
-        .rsplit('_')
-        .next()?
-        .parse()
-        .ok()
-}
-
 /// Simulates `experiment` (seed `seed`, parameters `params` over the calibrated ones, `recordings`
 /// per plate when given) and reads the recordings back.
 fn simulate(
@@ -62,10 +53,10 @@ fn simulate(
     Ok(collect_recordings(&[dir.path().to_path_buf()])?)
 }
 
-/// The recordings of `all` whose repetition is one of `reps`.
+/// The recordings of `all` whose repetition column is one of `reps`.
 fn pick(all: &Recs, reps: &[u32]) -> Recs {
     all.iter()
-        .filter(|(p, _)| rep_of(p).is_some_and(|r| reps.contains(&r)))
+        .filter(|(_, r)| r.repetition().is_some_and(|r| reps.contains(&r)))
         .cloned()
         .collect()
 }

@@ -31,9 +31,9 @@
 //! | fitted ([`calibrated_sensor`], [`calibrated_samples`]) | 4.35 | 2.51 | 5.22 | 43.3 |
 //!
 //! Fitted: tip radius 4.4 mm, lateral stiffness 0.59 N/mm, friction 0.33, cracks 2.5 mm deep
-//! with 73° walls (since set to vertical, and the wavy plate's wave to 1.25 mm, by the transfer
-//! measures, see [`calibrated_samples`]), bump of 3.9 mm base radius and 2.4 mm height. The bump now gives the real
-//! finger's short proximity spike with a jump of the position column (stick-slip), not a broad
+//! with 73° walls (since set to vertical, the wavy plate's wave to 1.25 mm and the width plates'
+//! cracks to 2.8 mm deep, by the transfer measures, see [`calibrated_samples`]), bump of 3.9 mm
+//! base radius and 2.4 mm height. The bump now gives the real finger's short proximity spike with a jump of the position column (stick-slip), not a broad
 //! rise; the deformation channels' excursions over a crack are the real ones' size.
 //!
 //! Transfer, measured on repetitions 2 and 3 only: see the crate's `docs/calibration.md`.

@@ -92,15 +92,16 @@ pub fn calibrated_sensor() -> SensorParams {
 }
 
 /// The plates' geometry chosen by the same calibration (the paper gives only the crack widths and
-/// the wave), except the wave's amplitude (chosen by transfer, below) and the cracks' walls:
-/// vertical, as printed slots are, where the fit chose 73°. With 73° walls the 1 and 2 mm cracks were shallow V-grooves whose
-/// sloping walls the proximity fibre saw brightly (the real narrow cracks read as dark as
-/// nothing in view); vertical walls make both transfer directions better on two simulated seeds
-/// (`docs/calibration.md`, "Vertical crack walls").
+/// the wave), except the wave's amplitude and the width plates' depth (chosen by transfer, below)
+/// and the cracks' walls: vertical, as printed slots are, where the fit chose 73°. With 73° walls
+/// the 1 and 2 mm cracks were shallow V-grooves whose sloping walls the proximity fibre saw
+/// brightly (the real narrow cracks read as dark as nothing in view); vertical walls make both
+/// transfer directions better on two simulated seeds (`docs/calibration.md`, "Vertical crack
+/// walls").
 pub fn calibrated_samples() -> Samples {
     Samples {
         crack_depth_mm: 2.530,
-        // Chosen as the wave's amplitude (below), on the width experiment's own transfer
+        // Chosen like the wave's amplitude (below), on the width experiment's own transfer
         // figures: the quantile fit's 2.53 mm let the real-trained width model read most
         // simulated 1 and 8 mm cracks as 10 mm (`docs/calibration.md`, "The width plates'
         // depth").

@@ -20,14 +20,10 @@ use crackbot_tactile::online::classify_recording;
 
 type Recs = Vec<(PathBuf, Recording)>;
 
-fn rep_of(p: &std::path::Path) -> Option<u32> {
-    let s = p.file_stem()?.to_string_lossy().to_string();
-    s.rsplit('_').next()?.parse().ok()
-}
-
+/// The recordings of `all` whose repetition column is one of `reps`.
 fn pick(all: &Recs, reps: &[u32]) -> Recs {
     all.iter()
-        .filter(|(p, _)| rep_of(p).is_some_and(|r| reps.contains(&r)))
+        .filter(|(_, r)| r.repetition().is_some_and(|r| reps.contains(&r)))
         .cloned()
         .collect()
 }

@@ -360,15 +360,18 @@ impl Pipeline {
                                 slide_start: range.start,
                                 end: range.start + end,
                             };
-                            match streamed.as_mut() {
+                            let done = match streamed.as_mut() {
                                 Some(streamed) => streamed.extend(place, &mut set.x)?,
-                                None => context_row(
+                                None => false,
+                            };
+                            if !done {
+                                context_row(
                                     c,
                                     place,
                                     spec.set.channels(),
                                     self.extractor.window().len,
                                     &mut set.x,
-                                ),
+                                );
                             }
                         }
                     }
@@ -393,19 +396,13 @@ impl Pipeline {
 
 /// The context rows of one recording's windows, from a [`StreamingContext`] that the recording's
 /// samples stream through in order (each pushed once): O(1) per sample where [`context_row`] is
-/// O(span) per window, and equal to it bit for bit (`tests/streaming_context.rs`). A window that
-/// ends before the samples already pushed (never, for windows in slide order) gets the
-/// reference row.
+/// O(span) per window, and equal to it bit for bit (`tests/streaming_context.rs`).
 struct ContextRows {
     stream: StreamingContext,
-    config: ContextConfig,
-    channels: Vec<usize>,
-    window_len: usize,
     /// Samples of the recording pushed so far.
     pushed: usize,
     /// Start of the slide the stream is in.
     slide_start: usize,
-    row: Vec<f32>,
 }
 
 impl ContextRows {
@@ -415,27 +412,24 @@ impl ContextRows {
         window_len: usize,
     ) -> Result<Self, TactileError> {
         let stream = StreamingContext::new(config, channels, window_len)?;
-        let row = vec![0.0; stream.n_values()];
         Ok(ContextRows {
             stream,
-            config: config.clone(),
-            channels: channels.to_vec(),
-            window_len,
             pushed: 0,
             slide_start: 0,
-            row,
         })
     }
 
     /// Appends the context row of the window at `place` (`place.samples` must be the whole
-    /// recording, the same on every call) to `out`.
-    fn extend(&mut self, place: WindowPlace<'_>, out: &mut Vec<f32>) -> Result<(), TactileError> {
+    /// recording, the same on every call) to `out` and returns `true`; returns `false` with
+    /// nothing appended for a window the stream has already passed (ending before the samples
+    /// pushed, or in a slide it did not begin), which never happens for windows in slide order:
+    /// the caller then computes it with [`context_row`].
+    fn extend(&mut self, place: WindowPlace<'_>, out: &mut Vec<f32>) -> Result<bool, TactileError> {
         let end = place.end.min(place.samples.len().saturating_sub(1));
         let behind = end + 1 < self.pushed;
         let elsewhere = self.pushed > place.slide_start && self.slide_start != place.slide_start;
         if place.samples.is_empty() || behind || elsewhere {
-            context_row(&self.config, place, &self.channels, self.window_len, out);
-            return Ok(());
+            return Ok(false);
         }
         while self.pushed <= end {
             let i = self.pushed;
@@ -447,9 +441,10 @@ impl ContextRows {
             self.stream.push(place.samples[i], direction)?;
             self.pushed += 1;
         }
-        self.stream.row_into(&mut self.row)?;
-        out.extend_from_slice(&self.row);
-        Ok(())
+        let start = out.len();
+        out.resize(start + self.stream.n_values(), 0.0);
+        self.stream.row_into(&mut out[start..])?;
+        Ok(true)
     }
 }
 
