@@ -67,8 +67,8 @@ fn bump_gives_a_short_proximity_spike() {
     let excursion = median(spikes.iter().map(|s| s.0).collect());
     let width = median(spikes.iter().map(|s| s.1 as f64).collect());
     // The authors' bump, repetitions 1-3: excursions of 195-260 counts (medians 210-222),
-    // 83-260 samples above half of it per stroke (medians 142-174). The fitted simulator: the
-    // excursion matches; the spike is still about 2.5 times as wide (458 samples, seed 11), so
+    // 83-260 samples above half of it per stroke (medians 142-174). The simulator: the
+    // excursion matches; the spike is still about 3 times as wide (474 samples, seed 11), so
     // the bound on the width is loose (a regression guard, not yet the real shape).
     assert!(
         (150.0..=300.0).contains(&excursion),
@@ -91,10 +91,12 @@ fn fitted_sensor_reproduces_repetition_1() {
     // 6.37, 3.03, 7.22, 90.80; the simulator before the mechanics were fitted: 64, 27, 79,
     // 100). Vertical crack walls and the roughness then gave 4.52, 2.58, 5.21, 46.7, and the
     // wavy plate's amplitude chosen by transfer (1.25 mm, docs/calibration.md) 4.57, 2.58,
-    // 5.25, 47.8, and the width plates' depth chosen the same way (2.8 mm) 4.76, 2.77, 5.32,
-    // 50.2: the quantiles prefer the paper's 1 mm wave and 2.53 mm deep width cracks, the
-    // transfer measures (the goals, chosen on repetition 1 too) do not.
-    let limits = [5.0, 3.0, 6.0, 51.0];
+    // 5.25, 47.8, the width plates' depth chosen the same way (2.8 mm) 4.76, 2.77, 5.32,
+    // 50.2, and the broader bump chosen the same way (8 × 1.5 mm) 5.53, 3.15, 6.32, 54.1: the
+    // quantiles prefer the paper's 1 mm wave, 2.53 mm deep width cracks and the fitted
+    // 3.85 × 2.45 mm cap (over the broad bump the finger bends about half as much as the real
+    // one does), the transfer measures (the goals, chosen on repetition 1 too) do not.
+    let limits = [5.6, 3.2, 6.4, 55.0];
     for (c, (r, l)) in rms.iter().zip(limits).enumerate() {
         assert!(
             r <= &l,
