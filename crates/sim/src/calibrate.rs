@@ -31,10 +31,11 @@
 //! | fitted ([`calibrated_sensor`], [`calibrated_samples`]) | 4.35 | 2.51 | 5.22 | 43.3 |
 //!
 //! Fitted: tip radius 4.4 mm, lateral stiffness 0.59 N/mm, friction 0.33, cracks 2.5 mm deep
-//! with 73° walls (since set to vertical, the wavy plate's wave to 1.25 mm and the width plates'
-//! cracks to 2.8 mm deep, by the transfer measures, see [`calibrated_samples`]), bump of 3.9 mm
-//! base radius and 2.4 mm height. The bump now gives the real finger's short proximity spike with a jump of the position column (stick-slip), not a broad
-//! rise; the deformation channels' excursions over a crack are the real ones' size.
+//! with 73° walls, bump of 3.9 mm base radius and 2.4 mm height. Since then, by the transfer
+//! measures (see [`calibrated_samples`]): vertical walls, the wavy plate's wave 1.25 mm, the
+//! width plates' cracks 2.8 mm deep, and the bump 8 mm in radius and 1.5 mm high (the fitted cap
+//! was a wall the simulated tip jumped, and every real-trained model read it as a crack). The
+//! deformation channels' excursions over a crack are the real ones' size.
 //!
 //! Transfer, measured on repetitions 2 and 3 only: see the crate's `docs/calibration.md`.
 //!

@@ -157,7 +157,9 @@ impl Feature {
                 edge_radius_mm,
                 wall_angle_deg,
             } => {
-                if *width_mm <= 0.0 || *depth_mm <= 0.0 {
+                // Written so that NaN counts as no groove (a scene file's validation refuses
+                // it first; a surface built in code gets a flat plate, never NaN heights).
+                if !(*width_mm > 0.0 && *depth_mm > 0.0) {
                     return 0.0;
                 }
                 let d = distance_to_polyline(path, p);
@@ -396,6 +398,23 @@ mod tests {
             features: vec![crack(0.0, 3.0)],
         };
         assert_eq!(closed.height_mm([50.0, 40.0]), 0.0);
+    }
+
+    #[test]
+    fn a_crack_with_nan_dimensions_leaves_the_plate_flat_not_nan() {
+        for (width, depth) in [(4.0, f64::NAN), (f64::NAN, 3.0), (4.0, -1.0)] {
+            let s = Surface {
+                size_mm: [200.0, 100.0],
+                features: vec![crack(width, depth)],
+            };
+            for x in [49.0, 50.0, 51.9, 60.0] {
+                assert_eq!(
+                    s.height_mm([x, 40.0]),
+                    0.0,
+                    "width {width}, depth {depth}, x {x}"
+                );
+            }
+        }
     }
 
     #[test]
