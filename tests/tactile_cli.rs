@@ -218,6 +218,7 @@ fn eval_recognition_trained_on_one_repetition_tested_on_another() {
     assert!(slide >= 0.9, "slide accuracy {slide}");
     assert_eq!(r["test_slides"], 48);
     assert!(r["width_mae_mm"].is_null());
+    assert!(r["slide_width_reported_mae_mm"].is_null());
     let confusion = r["window_confusion"].as_array().expect("confusion");
     let total: u64 = confusion
         .iter()
@@ -269,6 +270,30 @@ fn eval_width_reports_regression_error() {
         "MAE {mae} mm per window, {slide_mae} mm per slide"
     );
     assert!(r["window_accuracy"].as_f64().expect("acc") > 1.0 / 6.0);
+    // The width the robot reports is the slide verdict's class width: its error follows from
+    // the slide confusion (rows = true widths 0, 1, 2, 5, 8, 10 mm).
+    let widths = [0.0, 1.0, 2.0, 5.0, 8.0, 10.0];
+    let (mut error, mut slides) = (0.0, 0.0);
+    for (row, truth) in r["slide_confusion"]
+        .as_array()
+        .expect("slides")
+        .iter()
+        .zip(widths)
+    {
+        for (count, said) in row.as_array().expect("row").iter().zip(widths) {
+            let count = count.as_f64().expect("count");
+            error += count * f64::abs(said - truth);
+            slides += count;
+        }
+    }
+    let reported = r["slide_width_reported_mae_mm"]
+        .as_f64()
+        .expect("slide_width_reported_mae_mm");
+    assert!(
+        (reported - error / slides).abs() < 1e-9,
+        "{reported} vs {}",
+        error / slides
+    );
 }
 
 #[test]

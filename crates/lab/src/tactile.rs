@@ -494,6 +494,9 @@ fn eval(args: EvalArgs) -> Result<()> {
         );
         print_confusion(&report.classes, rows);
     }
+    if let Some(mae) = report.slide_width_reported_mae_mm {
+        println!("\nreported width (the slide verdict's class): MAE {mae:.2} mm per slide");
+    }
     if let (Some(window_mae), Some(slide_mae)) = (report.width_mae_mm, report.slide_width_mae_mm) {
         println!(
             "\nwidth regression ({} trees): MAE {:.2} mm per window, {:.2} mm per slide",

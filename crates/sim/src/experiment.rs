@@ -169,6 +169,20 @@ impl ExperimentConfig {
                 )));
             }
         }
+        if let Some(printed) = &self.samples.printed_widths_mm {
+            if printed.len() != self.samples.widths_mm.len() {
+                return Err(SimError::Invalid(format!(
+                    "samples.printed_widths_mm has {} widths for the {} of samples.widths_mm",
+                    printed.len(),
+                    self.samples.widths_mm.len()
+                )));
+            }
+            if let Some(w) = printed.iter().find(|w| !(w.is_finite() && **w >= 0.0)) {
+                return Err(SimError::Invalid(format!(
+                    "samples.printed_widths_mm must be widths ≥ 0 mm, got {w}"
+                )));
+            }
+        }
         let n = self.surfaces().len();
         if !self.mounts.is_empty() && self.mounts.len() != n {
             return Err(SimError::Invalid(format!(
@@ -248,12 +262,19 @@ impl ExperimentConfig {
             Experiment::Width => s
                 .widths_mm
                 .iter()
-                .map(|&w| {
+                .enumerate()
+                .map(|(k, &w)| {
+                    // The label is the nominal width; the groove is cut to the printed one.
+                    let cut = s
+                        .printed_widths_mm
+                        .as_ref()
+                        .and_then(|p| p.get(k).copied())
+                        .unwrap_or(w);
                     (
                         format!("crack_mm{}", fmt_width(w)),
                         w,
-                        plate(vec![crack_of_depth(w, width_depth)]),
-                        100.0 - w / 2.0,
+                        plate(vec![crack_of_depth(cut, width_depth)]),
+                        100.0 - cut / 2.0,
                     )
                 })
                 .collect(),

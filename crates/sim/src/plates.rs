@@ -27,8 +27,12 @@ pub struct Samples {
     pub crack_wall_angle_deg: f64,
     /// Width of the crack of the recognition experiment, mm.
     pub recognition_crack_width_mm: f64,
-    /// Widths of the width experiment, mm.
+    /// Widths of the width experiment, mm: the plates' nominal widths, which are their labels.
     pub widths_mm: Vec<f64>,
+    /// The widths the simulated width plates are cut to, mm, one per `widths_mm`, where they
+    /// differ from the nominal ones (a printed slot is not its drawing's width; an effective
+    /// width for this finger model). The labels stay the nominal widths.
+    pub printed_widths_mm: Option<Vec<f64>>,
     /// Base radius of the bump, mm.
     pub bump_radius_mm: f64,
     /// Height of the bump, mm.
@@ -51,6 +55,7 @@ impl Default for Samples {
             crack_wall_angle_deg: 85.0,
             recognition_crack_width_mm: 5.0,
             widths_mm: vec![0.0, 1.0, 2.0, 5.0, 8.0, 10.0],
+            printed_widths_mm: None,
             bump_radius_mm: 4.0,
             bump_height_mm: 2.0,
             wave_amplitude_mm: 1.0,

@@ -103,6 +103,47 @@ fn the_width_plates_have_their_own_crack_depth() {
 }
 
 #[test]
+fn printed_widths_cut_the_grooves_and_leave_the_labels() {
+    use crackbot_sim::surface::Feature;
+    let cut = |c: &ExperimentConfig| -> Vec<(f64, Option<f64>)> {
+        c.surfaces()
+            .iter()
+            .map(|(_, label, surface, _)| {
+                let width = match surface.features.first() {
+                    Some(Feature::Crack { width_mm, .. }) => Some(*width_mm),
+                    _ => None,
+                };
+                (*label, width)
+            })
+            .collect()
+    };
+    let mut c = ExperimentConfig::paper(Experiment::Width, 7);
+    let nominal = cut(&c);
+    assert_eq!(nominal[1], (1.0, Some(1.0)));
+    c.apply_params_toml("[samples]\nprinted_widths_mm = [0.0, 1.6, 2.0, 5.0, 8.0, 10.0]\n")
+        .unwrap();
+    c.validate().unwrap();
+    let printed = cut(&c);
+    assert_eq!(printed[1], (1.0, Some(1.6)), "the label stays 1 mm");
+    assert_eq!(printed[2], nominal[2]);
+    // The file names (and so the recordings' names) stay the nominal ones.
+    assert_eq!(c.surfaces()[1].0, "crack_mm1");
+    for bad in [
+        "[1.0, 2.0]",
+        "[0.0, -1.0, 2.0, 5.0, 8.0, 10.0]",
+        "[0.0, nan, 2.0, 5.0, 8.0, 10.0]",
+    ] {
+        let mut c = ExperimentConfig::paper(Experiment::Width, 7);
+        let err = c
+            .apply_params_toml(&format!("[samples]\nprinted_widths_mm = {bad}\n"))
+            .and_then(|()| c.validate())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("printed_widths_mm"), "{bad}: {err}");
+    }
+}
+
+#[test]
 fn speed_quantiles_see_a_steady_tip_and_a_stuck_one() {
     // 4.6 mm/s at 400 Hz: every quantile is 4.6 mm/s.
     let steady: Vec<f64> = (0..4000).map(|i| 4.6 * i as f64 / 400.0).collect();

@@ -119,6 +119,9 @@ pub struct EvalReport {
     pub slide_vote: String,
     /// Width regression: mean absolute error per slide (median of its windows), mm.
     pub slide_width_mae_mm: Option<f64>,
+    /// The width experiment: mean absolute error per slide of the width the robot reports (the
+    /// slide verdict's class width, `online::WidthEstimate::mm`), from the slide confusion, mm.
+    pub slide_width_reported_mae_mm: Option<f64>,
     /// Test recordings.
     pub test_recordings: usize,
     /// Test slides with at least one window.
@@ -360,6 +363,7 @@ fn report(
         slide_recall: s.weighted_recall(),
         slide_vote: facts.slide_vote.to_string(),
         slide_width_mae_mm: width.map(|x| x.slide_mae_mm),
+        slide_width_reported_mae_mm: reported_width_mae(experiment, &s.rows()),
         test_recordings: facts.test_recordings,
         test_slides: s.total(),
         test_windows: facts.test_windows,
@@ -375,6 +379,24 @@ fn report(
     }
 }
 
+/// The mean absolute error of the class widths a slide confusion (rows = true classes) puts on
+/// the slides, for the width experiment (its labels are widths in mm); `None` for another
+/// experiment or no slide.
+pub fn reported_width_mae(experiment: Experiment, confusion: &[Vec<u64>]) -> Option<f64> {
+    if experiment != Experiment::Width {
+        return None;
+    }
+    let widths = experiment.labels();
+    let (mut error, mut slides) = (0.0, 0u64);
+    for (row, truth) in confusion.iter().zip(widths) {
+        for (count, said) in row.iter().zip(widths) {
+            error += *count as f64 * (said - truth).abs();
+            slides += count;
+        }
+    }
+    (slides > 0).then(|| error / slides as f64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -388,5 +410,26 @@ mod tests {
         let missing = [PathBuf::from("/nonexistent/recordings")];
         let err = evaluate(&config, &missing, &missing, |_, _, _| {}).unwrap_err();
         assert_eq!(err.to_string(), "--trees must be at least 1");
+    }
+
+    #[test]
+    fn reported_width_error_weighs_each_slide_by_how_far_its_class_is() {
+        // Widths 0, 1, 2, 5, 8, 10 mm: two 1 mm slides called 10 mm, one 5 mm slide called 2 mm,
+        // seven right.
+        let mut confusion = vec![vec![0u64; 6]; 6];
+        confusion[1][1] = 3;
+        confusion[1][5] = 2;
+        confusion[3][2] = 1;
+        confusion[0][0] = 4;
+        let mae = reported_width_mae(Experiment::Width, &confusion).unwrap();
+        assert!((mae - (2.0 * 9.0 + 3.0) / 10.0).abs() < 1e-12, "{mae}");
+        assert_eq!(
+            reported_width_mae(Experiment::Width, &vec![vec![0; 6]; 6]),
+            None
+        );
+        assert_eq!(
+            reported_width_mae(Experiment::Recognition, &confusion),
+            None
+        );
     }
 }
