@@ -16,6 +16,25 @@ fn width_mounts_toml(n: usize, reflectivity: f64) -> String {
         .collect()
 }
 
+/// The groove of plate `k` of `c`: `(width, depth)` in mm, `None` for a plate without a crack.
+fn groove(c: &ExperimentConfig, k: usize) -> Option<(f64, f64)> {
+    match c.surfaces()[k].2.features.first() {
+        Some(crackbot_sim::surface::Feature::Crack {
+            width_mm, depth_mm, ..
+        }) => Some((*width_mm, *depth_mm)),
+        _ => None,
+    }
+}
+
+/// The error a width-experiment configuration with `[samples]` line `line` is refused with.
+fn refused_samples(line: &str) -> String {
+    let mut c = ExperimentConfig::paper(Experiment::Width, 7);
+    c.apply_params_toml(&format!("[samples]\n{line}\n"))
+        .and_then(|()| c.validate())
+        .unwrap_err()
+        .to_string()
+}
+
 #[test]
 fn mounts_of_this_experiment_are_applied() {
     let mut width = ExperimentConfig::paper(Experiment::Width, 7);
@@ -68,11 +87,7 @@ fn bad_mounts_are_named() {
 
 #[test]
 fn the_width_plates_have_their_own_crack_depth() {
-    use crackbot_sim::surface::Feature;
-    let depth_of = |c: &ExperimentConfig, k: usize| match c.surfaces()[k].2.features.first() {
-        Some(Feature::Crack { depth_mm, .. }) => Some(*depth_mm),
-        _ => None,
-    };
+    let depth_of = |c: &ExperimentConfig, k: usize| groove(c, k).map(|(_, depth)| depth);
     let mut width = ExperimentConfig::paper(Experiment::Width, 7);
     let mut recognition = ExperimentConfig::paper(Experiment::Recognition, 7);
     // The calibrated plates: 2.8 mm deep width cracks, 2.53 mm deep surface-type crack.
@@ -92,29 +107,16 @@ fn the_width_plates_have_their_own_crack_depth() {
     common.samples.crack_depth_mm = 1.5;
     assert_eq!(depth_of(&common, 2), Some(1.5));
     for bad in ["-1.0", "0.0", "nan"] {
-        let mut c = ExperimentConfig::paper(Experiment::Width, 7);
-        let err = c
-            .apply_params_toml(&format!("[samples]\nwidth_crack_depth_mm = {bad}\n"))
-            .and_then(|()| c.validate())
-            .unwrap_err()
-            .to_string();
+        let err = refused_samples(&format!("width_crack_depth_mm = {bad}"));
         assert!(err.contains("width_crack_depth_mm"), "{bad}: {err}");
     }
 }
 
 #[test]
 fn printed_widths_cut_the_grooves_and_leave_the_labels() {
-    use crackbot_sim::surface::Feature;
     let cut = |c: &ExperimentConfig| -> Vec<(f64, Option<f64>)> {
-        c.surfaces()
-            .iter()
-            .map(|(_, label, surface, _)| {
-                let width = match surface.features.first() {
-                    Some(Feature::Crack { width_mm, .. }) => Some(*width_mm),
-                    _ => None,
-                };
-                (*label, width)
-            })
+        (0..c.surfaces().len())
+            .map(|k| (c.surfaces()[k].1, groove(c, k).map(|(width, _)| width)))
             .collect()
     };
     let mut c = ExperimentConfig::paper(Experiment::Width, 7);
@@ -133,12 +135,7 @@ fn printed_widths_cut_the_grooves_and_leave_the_labels() {
         "[0.0, -1.0, 2.0, 5.0, 8.0, 10.0]",
         "[0.0, nan, 2.0, 5.0, 8.0, 10.0]",
     ] {
-        let mut c = ExperimentConfig::paper(Experiment::Width, 7);
-        let err = c
-            .apply_params_toml(&format!("[samples]\nprinted_widths_mm = {bad}\n"))
-            .and_then(|()| c.validate())
-            .unwrap_err()
-            .to_string();
+        let err = refused_samples(&format!("printed_widths_mm = {bad}"));
         assert!(err.contains("printed_widths_mm"), "{bad}: {err}");
     }
 }
