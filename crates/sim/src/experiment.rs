@@ -169,18 +169,35 @@ impl ExperimentConfig {
                 )));
             }
         }
-        if let Some(printed) = &self.samples.printed_widths_mm {
-            if printed.len() != self.samples.widths_mm.len() {
+        let per_plate = [
+            (
+                "samples.printed_widths_mm",
+                &self.samples.printed_widths_mm,
+                true,
+            ),
+            (
+                "samples.printed_depths_mm",
+                &self.samples.printed_depths_mm,
+                false,
+            ),
+        ];
+        for (name, values, zero_ok) in per_plate {
+            let Some(values) = values else { continue };
+            if values.len() != self.samples.widths_mm.len() {
                 return Err(SimError::Invalid(format!(
-                    "samples.printed_widths_mm has {} widths for the {} of samples.widths_mm",
-                    printed.len(),
+                    "{name} has {} values for the {} of samples.widths_mm",
+                    values.len(),
                     self.samples.widths_mm.len()
                 )));
             }
-            if let Some(w) = printed.iter().find(|w| !(w.is_finite() && **w >= 0.0)) {
-                return Err(SimError::Invalid(format!(
-                    "samples.printed_widths_mm must be widths ≥ 0 mm, got {w}"
-                )));
+            let valid = |v: f64| v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0));
+            if let Some(v) = values.iter().find(|v| !valid(**v)) {
+                let what = if zero_ok {
+                    "widths ≥ 0 mm"
+                } else {
+                    "depths > 0 mm"
+                };
+                return Err(SimError::Invalid(format!("{name} must be {what}, got {v}")));
             }
         }
         let n = self.surfaces().len();
@@ -270,10 +287,15 @@ impl ExperimentConfig {
                         .as_ref()
                         .and_then(|p| p.get(k).copied())
                         .unwrap_or(w);
+                    let depth = s
+                        .printed_depths_mm
+                        .as_ref()
+                        .and_then(|p| p.get(k).copied())
+                        .unwrap_or(width_depth);
                     (
                         format!("crack_mm{}", fmt_width(w)),
                         w,
-                        plate(vec![crack_of_depth(cut, width_depth)]),
+                        plate(vec![crack_of_depth(cut, depth)]),
                         100.0 - cut / 2.0,
                     )
                 })

@@ -33,6 +33,10 @@ pub struct Samples {
     /// differ from the nominal ones (a printed slot is not its drawing's width; an effective
     /// width for this finger model). The labels stay the nominal widths.
     pub printed_widths_mm: Option<Vec<f64>>,
+    /// The depths the simulated width plates are cut to, mm, one per `widths_mm`, where they
+    /// differ from `width_crack_depth_mm` (a narrow printed slot need not reach its drawing's
+    /// depth).
+    pub printed_depths_mm: Option<Vec<f64>>,
     /// Base radius of the bump, mm.
     pub bump_radius_mm: f64,
     /// Height of the bump, mm.
@@ -56,6 +60,7 @@ impl Default for Samples {
             recognition_crack_width_mm: 5.0,
             widths_mm: vec![0.0, 1.0, 2.0, 5.0, 8.0, 10.0],
             printed_widths_mm: None,
+            printed_depths_mm: None,
             bump_radius_mm: 4.0,
             bump_height_mm: 2.0,
             wave_amplitude_mm: 1.0,

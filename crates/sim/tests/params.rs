@@ -141,6 +141,32 @@ fn printed_widths_cut_the_grooves_and_leave_the_labels() {
 }
 
 #[test]
+fn printed_depths_cut_the_grooves_and_leave_the_labels() {
+    let mut c = ExperimentConfig::paper(Experiment::Width, 7);
+    let nominal: Vec<_> = (0..c.surfaces().len()).map(|k| groove(&c, k)).collect();
+    c.apply_params_toml("[samples]\nprinted_depths_mm = [2.8, 1.5, 2.8, 2.8, 2.8, 3.5]\n")
+        .unwrap();
+    c.validate().unwrap();
+    let (w1, d1) = groove(&c, 1).unwrap();
+    assert_eq!((c.surfaces()[1].1, w1, d1), (1.0, 1.0, 1.5), "label and width stay");
+    assert_eq!(groove(&c, 5).unwrap().1, 3.5);
+    assert_eq!(groove(&c, 2), nominal[2], "the other plates keep the width depth");
+    assert!(
+        groove(&c, 0).is_none_or(|(width, _)| width == 0.0),
+        "the flat plate stays flat"
+    );
+    for bad in [
+        "[2.8]",
+        "[2.8, 0.0, 2.8, 2.8, 2.8, 2.8]",
+        "[2.8, -1.0, 2.8, 2.8, 2.8, 2.8]",
+        "[2.8, inf, 2.8, 2.8, 2.8, 2.8]",
+    ] {
+        let err = refused_samples(&format!("printed_depths_mm = {bad}"));
+        assert!(err.contains("printed_depths_mm"), "{bad}: {err}");
+    }
+}
+
+#[test]
 fn speed_quantiles_see_a_steady_tip_and_a_stuck_one() {
     // 4.6 mm/s at 400 Hz: every quantile is 4.6 mm/s.
     let steady: Vec<f64> = (0..4000).map(|i| 4.6 * i as f64 / 400.0).collect();
