@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use crate::finger::Integrator;
 use crate::plates::{calibrated_mounts, calibrated_samples, calibrated_sensor};
-pub use crate::plates::{Experiment, PlateMount, Samples};
+pub use crate::plates::{Experiment, PlateMount, PrintedSlot, Samples};
 use crate::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crate::surface::{Feature, Surface};
 use crate::{SensorParams, SimError};
@@ -169,35 +169,33 @@ impl ExperimentConfig {
                 )));
             }
         }
-        let per_plate = [
-            (
-                "samples.printed_widths_mm",
-                &self.samples.printed_widths_mm,
-                true,
-            ),
-            (
-                "samples.printed_depths_mm",
-                &self.samples.printed_depths_mm,
-                false,
-            ),
-        ];
-        for (name, values, zero_ok) in per_plate {
-            let Some(values) = values else { continue };
-            if values.len() != self.samples.widths_mm.len() {
+        let s = &self.samples;
+        for (k, slot) in s.printed_slots.iter().enumerate() {
+            let name = format!("samples.printed_slots[{k}]");
+            if !s.widths_mm.contains(&slot.nominal_mm) {
                 return Err(SimError::Invalid(format!(
-                    "{name} has {} values for the {} of samples.widths_mm",
-                    values.len(),
-                    self.samples.widths_mm.len()
+                    "{name}: nominal_mm = {} is not one of samples.widths_mm {:?}",
+                    slot.nominal_mm, s.widths_mm
                 )));
             }
-            let valid = |v: f64| v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0));
-            if let Some(v) = values.iter().find(|v| !valid(**v)) {
-                let what = if zero_ok {
-                    "widths ≥ 0 mm"
-                } else {
-                    "depths > 0 mm"
-                };
-                return Err(SimError::Invalid(format!("{name} must be {what}, got {v}")));
+            if s.printed_slots[..k]
+                .iter()
+                .any(|p| p.nominal_mm == slot.nominal_mm)
+            {
+                return Err(SimError::Invalid(format!(
+                    "{name}: the {} mm plate is listed twice",
+                    slot.nominal_mm
+                )));
+            }
+            if let Some(w) = slot.width_mm.filter(|w| !(w.is_finite() && *w >= 0.0)) {
+                return Err(SimError::Invalid(format!(
+                    "{name}: width_mm must be ≥ 0 mm, got {w}"
+                )));
+            }
+            if let Some(d) = slot.depth_mm.filter(|d| !(d.is_finite() && *d > 0.0)) {
+                return Err(SimError::Invalid(format!(
+                    "{name}: depth_mm must be a positive depth in mm, got {d}"
+                )));
             }
         }
         let n = self.surfaces().len();
@@ -239,7 +237,6 @@ impl ExperimentConfig {
             wall_angle_deg: s.crack_wall_angle_deg,
         };
         let crack = |w: f64| crack_of_depth(w, s.crack_depth_mm);
-        let width_depth = s.width_crack_depth_mm.unwrap_or(s.crack_depth_mm);
         let plate = |features: Vec<Feature>| Surface {
             size_mm: [200.0, 100.0],
             features,
@@ -279,19 +276,9 @@ impl ExperimentConfig {
             Experiment::Width => s
                 .widths_mm
                 .iter()
-                .enumerate()
-                .map(|(k, &w)| {
-                    // The label is the nominal width; the groove is cut to the printed one.
-                    let cut = s
-                        .printed_widths_mm
-                        .as_ref()
-                        .and_then(|p| p.get(k).copied())
-                        .unwrap_or(w);
-                    let depth = s
-                        .printed_depths_mm
-                        .as_ref()
-                        .and_then(|p| p.get(k).copied())
-                        .unwrap_or(width_depth);
+                .map(|&w| {
+                    // The label is the nominal width; the groove is cut to the printed slot.
+                    let (cut, depth) = s.slot(w);
                     (
                         format!("crack_mm{}", fmt_width(w)),
                         w,

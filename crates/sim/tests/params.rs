@@ -90,8 +90,9 @@ fn the_width_plates_have_their_own_crack_depth() {
     let depth_of = |c: &ExperimentConfig, k: usize| groove(c, k).map(|(_, depth)| depth);
     let mut width = ExperimentConfig::paper(Experiment::Width, 7);
     let mut recognition = ExperimentConfig::paper(Experiment::Recognition, 7);
-    // The calibrated plates: 2.8 mm deep width cracks, 2.53 mm deep surface-type crack.
-    assert_eq!(depth_of(&width, 1), Some(2.8));
+    // The calibrated plates: 2.8 mm deep width cracks (the 1 mm plate's printed slot aside),
+    // 2.53 mm deep surface-type crack.
+    assert_eq!(depth_of(&width, 2), Some(2.8));
     assert_eq!(depth_of(&recognition, 1), Some(2.53));
     width
         .apply_params_toml("[samples]\nwidth_crack_depth_mm = 3.5\n")
@@ -113,57 +114,62 @@ fn the_width_plates_have_their_own_crack_depth() {
 }
 
 #[test]
-fn printed_widths_cut_the_grooves_and_leave_the_labels() {
-    let cut = |c: &ExperimentConfig| -> Vec<(f64, Option<f64>)> {
-        (0..c.surfaces().len())
-            .map(|k| (c.surfaces()[k].1, groove(c, k).map(|(width, _)| width)))
-            .collect()
-    };
+fn printed_slots_cut_the_grooves_and_leave_the_labels() {
+    // The calibrated plates: the 1 mm plate is cut 1.5 × 1.5 mm (docs/calibration.md), the
+    // others as drawn, 2.8 mm deep.
     let mut c = ExperimentConfig::paper(Experiment::Width, 7);
-    let nominal = cut(&c);
-    assert_eq!(nominal[1], (1.0, Some(1.0)));
-    c.apply_params_toml("[samples]\nprinted_widths_mm = [0.0, 1.6, 2.0, 5.0, 8.0, 10.0]\n")
-        .unwrap();
+    assert_eq!(c.surfaces()[1].1, 1.0);
+    assert_eq!(groove(&c, 1), Some((1.5, 1.5)));
+    assert_eq!(groove(&c, 2), Some((2.0, 2.8)));
+    // A file's list replaces the calibrated one: the 1 mm plate goes back to its drawing,
+    // width_crack_depth_mm still reaches the plates not listed.
+    c.apply_params_toml(
+        "[samples]\nwidth_crack_depth_mm = 3.0\n\
+         [[samples.printed_slots]]\nnominal_mm = 10.0\nwidth_mm = 9.5\n\
+         [[samples.printed_slots]]\nnominal_mm = 5.0\ndepth_mm = 2.0\n",
+    )
+    .unwrap();
     c.validate().unwrap();
-    let printed = cut(&c);
-    assert_eq!(printed[1], (1.0, Some(1.6)), "the label stays 1 mm");
-    assert_eq!(printed[2], nominal[2]);
-    // The file names (and so the recordings' names) stay the nominal ones.
-    assert_eq!(c.surfaces()[1].0, "crack_mm1");
-    for bad in [
-        "[1.0, 2.0]",
-        "[0.0, -1.0, 2.0, 5.0, 8.0, 10.0]",
-        "[0.0, nan, 2.0, 5.0, 8.0, 10.0]",
-    ] {
-        let err = refused_samples(&format!("printed_widths_mm = {bad}"));
-        assert!(err.contains("printed_widths_mm"), "{bad}: {err}");
-    }
-}
-
-#[test]
-fn printed_depths_cut_the_grooves_and_leave_the_labels() {
-    let mut c = ExperimentConfig::paper(Experiment::Width, 7);
-    let nominal: Vec<_> = (0..c.surfaces().len()).map(|k| groove(&c, k)).collect();
-    c.apply_params_toml("[samples]\nprinted_depths_mm = [2.8, 1.5, 2.8, 2.8, 2.8, 3.5]\n")
-        .unwrap();
-    c.validate().unwrap();
-    let (w1, d1) = groove(&c, 1).unwrap();
-    assert_eq!((c.surfaces()[1].1, w1, d1), (1.0, 1.0, 1.5), "label and width stay");
-    assert_eq!(groove(&c, 5).unwrap().1, 3.5);
-    assert_eq!(groove(&c, 2), nominal[2], "the other plates keep the width depth");
-    assert!(
-        groove(&c, 0).is_none_or(|(width, _)| width == 0.0),
-        "the flat plate stays flat"
+    assert_eq!(groove(&c, 1), Some((1.0, 3.0)));
+    assert_eq!(groove(&c, 5), Some((9.5, 3.0)));
+    assert_eq!(groove(&c, 3), Some((5.0, 2.0)));
+    // Labels and file names (so the recordings' names) stay nominal.
+    assert_eq!(
+        (c.surfaces()[5].0.as_str(), c.surfaces()[5].1),
+        ("crack_mm10", 10.0)
     );
-    for bad in [
-        "[2.8]",
-        "[2.8, 0.0, 2.8, 2.8, 2.8, 2.8]",
-        "[2.8, -1.0, 2.8, 2.8, 2.8, 2.8]",
-        "[2.8, inf, 2.8, 2.8, 2.8, 2.8]",
+    let mut drawn = ExperimentConfig::paper(Experiment::Width, 7);
+    drawn
+        .apply_params_toml("[samples]\nprinted_slots = []\n")
+        .unwrap();
+    assert_eq!(groove(&drawn, 1), Some((1.0, 2.8)));
+    for (bad, names) in [
+        (
+            "nominal_mm = 3.0\nwidth_mm = 1.0",
+            "not one of samples.widths_mm",
+        ),
+        ("nominal_mm = 1.0\nwidth_mm = -1.0", "width_mm"),
+        ("nominal_mm = 1.0\nwidth_mm = nan", "width_mm"),
+        ("nominal_mm = 1.0\ndepth_mm = 0.0", "depth_mm"),
+        ("nominal_mm = 1.0\ndepth_mm = inf", "depth_mm"),
+        (
+            "nominal_mm = 1.0\n[[samples.printed_slots]]\nnominal_mm = 1.0",
+            "listed twice",
+        ),
     ] {
-        let err = refused_samples(&format!("printed_depths_mm = {bad}"));
-        assert!(err.contains("printed_depths_mm"), "{bad}: {err}");
+        let err = refused_samples(&format!("[[samples.printed_slots]]\n{bad}"));
+        assert!(
+            err.contains("printed_slots") && err.contains(names),
+            "{bad}: {err}"
+        );
     }
+    // A misspelt key is refused, not ignored.
+    let mut c = ExperimentConfig::paper(Experiment::Width, 7);
+    let err = c
+        .apply_params_toml("[[samples.printed_slots]]\nnominal_mm = 1.0\nwidht_mm = 2.0\n")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("widht_mm"), "{err}");
 }
 
 #[test]
