@@ -86,6 +86,9 @@ fn main() -> Result<()> {
     let Some(fit_model) = fit_model else {
         bail!("--fit-model FILE (a recognition model trained on repetition 1) is required")
     };
+    if width_only && fit_width.is_none() {
+        bail!("--width-only needs --fit-width-model FILE (a width model trained on repetition 1)")
+    }
     let fit_model = TactileModel::load(&fit_model)?;
     let deployed = TactileModel::load(Path::new("models/tactile/recognition.ctm"))?;
     let width_models = match &fit_width {
