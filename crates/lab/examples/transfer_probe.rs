@@ -135,15 +135,15 @@ fn main() -> Result<()> {
             let s1 = evaluate_model_recordings(&model, &real1)?;
             let s23 = evaluate_model_recordings(&model, &real23)?;
             println!(
-            "| {name} | {seed} | {:.1} % | {:.1} % | {:.1} % / {:.1} % | {:.1} % / {:.1} % | {:.0} |",
-            100.0 * r1,
-            100.0 * rd,
-            100.0 * s1.window_accuracy,
-            100.0 * s1.slide_accuracy,
-            100.0 * s23.window_accuracy,
-            100.0 * s23.slide_accuracy,
-            t.elapsed().as_secs_f64()
-        );
+                "| {name} | {seed} | {:.1} % | {:.1} % | {:.1} % / {:.1} % | {:.1} % / {:.1} % | {:.0} |",
+                100.0 * r1,
+                100.0 * rd,
+                100.0 * s1.window_accuracy,
+                100.0 * s1.slide_accuracy,
+                100.0 * s23.window_accuracy,
+                100.0 * s23.slide_accuracy,
+                t.elapsed().as_secs_f64()
+            );
             eprintln!(
                 "{name}: rep-1 model {c1:?}; deployed {cd:?}; s2r1 {:?}",
                 s1.slide_confusion

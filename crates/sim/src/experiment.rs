@@ -155,13 +155,23 @@ impl ExperimentConfig {
                 self.position_rate_hz
             )));
         }
-        let depths = [
-            ("samples.crack_depth_mm", Some(self.samples.crack_depth_mm)),
+        let s = &self.samples;
+        // Every depth the plates are cut to, named as a parameter file names it.
+        let slot_depths = s.printed_slots.iter().enumerate().map(|(k, slot)| {
             (
-                "samples.width_crack_depth_mm",
-                self.samples.width_crack_depth_mm,
+                format!("samples.printed_slots[{k}].depth_mm"),
+                slot.depth_mm,
+            )
+        });
+        let depths = [
+            ("samples.crack_depth_mm".to_string(), Some(s.crack_depth_mm)),
+            (
+                "samples.width_crack_depth_mm".to_string(),
+                s.width_crack_depth_mm,
             ),
-        ];
+        ]
+        .into_iter()
+        .chain(slot_depths);
         for (name, depth) in depths {
             if let Some(d) = depth.filter(|d| !(d.is_finite() && *d > 0.0)) {
                 return Err(SimError::Invalid(format!(
@@ -169,7 +179,6 @@ impl ExperimentConfig {
                 )));
             }
         }
-        let s = &self.samples;
         for (k, slot) in s.printed_slots.iter().enumerate() {
             let name = format!("samples.printed_slots[{k}]");
             if !s.widths_mm.contains(&slot.nominal_mm) {
@@ -190,11 +199,6 @@ impl ExperimentConfig {
             if let Some(w) = slot.width_mm.filter(|w| !(w.is_finite() && *w >= 0.0)) {
                 return Err(SimError::Invalid(format!(
                     "{name}: width_mm must be ≥ 0 mm, got {w}"
-                )));
-            }
-            if let Some(d) = slot.depth_mm.filter(|d| !(d.is_finite() && *d > 0.0)) {
-                return Err(SimError::Invalid(format!(
-                    "{name}: depth_mm must be a positive depth in mm, got {d}"
                 )));
             }
         }

@@ -132,10 +132,10 @@ pub fn calibrated_sensor() -> SensorParams {
 
 /// The plates' geometry chosen by the same calibration (the paper gives only the crack widths and
 /// the wave), except the wave's amplitude, the bump, the width plates' depth and the 1 mm plate's
-/// slot (chosen by transfer, below) and the cracks' walls: vertical, as printed slots are, where the fit chose
-/// 73°. With 73° walls the 1 and 2 mm cracks were shallow V-grooves whose sloping walls the
-/// proximity fibre saw brightly (the real narrow cracks read as dark as nothing in view);
-/// vertical walls make both transfer directions better on two simulated seeds
+/// slot (chosen by transfer, below) and the cracks' walls: vertical, as printed slots are, where
+/// the fit chose 73°. With 73° walls the 1 and 2 mm cracks were shallow V-grooves whose sloping
+/// walls the proximity fibre saw brightly (the real narrow cracks read as dark as nothing in
+/// view); vertical walls make both transfer directions better on two simulated seeds
 /// (`docs/calibration.md`, "Vertical crack walls").
 pub fn calibrated_samples() -> Samples {
     Samples {
