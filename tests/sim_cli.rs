@@ -345,3 +345,70 @@ fn calibrate_fits_the_cone_and_keeps_the_end_stop_of_its_start() {
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
 }
+
+/// `sim dataset --start-mm MIN,MAX` places the strokes before the plate's feature. The crack's
+/// proximity dip comes as much later in the first stroke as the strokes start further before it,
+/// and a bad range is refused by name.
+#[test]
+fn dataset_start_mm_places_the_strokes_before_the_feature() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let run = |name: &str, extra: &[&str]| {
+        let out = tmp.path().join(name);
+        let mut args = vec![
+            "sim",
+            "dataset",
+            "--experiment",
+            "recognition",
+            "--out",
+            utf8(&out),
+            "--seed",
+            "3",
+            "--recordings",
+            "1",
+            "--slides",
+            "1",
+        ];
+        args.extend_from_slice(extra);
+        let o = crackbot(&args);
+        (o, out.join("crack_crack_complete_1.csv"))
+    };
+    // Distance travelled from the first stroke's start to its first proximity reading below 420
+    // counts.
+    let onset = |path: &Path| {
+        let rec = read_recording(path).expect("readable");
+        let first = rec.rows.first().expect("rows");
+        let stroke: Vec<_> = rec
+            .rows
+            .iter()
+            .take_while(|r| r.direction == first.direction)
+            .collect();
+        let dip = stroke
+            .iter()
+            .find(|r| r.p < 420.0)
+            .expect("the crack's dip");
+        (dip.x_mm - first.x_mm).abs()
+    };
+    let (o, near) = run("near", &["--start-mm", "4,4"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let (o, far) = run("far", &["--start-mm", "9,9"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let shift = onset(&far) - onset(&near);
+    assert!(
+        (shift - 5.0).abs() < 0.3,
+        "dip moved {shift} mm for a 5 mm later start"
+    );
+
+    for bad in [
+        ["--start-mm", "9,3"],
+        ["--start-mm", "-1,3"],
+        ["--start-mm", "5"],
+    ] {
+        let (o, _) = run("bad", &bad);
+        assert!(!o.status.success(), "{bad:?} accepted");
+        assert!(
+            text(&o.stderr).contains("--start-mm"),
+            "{bad:?}: {}",
+            text(&o.stderr)
+        );
+    }
+}

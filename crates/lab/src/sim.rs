@@ -124,6 +124,17 @@ pub struct DatasetArgs {
     /// Sliding speed, mm/s (the paper states about 3.89; the authors' files move at about 4.6).
     #[arg(long, default_value_t = crackbot_sim::experiment::PAPER_SPEED_MM_S)]
     speed_mm_s: f64,
+    /// Where the strokes start: MIN,MAX mm before the plate's feature, drawn uniformly for each
+    /// recording (default 5,10, the paper's "approximately 5–10 mm from the crack edge"; MIN =
+    /// MAX fixes it). The simulated width figures depend on it: `crates/sim/docs/calibration.md`,
+    /// "Width on six fresh seeds".
+    #[arg(
+        long,
+        value_name = "MIN,MAX",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    start_mm: Option<Vec<f64>>,
     /// Simulate with these parameters instead of the calibrated ones: a TOML file with any of
     /// the tables `[sensor.finger]`, `[sensor.optics]` (fields of `FingerParams`,
     /// `OpticsParams`) and `[samples]` (fields of `Samples`); what it leaves out stays calibrated.
@@ -260,6 +271,15 @@ fn dataset(a: DatasetArgs) -> Result<()> {
         );
     }
     config.speed_mm_s = a.speed_mm_s;
+    if let Some(range) = &a.start_mm {
+        let &[lo, hi] = range.as_slice() else {
+            bail!("--start-mm takes two distances, MIN,MAX mm, got {range:?}");
+        };
+        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
+            bail!("--start-mm must be 0 ≤ MIN ≤ MAX mm, got {lo},{hi}");
+        }
+        config.start_range_mm = (lo, hi);
+    }
     if let Some(path) = &a.params {
         let text =
             std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
