@@ -412,3 +412,45 @@ fn dataset_start_mm_places_the_strokes_before_the_feature() {
         );
     }
 }
+
+/// `sim dataset --printed-decoys` adds the paper-printed cracks to the recognition experiment
+/// (labelled "no crack") and is refused by name for the width experiment.
+#[test]
+fn dataset_printed_decoys_add_no_crack_plates_to_recognition_only() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let out = tmp.path().join("w");
+    let o = crackbot(&[
+        "sim",
+        "dataset",
+        "--experiment",
+        "width",
+        "--printed-decoys",
+        "--out",
+        utf8(&out),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        text(&o.stderr).contains("--printed-decoys"),
+        "{}",
+        text(&o.stderr)
+    );
+    let out = tmp.path().join("r");
+    let o = crackbot(&[
+        "sim",
+        "dataset",
+        "--experiment",
+        "recognition",
+        "--printed-decoys",
+        "--recordings",
+        "1",
+        "--slides",
+        "1",
+        "--out",
+        utf8(&out),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let rec = read_recording(&out.join("crack_printed_w0p5_r0p3_complete_1.csv")).expect("decoy");
+    assert_eq!(rec.label(), Some(0.0));
+    let written = std::fs::read_dir(&out).expect("out").count();
+    assert_eq!(written, 8, "four paper plates and four printed decoys");
+}

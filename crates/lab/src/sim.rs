@@ -135,6 +135,12 @@ pub struct DatasetArgs {
         allow_hyphen_values = true
     )]
     start_mm: Option<Vec<f64>>,
+    /// Recognition experiment: add plates with cracks printed on paper, labelled "no crack"
+    /// (`crackbot_sim::plates::paper_printed_decoys`: 0.5, 1, 2 and 4 mm lines of four inks;
+    /// files `crack_printed_w*_r*`), as the visual-tactile paper's authors recorded theirs. A
+    /// parameter file's `[samples] printed_decoys` replaces the set.
+    #[arg(long)]
+    printed_decoys: bool,
     /// Simulate with these parameters instead of the calibrated ones: a TOML file with any of
     /// the tables `[sensor.finger]`, `[sensor.optics]` (fields of `FingerParams`,
     /// `OpticsParams`) and `[samples]` (fields of `Samples`); what it leaves out stays calibrated.
@@ -279,6 +285,12 @@ fn dataset(a: DatasetArgs) -> Result<()> {
             bail!("--start-mm must be 0 ≤ MIN ≤ MAX mm, got {lo},{hi}");
         }
         config.start_range_mm = (lo, hi);
+    }
+    if a.printed_decoys {
+        if !matches!(a.experiment, ExperimentArg::Recognition) {
+            bail!("--printed-decoys adds plates to --experiment recognition only");
+        }
+        config.samples.printed_decoys = crackbot_sim::plates::paper_printed_decoys();
     }
     if let Some(path) = &a.params {
         let text =

@@ -17,6 +17,12 @@
 //! mission's calls about cracks that are right, the paper's figure (it counts a crack found by
 //! vision and a decoy rejected by touch alike). Localisation error: the distance of each correct
 //! report from the crack's centre line.
+//!
+//! **The finger's error budget** ([`FingerBudget`]): for each candidate the fused mission
+//! touched, what its strokes crossed in the scene's truth (a crack, a printed decoy, a screw or
+//! bump, nothing) against whether the finger confirmed it; and the cracks no stroke crossed,
+//! which touch could never find. It separates what the finger gets wrong from what vision never
+//! proposed.
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -128,6 +134,129 @@ pub fn score(scene: &Scene, report: &InspectReport) -> Score {
     s
 }
 
+/// What the finger said about the candidates it touched, by what their strokes crossed in the
+/// scene's truth: `[confirmed, rejected]` per kind. A candidate whose strokes crossed a crack
+/// counts as a crack; else a decoy; else a screw, bump or wavy patch; else nothing.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct FingerBudget {
+    /// Strokes crossed a true crack.
+    pub crack: [usize; 2],
+    /// Strokes crossed a printed decoy (and no crack).
+    pub decoy: [usize; 2],
+    /// Strokes crossed a screw, bump or wavy patch (and no crack or decoy).
+    pub relief: [usize; 2],
+    /// Strokes crossed nothing of the scene's features.
+    pub nothing: [usize; 2],
+    /// True cracks that no stroke crossed.
+    pub untouched_cracks: usize,
+}
+
+impl FingerBudget {
+    fn add(&mut self, other: &FingerBudget) {
+        for (a, b) in [
+            (&mut self.crack, other.crack),
+            (&mut self.decoy, other.decoy),
+            (&mut self.relief, other.relief),
+            (&mut self.nothing, other.nothing),
+        ] {
+            a[0] += b[0];
+            a[1] += b[1];
+        }
+        self.untouched_cracks += other.untouched_cracks;
+    }
+}
+
+/// Distance between segments `a`–`b` and `c`–`d` (0 when they cross), mm.
+fn segment_distance(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
+    let cross = |o: [f64; 2], p: [f64; 2], q: [f64; 2]| {
+        (p[0] - o[0]) * (q[1] - o[1]) - (p[1] - o[1]) * (q[0] - o[0])
+    };
+    let (d1, d2) = (cross(a, b, c), cross(a, b, d));
+    let (d3, d4) = (cross(c, d, a), cross(c, d, b));
+    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
+        return 0.0;
+    }
+    [
+        distance_to_polyline(&[c, d], a),
+        distance_to_polyline(&[c, d], b),
+        distance_to_polyline(&[a, b], c),
+        distance_to_polyline(&[a, b], d),
+    ]
+    .into_iter()
+    .fold(f64::INFINITY, f64::min)
+}
+
+/// Whether the stroke `a`–`b` crosses (or touches) the feature `f`.
+fn stroke_meets(a: [f64; 2], b: [f64; 2], f: &Feature) -> bool {
+    let polyline = |path: &[[f64; 2]], half_width: f64| {
+        path.windows(2)
+            .any(|s| segment_distance(a, b, s[0], s[1]) <= half_width)
+    };
+    match f {
+        Feature::Crack { path, width_mm, .. } | Feature::Decoy { path, width_mm, .. } => {
+            polyline(path, width_mm / 2.0)
+        }
+        Feature::Bump {
+            centre, radius_mm, ..
+        } => distance_to_polyline(&[a, b], *centre) < *radius_mm,
+        Feature::Screw {
+            centre,
+            head_diameter_mm,
+            ..
+        } => distance_to_polyline(&[a, b], *centre) < head_diameter_mm / 2.0,
+        Feature::Wavy { min, max, .. } => {
+            // Points every 0.5 mm along the stroke, inside the patch's rectangle.
+            let n = ((b[0] - a[0]).hypot(b[1] - a[1]) / 0.5).ceil().max(1.0) as usize;
+            (0..=n).any(|k| {
+                let t = k as f64 / n as f64;
+                let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+                (min[0]..=max[0]).contains(&p[0]) && (min[1]..=max[1]).contains(&p[1])
+            })
+        }
+    }
+}
+
+/// The finger's error budget of a fused mission's report against its scene.
+pub fn finger_budget(scene: &Scene, report: &InspectReport) -> FingerBudget {
+    let mut b = FingerBudget::default();
+    let mut touched = vec![false; scene.features.len()];
+    let mut ids: Vec<u64> = report.passes.iter().filter_map(|p| p.candidate).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    for id in ids {
+        let mut met = [false; 4];
+        for p in report.passes.iter().filter(|p| p.candidate == Some(id)) {
+            for (k, f) in scene.features.iter().enumerate() {
+                if stroke_meets(p.start_mm, p.end_mm, f) {
+                    touched[k] = true;
+                    let kind = match f {
+                        Feature::Crack { .. } => 0,
+                        Feature::Decoy { .. } => 1,
+                        _ => 2,
+                    };
+                    met[kind] = true;
+                }
+            }
+        }
+        met[3] = !met[..3].iter().any(|&m| m);
+        let confirmed = report.cracks.iter().any(|c| c.candidate == Some(id));
+        let slot = match met.iter().position(|&m| m) {
+            Some(0) => &mut b.crack,
+            Some(1) => &mut b.decoy,
+            Some(2) => &mut b.relief,
+            _ => &mut b.nothing,
+        };
+        slot[usize::from(!confirmed)] += 1;
+    }
+    b.untouched_cracks = scene
+        .features
+        .iter()
+        .zip(&touched)
+        .filter(|(f, t)| matches!(f, Feature::Crack { .. }) && !**t)
+        .count();
+    b
+}
+
 /// One trial: a scene, both modes.
 #[derive(Debug, Clone, Serialize)]
 pub struct Trial {
@@ -143,6 +272,8 @@ pub struct Trial {
     pub fused: Score,
     /// Exploration time of the fused mission (robot time), s.
     pub fused_exploration_s: f64,
+    /// What the fused mission's finger said about what it touched.
+    pub finger: FingerBudget,
 }
 
 /// The trials' table.
@@ -159,6 +290,8 @@ pub struct TrialsReport {
     pub fused_localisation_mm: Option<f64>,
     /// The paper's figures: vision only, vision + tactile.
     pub paper: [f64; 2],
+    /// The finger's error budget over every trial.
+    pub finger: FingerBudget,
 }
 
 impl TrialsReport {
@@ -190,6 +323,21 @@ impl TrialsReport {
             self.paper[1],
             self.fused_localisation_mm
                 .map_or_else(|| "– (no crack confirmed)".to_string(), |v| format!("{v:.2} mm"))
+        );
+        let f = &self.finger;
+        let cracks: usize = self.trials.iter().map(|t| t.cracks).sum();
+        out += &format!(
+            "\nWhat the finger said about the candidates it touched, by what their strokes crossed (fused missions, every trial):\n\n| strokes crossed | confirmed | rejected |\n|---|---|---|\n| a crack | {} | {} |\n| a printed decoy | {} | {} |\n| a screw, bump or wavy patch | {} | {} |\n| nothing | {} | {} |\n\nCracks no stroke crossed (never proposed by vision, or the stroke missed them): {} of {}.\n",
+            f.crack[0],
+            f.crack[1],
+            f.decoy[0],
+            f.decoy[1],
+            f.relief[0],
+            f.relief[1],
+            f.nothing[0],
+            f.nothing[1],
+            f.untouched_cracks,
+            cracks
         );
         out
     }
@@ -261,6 +409,7 @@ pub fn detection_trials(
             vision: score(&scene, &vision),
             fused: score(&scene, &fused),
             fused_exploration_s: fused.exploration_s,
+            finger: finger_budget(&scene, &fused),
         };
         progress(seed, &t);
         trials.push(t);
@@ -271,7 +420,12 @@ pub fn detection_trials(
         .iter()
         .flat_map(|t| t.fused.localisation_mm.iter().copied())
         .collect();
+    let mut finger = FingerBudget::default();
+    for t in &trials {
+        finger.add(&t.finger);
+    }
     Ok(TrialsReport {
+        finger,
         vision_correct: mean(&|t| t.vision.correct_fraction()),
         fused_correct: mean(&|t| t.fused.correct_fraction()),
         fused_localisation_mm: (!locs.is_empty())
@@ -389,7 +543,7 @@ pub fn exploration_markdown(rows: &[ExplorationRow]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::inspect::{Evidence, ReportedCrack};
+    use crate::inspect::{Evidence, PassRecord, ReportedCrack};
 
     #[test]
     fn a_table_without_confirmed_cracks_says_so_instead_of_nan() {
@@ -399,6 +553,7 @@ mod tests {
             fused_correct: 0.0,
             fused_localisation_mm: None,
             paper: [46.66, 92.85],
+            finger: FingerBudget::default(),
         };
         let md = t.markdown();
         assert!(
@@ -481,6 +636,73 @@ mod tests {
         }
         assert_eq!(cracks, 4);
         printed.validate().unwrap();
+    }
+
+    #[test]
+    fn the_finger_budget_sorts_candidates_by_what_their_strokes_crossed() {
+        let scene = Scene::builtin_default();
+        // Candidate 1 across the 1 mm crack and candidate 2 across the decoy, both confirmed;
+        // candidate 3 over a screw and candidate 4 over bare plate, both rejected. Candidate 2
+        // is touched twice (forth and back).
+        let mut r = report_with(&[[37.5, 30.0], [40.0, 84.0]]);
+        r.cracks[0].candidate = Some(1);
+        r.cracks[1].candidate = Some(2);
+        let strokes = [
+            (1, [37.5, 22.0], [37.5, 38.0]),
+            (2, [40.0, 76.0], [40.0, 92.0]),
+            (2, [40.0, 92.0], [40.0, 76.0]),
+            (3, [184.0, 92.0], [200.0, 92.0]),
+            (4, [100.0, 20.0], [100.0, 35.0]),
+        ];
+        for (k, (candidate, a, b)) in strokes.into_iter().enumerate() {
+            r.passes.push(PassRecord {
+                id: k as u32 + 1,
+                candidate: Some(candidate),
+                start_mm: a,
+                end_mm: b,
+                samples: 1400,
+                class: None,
+                confidence: 0.0,
+                width_mm: None,
+                doubt: None,
+                dip: None,
+                recording: String::new(),
+                attempts: 1,
+            });
+        }
+        let b = finger_budget(&scene, &r);
+        assert_eq!(
+            b,
+            FingerBudget {
+                crack: [1, 0],
+                decoy: [1, 0],
+                relief: [0, 1],
+                nothing: [0, 1],
+                // The 2, 5 and 10 mm cracks.
+                untouched_cracks: 3,
+            }
+        );
+        // The 5 mm crack's centre line crosses x = 100 mm at y = 64.9 mm. A stroke that ends
+        // 3.4 mm before it (perpendicular 3.3 mm) does not touch it; one that ends 1.9 mm before
+        // it (inside its 2.5 mm half width) does.
+        let crack5 = &scene.features[2];
+        assert!(!stroke_meets([100.0, 50.0], [100.0, 61.5], crack5));
+        assert!(stroke_meets([100.0, 50.0], [100.0, 63.0], crack5));
+        let mut t = TrialsReport {
+            trials: Vec::new(),
+            vision_correct: 0.5,
+            fused_correct: 0.5,
+            fused_localisation_mm: None,
+            paper: [46.66, 92.85],
+            finger: b,
+        };
+        t.finger.add(&b);
+        assert_eq!(t.finger.crack, [2, 0]);
+        assert!(
+            t.markdown().contains("| a printed decoy | 2 | 0 |"),
+            "{}",
+            t.markdown()
+        );
     }
 
     #[test]

@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use crate::finger::Integrator;
 use crate::plates::{calibrated_mounts, calibrated_samples, calibrated_sensor};
-pub use crate::plates::{Experiment, PlateMount, PrintedSlot, Samples};
+pub use crate::plates::{Experiment, PlateMount, PrintedDecoy, PrintedSlot, Samples};
 use crate::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crate::surface::{Feature, Surface};
 use crate::{SensorParams, SimError};
@@ -202,7 +202,27 @@ impl ExperimentConfig {
                 )));
             }
         }
-        let n = self.surfaces().len();
+        for (k, d) in s.printed_decoys.iter().enumerate() {
+            if self.experiment != Experiment::Recognition {
+                return Err(SimError::Invalid(
+                    "samples.printed_decoys: printed decoys are plates of the recognition experiment only"
+                        .into(),
+                ));
+            }
+            if !(d.width_mm.is_finite() && d.width_mm > 0.0) {
+                return Err(SimError::Invalid(format!(
+                    "samples.printed_decoys[{k}].width_mm must be a positive width in mm, got {}",
+                    d.width_mm
+                )));
+            }
+            if !(d.reflectivity.is_finite() && (0.0..=1.0).contains(&d.reflectivity)) {
+                return Err(SimError::Invalid(format!(
+                    "samples.printed_decoys[{k}].reflectivity must be within [0, 1], got {}",
+                    d.reflectivity
+                )));
+            }
+        }
+        let n = self.surfaces().len() - s.printed_decoys.len();
         if !self.mounts.is_empty() && self.mounts.len() != n {
             return Err(SimError::Invalid(format!(
                 "{} plate mounts given for {n} plates",
@@ -224,8 +244,11 @@ impl ExperimentConfig {
         self.integrator.validate()
     }
 
-    /// The mount of plate `k` (neutral when none is given).
+    /// The mount of plate `k` (neutral when none is given). The printed decoys, which follow the
+    /// paper's plates, lie on the flat plate and take its mount.
     pub fn mount(&self, k: usize) -> PlateMount {
+        let paper_plates = self.surfaces().len() - self.samples.printed_decoys.len();
+        let k = if k >= paper_plates { 0 } else { k };
         self.mounts.get(k).copied().unwrap_or_default()
     }
 
@@ -246,37 +269,57 @@ impl ExperimentConfig {
             features,
         };
         match self.experiment {
-            Experiment::Recognition => vec![
-                ("crack_nocrack".into(), 0.0, plate(vec![]), 100.0),
-                (
-                    "crack_crack".into(),
-                    1.0,
-                    plate(vec![crack(s.recognition_crack_width_mm)]),
-                    100.0 - s.recognition_crack_width_mm / 2.0,
-                ),
-                (
-                    "crack_bump".into(),
-                    2.0,
-                    plate(vec![Feature::Bump {
-                        centre: [100.0, 50.0],
-                        radius_mm: s.bump_radius_mm,
-                        height_mm: s.bump_height_mm,
-                    }]),
-                    100.0 - s.bump_radius_mm,
-                ),
-                (
-                    "crack_pattern".into(),
-                    3.0,
-                    plate(vec![Feature::Wavy {
-                        min: [40.0, 0.0],
-                        max: [160.0, 100.0],
-                        amplitude_mm: s.wave_amplitude_mm,
-                        period_mm: s.wave_period_mm,
-                        direction_deg: 0.0,
-                    }]),
-                    100.0,
-                ),
-            ],
+            Experiment::Recognition => {
+                let decoys = s.printed_decoys.iter().map(|d| {
+                    (
+                        format!(
+                            "crack_printed_w{}_r{}",
+                            fmt_width(d.width_mm),
+                            fmt_width(d.reflectivity)
+                        ),
+                        0.0,
+                        plate(vec![Feature::Decoy {
+                            path: vec![[100.0, 0.0], [100.0, 100.0]],
+                            width_mm: d.width_mm,
+                            reflectivity: d.reflectivity,
+                        }]),
+                        100.0 - d.width_mm / 2.0,
+                    )
+                });
+                let mut plates = vec![
+                    ("crack_nocrack".into(), 0.0, plate(vec![]), 100.0),
+                    (
+                        "crack_crack".into(),
+                        1.0,
+                        plate(vec![crack(s.recognition_crack_width_mm)]),
+                        100.0 - s.recognition_crack_width_mm / 2.0,
+                    ),
+                    (
+                        "crack_bump".into(),
+                        2.0,
+                        plate(vec![Feature::Bump {
+                            centre: [100.0, 50.0],
+                            radius_mm: s.bump_radius_mm,
+                            height_mm: s.bump_height_mm,
+                        }]),
+                        100.0 - s.bump_radius_mm,
+                    ),
+                    (
+                        "crack_pattern".into(),
+                        3.0,
+                        plate(vec![Feature::Wavy {
+                            min: [40.0, 0.0],
+                            max: [160.0, 100.0],
+                            amplitude_mm: s.wave_amplitude_mm,
+                            period_mm: s.wave_period_mm,
+                            direction_deg: 0.0,
+                        }]),
+                        100.0,
+                    ),
+                ];
+                plates.extend(decoys);
+                plates
+            }
             Experiment::Width => s
                 .widths_mm
                 .iter()

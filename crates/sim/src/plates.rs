@@ -35,6 +35,12 @@ pub struct Samples {
     /// `width_crack_depth_mm`. A parameter file's list replaces this one (`[]`: every slot as
     /// drawn).
     pub printed_slots: Vec<PrintedSlot>,
+    /// Cracks printed on paper and laid flat, added to the recognition experiment as plates
+    /// labelled "no crack" after the paper's four (the visual-tactile paper's authors recorded
+    /// two such prints so that their model would not take a dark line for a crack; those
+    /// recordings are not published). Empty in the calibrated samples; `sim dataset
+    /// --printed-decoys` adds [`paper_printed_decoys`].
+    pub printed_decoys: Vec<PrintedDecoy>,
     /// Base radius of the bump, mm.
     pub bump_radius_mm: f64,
     /// Height of the bump, mm.
@@ -58,6 +64,7 @@ impl Default for Samples {
             recognition_crack_width_mm: 5.0,
             widths_mm: vec![0.0, 1.0, 2.0, 5.0, 8.0, 10.0],
             printed_slots: Vec::new(),
+            printed_decoys: Vec::new(),
             bump_radius_mm: 4.0,
             bump_height_mm: 2.0,
             wave_amplitude_mm: 1.0,
@@ -80,6 +87,30 @@ pub struct PrintedSlot {
     /// The slot's depth, mm (absent: the width plates' depth).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depth_mm: Option<f64>,
+}
+
+/// A crack printed on paper and laid on a flat plate: flat to the touch, darker to the proximity
+/// fibre ([`crate::surface::Feature::Decoy`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrintedDecoy {
+    /// Width of the printed line, mm (> 0).
+    pub width_mm: f64,
+    /// Reflectivity of the ink relative to the plate, 0 (black) to 1 (invisible).
+    pub reflectivity: f64,
+}
+
+/// The printed decoys of `sim dataset --printed-decoys`: four lines spanning the widths and inks
+/// of the missions' random decoys (0.5–4 mm, reflectivity 0.2–0.6,
+/// `crackbot_sim::random_scene::RandomSceneParams`), each width with another ink.
+pub fn paper_printed_decoys() -> Vec<PrintedDecoy> {
+    [(0.5, 0.3), (1.0, 0.5), (2.0, 0.2), (4.0, 0.6)]
+        .into_iter()
+        .map(|(width_mm, reflectivity)| PrintedDecoy {
+            width_mm,
+            reflectivity,
+        })
+        .collect()
 }
 
 impl Samples {

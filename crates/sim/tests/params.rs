@@ -307,3 +307,89 @@ fn proximity_tails_join_only_the_proximity_targets() {
         }
     }
 }
+
+/// The printed decoys: plates after the paper's four, labelled "no crack", on the flat plate's
+/// mount. The finger feels them as the flat plate (the same deformation to a count) while the
+/// proximity fibre reads the ink darker; bad values and the width experiment are refused by name.
+#[test]
+fn printed_decoys_are_flat_plates_with_a_dark_line_labelled_no_crack() {
+    let mut c = ExperimentConfig::paper(Experiment::Recognition, 5);
+    c.recordings = 1;
+    c.slides = 2;
+    assert_eq!(c.surfaces().len(), 4, "none in the calibrated samples");
+    c.samples.printed_decoys = crackbot_sim::plates::paper_printed_decoys();
+    c.validate().unwrap();
+    let plates = c.surfaces();
+    assert_eq!(plates.len(), 8);
+    assert_eq!(plates[5].0, "crack_printed_w1_r0p5");
+    assert!(plates[4..].iter().all(|p| p.1 == 0.0));
+    assert_eq!(c.mount(6), c.mount(0));
+    // The flat plate and the 2 mm line of ink 0.2, simulated on the same line with the same
+    // seed: the deformation channels agree everywhere, the proximity dips over the ink.
+    let flat = &plates[0];
+    let decoy = plates
+        .iter()
+        .find(|p| p.0 == "crack_printed_w2_r0p2")
+        .unwrap();
+    let run = |p: &(String, f64, crackbot_sim::surface::Surface, f64)| {
+        crackbot_sim::experiment::simulate_recording(
+            &c,
+            &p.2,
+            c.mount(0),
+            p.1,
+            1,
+            99.0,
+            8.0,
+            50.0,
+            10.0,
+            3,
+        )
+        .unwrap()
+    };
+    let (a, b) = (run(flat), run(decoy));
+    assert_eq!(a.rows.len(), b.rows.len());
+    let max_dd = a
+        .rows
+        .iter()
+        .zip(&b.rows)
+        .map(|(x, y)| {
+            (x.d1 - y.d1)
+                .abs()
+                .max((x.d2 - y.d2).abs())
+                .max((x.d3 - y.d3).abs())
+        })
+        .fold(0.0, f64::max);
+    assert!(max_dd <= 1.0, "deformation differs by {max_dd} counts");
+    let min_p = |r: &Recording| r.rows.iter().map(|x| x.p).fold(f64::INFINITY, f64::min);
+    assert!(
+        min_p(&b) < min_p(&a) - 60.0,
+        "ink {} vs plate {}",
+        min_p(&b),
+        min_p(&a)
+    );
+
+    for (bad, names) in [
+        (
+            "width_mm = 0.0\nreflectivity = 0.3",
+            "printed_decoys[0].width_mm",
+        ),
+        (
+            "width_mm = 1.0\nreflectivity = 1.5",
+            "printed_decoys[0].reflectivity",
+        ),
+        (
+            "width_mm = nan\nreflectivity = 0.3",
+            "printed_decoys[0].width_mm",
+        ),
+    ] {
+        let mut c = ExperimentConfig::paper(Experiment::Recognition, 5);
+        let err = c
+            .apply_params_toml(&format!("[[samples.printed_decoys]]\n{bad}\n"))
+            .and_then(|()| c.validate())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(names), "{bad}: {err}");
+    }
+    let err = refused_samples("printed_decoys = [{ width_mm = 1.0, reflectivity = 0.3 }]");
+    assert!(err.contains("recognition experiment only"), "{err}");
+}

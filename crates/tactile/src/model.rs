@@ -328,12 +328,29 @@ impl TactileModel {
         config: &TrainConfig,
         progress: ModelProgress<'_>,
     ) -> Result<Self, TactileError> {
+        Self::train_with_pipeline(
+            recordings,
+            experiment,
+            config,
+            deployed_pipeline(),
+            progress,
+        )
+    }
+
+    /// [`Self::train`] with another pipeline than [`deployed_pipeline`] (it must have context
+    /// features).
+    pub fn train_with_pipeline(
+        recordings: &[(PathBuf, Recording)],
+        experiment: Option<Experiment>,
+        config: &TrainConfig,
+        pipeline_config: PipelineConfig,
+        progress: ModelProgress<'_>,
+    ) -> Result<Self, TactileError> {
         crate::eval::check_n_trees(config.n_trees)?;
         let experiment = match experiment {
             Some(e) => e,
             None => detect_experiment(recordings)?,
         };
-        let pipeline_config = deployed_pipeline();
         let pipeline = pipeline_config.check()?;
         let started = Instant::now();
         let context_set = pipeline.build_windows(recordings, experiment)?;
