@@ -57,6 +57,11 @@ pub struct RunArgs {
     /// rejects the rest).
     #[arg(long, default_value_t = 0.3, value_parser = score_in_unit_range)]
     pub proposal_min_score: f32,
+    /// What the finger touches: every crack a detection holds, on its centre line (cracks), or
+    /// every detection once across its main axis (detections: fewer strokes, but of cracks that
+    /// run close together or cross only one is touched).
+    #[arg(long, default_value = "cracks", value_parser = ["cracks", "detections"])]
+    pub candidates: String,
     /// Deployed recognition model.
     #[arg(long)]
     pub recognition_model: Option<PathBuf>,
@@ -172,6 +177,7 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
     config.gamma = args.gamma;
     config.min_score = args.min_score;
     config.proposal_min_score = args.proposal_min_score;
+    config.candidates = args.candidates.parse().map_err(anyhow::Error::msg)?;
     config.planner.passes = args.passes;
     if let Some(v) = args.stroke_mm {
         config.planner.min_stroke_mm = v;

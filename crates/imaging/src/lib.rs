@@ -10,6 +10,8 @@
 //!   per-crack fields, the photo datasets' mask files) are typed optional fields.
 //! * [`scene_truth`]: a detector set's `features.json` (every crack, decoy and screw of every
 //!   rendered frame), written by the simulator and read by the detector's evaluation.
+//! * [`thinning`]: binary images thinned to one-pixel centre lines (the planner's eq. 1 on
+//!   crack masks, the vision crate's touch points along a detected crack).
 //!
 //! The crate is deliberately light (nalgebra, serde, serde_json, thiserror): no image decoding,
 //! no runtime.
@@ -18,6 +20,7 @@ pub mod coco;
 mod error;
 pub mod homography;
 pub mod scene_truth;
+pub mod thinning;
 
 pub use error::ImagingError;
 pub use homography::{Homography, PointPair, ReprojectionStats};

@@ -46,6 +46,10 @@ pub struct Common {
     /// mm (default: 2).
     #[arg(long)]
     margin_mm: Option<f64>,
+    /// What the finger touches: every crack a detection holds (cracks) or every detection once
+    /// across its main axis (detections).
+    #[arg(long, default_value = "cracks", value_parser = ["cracks", "detections"])]
+    candidates: String,
     /// Deployed recognition model (default: models/tactile/recognition.ctm).
     #[arg(long)]
     recognition_model: Option<PathBuf>,
@@ -100,6 +104,7 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
         );
     }
     template.proposal_min_score = common.proposal_min_score;
+    template.candidates = common.candidates.parse().map_err(anyhow::Error::msg)?;
     if let Some(p) = &common.recognition_model {
         template.recognition_model = p.clone();
     }

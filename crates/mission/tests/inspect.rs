@@ -73,6 +73,10 @@ fn a_fused_mission_finds_the_crack_with_synchronised_positions_and_saves_everyth
     c.clock.drift_ppm = 150.0;
     let r = mission(&c).unwrap();
     println!("{}", serde_json::to_string_pretty(&r.cracks).unwrap());
+    println!("{}", serde_json::to_string_pretty(&r.candidates).unwrap());
+    for p in &r.passes {
+        println!("pass {} {:?} -> {:?}", p.id, p.start_mm, p.end_mm);
+    }
     assert_eq!(r.mode, InspectMode::Fused);
     assert!(!r.candidates.is_empty(), "the detector found nothing");
     assert_eq!(r.passes.len(), 2 * r.candidates.len());
@@ -92,7 +96,11 @@ fn a_fused_mission_finds_the_crack_with_synchronised_positions_and_saves_everyth
     // can wait tens of ms for the robot's thread (a run saw the fit 76 ms off); 0.2 s is 0.9 mm at
     // the slide speed, and the dip check below bounds what that costs the localisation.
     assert!((fit.offset_us + 3.2e6).abs() < 2e5, "{fit:?}");
-    // Every pass's dip (where the proximity channel sees the crack) lies on the crack.
+    // Every pass's dip (where the proximity channel sees the crack) touches the crack's span:
+    // within its half width (5 mm) and a millimetre of the centre line. The simulated dip covers
+    // the near part of a wide crack only (crackbot_tactile::localise, "Measured accuracy"), so
+    // each pass's dip lies 3–5.5 mm from the line on the side the finger enters from. (A clock
+    // offset left uncorrected would put it 15 mm away: 3.2 s at 4.6 mm/s.)
     let mut dips = 0;
     for p in &r.passes {
         if let Some(d) = p.dip {
@@ -107,7 +115,7 @@ fn a_fused_mission_finds_the_crack_with_synchronised_positions_and_saves_everyth
                 "pass {} dip at {at:?}: {err:.2} mm from the crack's centre line",
                 p.id
             );
-            assert!(err < 4.0, "pass {}: {err} mm", p.id);
+            assert!(err < 6.0, "pass {}: {err} mm", p.id);
             dips += 1;
         }
     }

@@ -22,6 +22,8 @@
 
 use serde::Serialize;
 
+use crackbot_imaging::thinning;
+
 use crate::error::PlanError;
 
 /// The figures the paper gives for eq. 1 and 2 (section III-C): `Ā = 2961` black pixels of 51 529
@@ -277,79 +279,15 @@ pub fn eq1(areas_px: &[f64], mean_width_px: f64) -> (Vec<f64>, f64) {
 
 /// The eight neighbours of `(x, y)`, counter-clockwise from east: E, NE, N, NW, W, SW, S, SE.
 fn neighbours(m: &BinaryMask, x: isize, y: isize) -> [bool; 8] {
-    [
-        m.get(x + 1, y),
-        m.get(x + 1, y - 1),
-        m.get(x, y - 1),
-        m.get(x - 1, y - 1),
-        m.get(x - 1, y),
-        m.get(x - 1, y + 1),
-        m.get(x, y + 1),
-        m.get(x + 1, y + 1),
-    ]
+    thinning::neighbours(&m.pixels, m.width, x, y)
 }
 
-/// Yokoi's 8-connectivity number: 1 exactly when removing the pixel keeps the crack's
-/// 8-connected pieces and the background's 4-connected pieces as they were (a *simple* pixel).
-fn connectivity8(n: &[bool; 8]) -> u32 {
-    let b = |k: usize| u32::from(!n[k % 8]);
-    [0, 2, 4, 6]
-        .iter()
-        .map(|&k| b(k) - b(k) * b(k + 1) * b(k + 2))
-        .sum()
-}
-
-/// The mask thinned to one-pixel centre lines (see the module docs). Each sub-iteration marks
-/// its boundary pixels on a snapshot, as Zhang–Suen do (so both sides are peeled evenly and
-/// nothing cascades along a row), then removes the marked pixels one at a time, each only if it
-/// is still simple and not a line end (so nothing breaks or vanishes, unlike plain Zhang–Suen,
-/// which erases 2 × 2 squares and two-pixel diagonals).
+/// The mask thinned to one-pixel centre lines ([`crackbot_imaging::thinning::thin`], see the
+/// module docs).
 pub fn skeleton(mask: &BinaryMask) -> BinaryMask {
     let mut s = mask.clone();
-    let (w, h) = (s.width as isize, s.height as isize);
-    let removable = |n: &[bool; 8]| {
-        let count = n.iter().filter(|&&v| v).count();
-        (2..=6).contains(&count) && connectivity8(n) == 1
-    };
-    let mut marked = Vec::new();
-    loop {
-        let mut changed = false;
-        for sub in 0..2 {
-            marked.clear();
-            for y in 0..h {
-                for x in 0..w {
-                    if !s.get(x, y) {
-                        continue;
-                    }
-                    let n = neighbours(&s, x, y);
-                    if !removable(&n) {
-                        continue;
-                    }
-                    // Zhang–Suen's sides: the first sub-iteration peels the east/south
-                    // boundary, the second the west/north one (E = n[0], N = n[2], W = n[4],
-                    // S = n[6]).
-                    let (east, north, west, south) = (n[0], n[2], n[4], n[6]);
-                    let peel = if sub == 0 {
-                        !(east && south && (north || west))
-                    } else {
-                        !(north && west && (east || south))
-                    };
-                    if peel {
-                        marked.push((x, y));
-                    }
-                }
-            }
-            for &(x, y) in &marked {
-                if removable(&neighbours(&s, x, y)) {
-                    s.pixels[(y * w + x) as usize] = false;
-                    changed = true;
-                }
-            }
-        }
-        if !changed {
-            return s;
-        }
-    }
+    thinning::thin(&mut s.pixels, s.width);
+    s
 }
 
 /// Length of a one-pixel centre line, pixels (see the module docs).

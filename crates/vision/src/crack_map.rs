@@ -20,6 +20,17 @@
 //!
 //! `models/detector/seg_post.py` is the independent (numpy + scipy) implementation of the same
 //! rule; `tests/onnx_reference.rs` checks the two agree on real photos.
+//!
+//! **Where to touch** ([`CrackShape::pieces`]). The dilation that joins a broken crack also joins
+//! cracks that run close together or cross, and a component's main axis then passes between
+//! them. For the finger, each component is split into the cracks it holds: its crack cells are
+//! thinned to a centre line ([`crackbot_imaging::thinning`]), the line is cut at its junctions
+//! into branches, spurs shorter than [`SPUR_CELLS`] are dropped, and branches are joined again
+//! where a crack plainly goes on: through a junction the pair of branches that continue each
+//! other best (within [`CONTINUATION_DEG`] of straight), and across a gap no longer than the
+//! dilation joins when both ends point at each other. Each joined run is a [`CrackPiece`]: a
+//! centre-line point near its middle and away from junctions (where a stroke across meets that
+//! crack alone), its local direction and its length.
 
 use serde::{Deserialize, Serialize};
 
@@ -47,7 +58,37 @@ pub struct CrackShape {
     pub polyline: Vec<[f32; 2]>,
     /// Length of the polyline, pixels.
     pub length_px: f32,
+    /// The cracks the component holds, longest first, where the finger should touch each (see
+    /// the [module docs](self)); empty when none is at least [`MIN_PIECE_CELLS`] long.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pieces: Vec<CrackPiece>,
 }
+
+/// One crack of a detection, where a stroke across it should go (image pixels).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CrackPiece {
+    /// A point of its centre line near its middle, away from junctions with other cracks.
+    pub touch: [f32; 2],
+    /// Its direction at `touch`: the ends of a segment through `touch`, as long as the piece.
+    pub axis: [[f32; 2]; 2],
+    /// Length of its centre line, pixels.
+    pub length_px: f32,
+    /// Its width at `touch`: the run of crack cells across its direction there, pixels (a map
+    /// cell's resolution).
+    pub width_px: f32,
+}
+
+/// Branches of the centre line with a free end shorter than this (map cells) are spurs.
+pub const SPUR_CELLS: usize = 3;
+/// Pieces shorter than this (map cells) are not touched on their own.
+pub const MIN_PIECE_CELLS: usize = 4;
+/// Two branches continue each other through a junction (or across a gap) when their directions
+/// are within this many degrees of a straight line.
+pub const CONTINUATION_DEG: f64 = 40.0;
+/// Cells along a branch over which its direction at an end is taken.
+const DIRECTION_CELLS: usize = 4;
+/// Touch points keep at least this many cells from a junction when the piece allows.
+const JUNCTION_CLEARANCE_CELLS: f64 = 3.0;
 
 /// A crack map of one letterboxed frame: `cells × cells` probabilities, row-major.
 #[derive(Debug, Clone, PartialEq)]
@@ -176,10 +217,15 @@ pub fn map_detections(map: &CrackMap, params: &PostprocessParams) -> Vec<Detecti
                 y1: ((c.r1 + 1) as f32 * to_img).min(h),
             };
             let score = c.max;
-            (bbox.area() >= min_area && score >= params.score_threshold).then(|| Detection {
-                bbox,
-                score,
-                shape: Some(c.shape(to_img)),
+            (bbox.area() >= min_area && score >= params.score_threshold).then(|| {
+                let mut shape = c.shape(to_img);
+                let cells: Vec<(usize, usize)> = c.cells.iter().map(|&(r, c, _)| (r, c)).collect();
+                shape.pieces = pieces(&cells, 2 * dilation_radius_cells(lb) + 1, to_img);
+                Detection {
+                    bbox,
+                    score,
+                    shape: Some(shape),
+                }
             })
         })
         .collect();
@@ -272,8 +318,427 @@ impl Component {
             axis,
             polyline,
             length_px,
+            pieces: Vec::new(),
         }
     }
+}
+
+/// Disjoint sets (union by size, path halving).
+struct Sets(Vec<usize>, Vec<usize>);
+
+impl Sets {
+    fn new(n: usize) -> Self {
+        Sets((0..n).collect(), vec![1; n])
+    }
+    fn find(&mut self, mut i: usize) -> usize {
+        while self.0[i] != i {
+            self.0[i] = self.0[self.0[i]];
+            i = self.0[i];
+        }
+        i
+    }
+    fn union(&mut self, a: usize, b: usize) {
+        let (mut a, mut b) = (self.find(a), self.find(b));
+        if a == b {
+            return;
+        }
+        if self.1[a] < self.1[b] {
+            std::mem::swap(&mut a, &mut b);
+        }
+        self.0[b] = a;
+        self.1[a] += self.1[b];
+    }
+}
+
+/// One branch of the centre line: its cells in order (row, column), and at each end the
+/// junction it meets (`None`: a free end).
+struct Branch {
+    cells: Vec<(isize, isize)>,
+    junction: [Option<usize>; 2],
+}
+
+impl Branch {
+    /// Unit direction pointing away from end `e` (0: first cell, 1: last) into the branch's
+    /// surroundings: from a cell [`DIRECTION_CELLS`] inside towards the end.
+    fn outward(&self, e: usize) -> [f64; 2] {
+        let n = self.cells.len();
+        let k = DIRECTION_CELLS.min(n - 1);
+        let (end, inner) = if e == 0 {
+            (self.cells[0], self.cells[k])
+        } else {
+            (self.cells[n - 1], self.cells[n - 1 - k])
+        };
+        let d = [(end.1 - inner.1) as f64, (end.0 - inner.0) as f64];
+        let l = d[0].hypot(d[1]);
+        if l > 0.0 {
+            [d[0] / l, d[1] / l]
+        } else {
+            [0.0, 0.0]
+        }
+    }
+
+    fn end(&self, e: usize) -> (isize, isize) {
+        if e == 0 {
+            self.cells[0]
+        } else {
+            self.cells[self.cells.len() - 1]
+        }
+    }
+
+    /// Centre-line length, cells (√2 per diagonal step).
+    fn length(&self) -> f64 {
+        1.0 + self
+            .cells
+            .windows(2)
+            .map(|w| {
+                if w[0].0 != w[1].0 && w[0].1 != w[1].1 {
+                    std::f64::consts::SQRT_2
+                } else {
+                    1.0
+                }
+            })
+            .sum::<f64>()
+    }
+}
+
+/// Angle between two directions, degrees.
+fn angle_deg(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] * b[0] + a[1] * b[1])
+        .clamp(-1.0, 1.0)
+        .acos()
+        .to_degrees()
+}
+
+/// The cracks of one component (cells `(row, column)`), where the finger should touch each (see
+/// the [module docs](self)); `max_gap` cells is the longest gap the dilation joined; `to_img`
+/// image pixels per cell.
+fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPiece> {
+    let Some(r0) = cells.iter().map(|c| c.0).min() else {
+        return Vec::new();
+    };
+    let c0 = cells.iter().map(|c| c.1).min().unwrap_or(0);
+    let rows = cells.iter().map(|c| c.0).max().unwrap_or(0) - r0 + 3;
+    let cols = cells.iter().map(|c| c.1).max().unwrap_or(0) - c0 + 3;
+    // A one-cell margin, so the thinning never meets the edge.
+    let mut grid = vec![false; rows * cols];
+    for &(r, c) in cells {
+        grid[(r - r0 + 1) * cols + (c - c0 + 1)] = true;
+    }
+    let crack = grid.clone();
+    crackbot_imaging::thinning::thin(&mut grid, cols);
+    let on = |r: isize, c: isize| {
+        r >= 0
+            && c >= 0
+            && (r as usize) < rows
+            && (c as usize) < cols
+            && grid[r as usize * cols + c as usize]
+    };
+    const AROUND: [(isize, isize); 8] = [
+        (0, 1),
+        (-1, 1),
+        (-1, 0),
+        (-1, -1),
+        (0, -1),
+        (1, -1),
+        (1, 0),
+        (1, 1),
+    ];
+    let degree = |r: isize, c: isize| AROUND.iter().filter(|d| on(r + d.0, c + d.1)).count();
+    // Junction cells (three or more neighbours), grouped into junctions by 8-adjacency.
+    let mut junction_of = vec![usize::MAX; rows * cols];
+    let mut junction_cells: Vec<Vec<(isize, isize)>> = Vec::new();
+    for r in 0..rows as isize {
+        for c in 0..cols as isize {
+            let i = r as usize * cols + c as usize;
+            if !on(r, c) || degree(r, c) < 3 || junction_of[i] != usize::MAX {
+                continue;
+            }
+            let id = junction_cells.len();
+            let mut group = vec![(r, c)];
+            junction_of[i] = id;
+            let mut k = 0;
+            while k < group.len() {
+                let (gr, gc) = group[k];
+                k += 1;
+                for d in AROUND {
+                    let (nr, nc) = (gr + d.0, gc + d.1);
+                    if on(nr, nc) && degree(nr, nc) >= 3 {
+                        let j = nr as usize * cols + nc as usize;
+                        if junction_of[j] == usize::MAX {
+                            junction_of[j] = id;
+                            group.push((nr, nc));
+                        }
+                    }
+                }
+            }
+            junction_cells.push(group);
+        }
+    }
+    let is_junction =
+        |r: isize, c: isize| junction_of[r as usize * cols + c as usize] != usize::MAX;
+    // Branches: runs of the other centre-line cells (each has at most two such neighbours).
+    let mut seen = vec![false; rows * cols];
+    let mut branches: Vec<Branch> = Vec::new();
+    for r in 0..rows as isize {
+        for c in 0..cols as isize {
+            let i = r as usize * cols + c as usize;
+            if !on(r, c) || is_junction(r, c) || seen[i] {
+                continue;
+            }
+            // The run's cells, then walk it from one end.
+            let mut run = vec![(r, c)];
+            seen[i] = true;
+            let mut k = 0;
+            while k < run.len() {
+                let (gr, gc) = run[k];
+                k += 1;
+                for d in AROUND {
+                    let (nr, nc) = (gr + d.0, gc + d.1);
+                    if on(nr, nc) && !is_junction(nr, nc) {
+                        let j = nr as usize * cols + nc as usize;
+                        if !seen[j] {
+                            seen[j] = true;
+                            run.push((nr, nc));
+                        }
+                    }
+                }
+            }
+            let inside = |p: (isize, isize)| {
+                AROUND
+                    .iter()
+                    .filter(|d| run.contains(&(p.0 + d.0, p.1 + d.1)))
+                    .count()
+            };
+            let start = run
+                .iter()
+                .copied()
+                .find(|&p| inside(p) <= 1)
+                .unwrap_or(run[0]);
+            let mut ordered = vec![start];
+            let mut used = vec![false; run.len()];
+            if let Some(k) = run.iter().position(|&p| p == start) {
+                used[k] = true;
+            }
+            // Walk to an unused run neighbour, 4-neighbours first (so diagonal shortcuts of a
+            // staircase are not skipped).
+            loop {
+                let (gr, gc) = ordered[ordered.len() - 1];
+                let mut next = None;
+                for d in [0, 2, 4, 6, 1, 3, 5, 7].map(|k| AROUND[k]) {
+                    if let Some(k) = run
+                        .iter()
+                        .position(|&p| p == (gr + d.0, gc + d.1))
+                        .filter(|&k| !used[k])
+                    {
+                        next = Some(k);
+                        break;
+                    }
+                }
+                match next {
+                    Some(k) => {
+                        used[k] = true;
+                        ordered.push(run[k]);
+                    }
+                    None => break,
+                }
+            }
+            let touching = |p: (isize, isize)| {
+                AROUND.iter().find_map(|d| {
+                    let (nr, nc) = (p.0 + d.0, p.1 + d.1);
+                    (on(nr, nc) && is_junction(nr, nc))
+                        .then(|| junction_of[nr as usize * cols + nc as usize])
+                })
+            };
+            let first = ordered[0];
+            let last = ordered[ordered.len() - 1];
+            let junction = [touching(first), touching(last)];
+            branches.push(Branch {
+                cells: ordered,
+                junction,
+            });
+        }
+    }
+    // Spurs: a free end, a junction at the other, short.
+    branches.retain(|b| {
+        let free = b.junction.iter().filter(|j| j.is_none()).count();
+        !(free == 1 && b.length() < SPUR_CELLS as f64)
+    });
+    let mut sets = Sets::new(branches.len());
+    // Through each junction, the pairs of branches that continue each other best.
+    for j in 0..junction_cells.len() {
+        let mut ends: Vec<(usize, usize, [f64; 2])> = Vec::new();
+        for (bi, b) in branches.iter().enumerate() {
+            for e in 0..2 {
+                if b.junction[e] == Some(j)
+                    && !(e == 1 && b.cells.len() == 1 && b.junction[0] == Some(j))
+                {
+                    // Pointing into the branch, away from the junction: the opposite of outward.
+                    let o = b.outward(e);
+                    ends.push((bi, e, [-o[0], -o[1]]));
+                }
+            }
+        }
+        loop {
+            let mut best: Option<(f64, usize, usize)> = None;
+            for a in 0..ends.len() {
+                for b in a + 1..ends.len() {
+                    if ends[a].0 == ends[b].0 {
+                        continue;
+                    }
+                    let (da, db) = (ends[a].2, ends[b].2);
+                    // Straight on: the two leave the junction in opposite directions.
+                    let bend = angle_deg(da, [-db[0], -db[1]]);
+                    if bend <= CONTINUATION_DEG && best.is_none_or(|x| bend < x.0) {
+                        best = Some((bend, a, b));
+                    }
+                }
+            }
+            let Some((_, a, b)) = best else { break };
+            sets.union(ends[a].0, ends[b].0);
+            let (hi, lo) = (a.max(b), a.min(b));
+            ends.remove(hi);
+            ends.remove(lo);
+        }
+    }
+    // Across gaps the dilation joined: free ends that point at each other.
+    let mut free: Vec<(usize, usize)> = Vec::new();
+    for (bi, b) in branches.iter().enumerate() {
+        for e in 0..2 {
+            if b.junction[e].is_none() && b.cells.len() > 1 {
+                free.push((bi, e));
+            }
+        }
+    }
+    let mut gaps: Vec<(f64, usize, usize)> = Vec::new();
+    for a in 0..free.len() {
+        for b in a + 1..free.len() {
+            let ((ba, ea), (bb, eb)) = (free[a], free[b]);
+            if ba == bb {
+                continue;
+            }
+            let (pa, pb) = (branches[ba].end(ea), branches[bb].end(eb));
+            let v = [(pb.1 - pa.1) as f64, (pb.0 - pa.0) as f64];
+            let d = v[0].hypot(v[1]);
+            if d > max_gap as f64 || d == 0.0 {
+                continue;
+            }
+            let u = [v[0] / d, v[1] / d];
+            if angle_deg(branches[ba].outward(ea), u) <= CONTINUATION_DEG
+                && angle_deg(branches[bb].outward(eb), [-u[0], -u[1]]) <= CONTINUATION_DEG
+            {
+                gaps.push((d, a, b));
+            }
+        }
+    }
+    gaps.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut end_used = vec![false; free.len()];
+    for (_, a, b) in gaps {
+        if !end_used[a] && !end_used[b] {
+            end_used[a] = true;
+            end_used[b] = true;
+            sets.union(free[a].0, free[b].0);
+        }
+    }
+    // Each joined run: length, touch point and local direction.
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut group_of = vec![usize::MAX; branches.len()];
+    for bi in 0..branches.len() {
+        let root = sets.find(bi);
+        if group_of[root] == usize::MAX {
+            group_of[root] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[group_of[root]].push(bi);
+    }
+    let all_junctions: Vec<(isize, isize)> = junction_cells.iter().flatten().copied().collect();
+    let img = |p: (f64, f64)| {
+        // Grid cell (row, column) → image pixels of the map cell's centre.
+        [
+            ((p.1 + c0 as f64 - 1.0 + 0.5) * f64::from(to_img)) as f32,
+            ((p.0 + r0 as f64 - 1.0 + 0.5) * f64::from(to_img)) as f32,
+        ]
+    };
+    let mut out: Vec<CrackPiece> = Vec::new();
+    for g in groups {
+        let length: f64 = g.iter().map(|&b| branches[b].length()).sum();
+        if length < MIN_PIECE_CELLS as f64 {
+            continue;
+        }
+        let pts: Vec<(isize, isize)> = g
+            .iter()
+            .flat_map(|&b| branches[b].cells.iter().copied())
+            .collect();
+        let n = pts.len() as f64;
+        let (mr, mc) = pts.iter().fold((0.0, 0.0), |a, p| {
+            (a.0 + p.0 as f64 / n, a.1 + p.1 as f64 / n)
+        });
+        let clear = |p: &(isize, isize)| {
+            all_junctions
+                .iter()
+                .all(|q| ((p.0 - q.0) as f64).hypot((p.1 - q.1) as f64) >= JUNCTION_CLEARANCE_CELLS)
+        };
+        let near = |p: &&(isize, isize)| (p.0 as f64 - mr).powi(2) + (p.1 as f64 - mc).powi(2);
+        let touch = pts
+            .iter()
+            .filter(|p| clear(p))
+            .min_by(|a, b| near(a).total_cmp(&near(b)))
+            .or_else(|| pts.iter().min_by(|a, b| near(a).total_cmp(&near(b))))
+            .copied()
+            .unwrap_or((mr as isize, mc as isize));
+        // Local direction: principal axis of the run's cells within a few cells of the touch.
+        let local: Vec<&(isize, isize)> = pts
+            .iter()
+            .filter(|p| {
+                ((p.0 - touch.0) as f64).hypot((p.1 - touch.1) as f64)
+                    <= 2.0 * DIRECTION_CELLS as f64
+            })
+            .collect();
+        let m = local.len().max(1) as f64;
+        let (lr, lc) = local.iter().fold((0.0, 0.0), |a, p| {
+            (a.0 + p.0 as f64 / m, a.1 + p.1 as f64 / m)
+        });
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        for p in &local {
+            let (dx, dy) = (p.1 as f64 - lc, p.0 as f64 - lr);
+            sxx += dx * dx;
+            sxy += dx * dy;
+            syy += dy * dy;
+        }
+        let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+        let (ux, uy) = (theta.cos(), theta.sin());
+        let half = length / 2.0;
+        let t = (touch.0 as f64, touch.1 as f64);
+        // Width: crack cells across the direction at the touch, both ways, in half-cell steps.
+        let in_crack = |r: f64, c: f64| {
+            let (r, c) = (r.round(), c.round());
+            r >= 0.0
+                && c >= 0.0
+                && (r as usize) < rows
+                && (c as usize) < cols
+                && crack[r as usize * cols + c as usize]
+        };
+        let mut across = 0.0;
+        for sign in [-1.0, 1.0] {
+            let mut k = 1.0;
+            while k < (rows + cols) as f64
+                && in_crack(t.0 + sign * k * 0.5 * ux, t.1 - sign * k * 0.5 * uy)
+            {
+                k += 1.0;
+            }
+            across += (k - 1.0) * 0.5;
+        }
+        out.push(CrackPiece {
+            width_px: ((across + 1.0) * f64::from(to_img)) as f32,
+            touch: img(t),
+            axis: [
+                img((t.0 - half * uy, t.1 - half * ux)),
+                img((t.0 + half * uy, t.1 + half * ux)),
+            ],
+            length_px: (length * f64::from(to_img)) as f32,
+        });
+    }
+    out.sort_by(|a, b| b.length_px.total_cmp(&a.length_px));
+    out
 }
 
 /// Binary dilation by a disk of radius `r` cells (offsets with `dx² + dy² ≤ r²`).
@@ -397,6 +862,111 @@ mod tests {
         assert!((dets[1].score - 0.7).abs() < 1e-6);
         let joined = &dets[0];
         assert_eq!((joined.bbox.x0, joined.bbox.x1), (40.0, 220.0));
+    }
+
+    /// Cells of a line from `a` to `b` (row, column), `thick` cells thick across it.
+    fn line_cells(a: (f64, f64), b: (f64, f64), thick: usize) -> Vec<(usize, usize)> {
+        let n = ((b.0 - a.0).abs().max((b.1 - a.1).abs()) * 2.0) as usize + 1;
+        let mut out = Vec::new();
+        for k in 0..=n {
+            let t = k as f64 / n as f64;
+            let (r, c) = (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1));
+            for o in 0..thick {
+                // Thick across the line's dominant direction.
+                let cell = if (b.1 - a.1).abs() >= (b.0 - a.0).abs() {
+                    ((r.round() as usize) + o, c.round() as usize)
+                } else {
+                    (r.round() as usize, (c.round() as usize) + o)
+                };
+                if !out.contains(&cell) {
+                    out.push(cell);
+                }
+            }
+        }
+        out
+    }
+
+    /// Angle of a piece's axis from +x in the image, degrees in [0, 180).
+    fn axis_deg(p: &CrackPiece) -> f64 {
+        let [a, b] = p.axis;
+        f64::from((b[1] - a[1]).atan2(b[0] - a[0]))
+            .to_degrees()
+            .rem_euclid(180.0)
+    }
+
+    #[test]
+    fn a_straight_crack_is_one_piece_touched_on_its_line() {
+        let cells = line_cells((20.0, 10.0), (20.0, 60.0), 2);
+        let p = pieces(&cells, 7, 4.0);
+        assert_eq!(p.len(), 1, "{p:?}");
+        // Touched near the middle, on the two-cell-thick line (rows 20–21 → y 82–86 px).
+        assert!((p[0].touch[0] - 142.0).abs() <= 12.0, "{p:?}");
+        assert!((82.0..=86.0).contains(&p[0].touch[1]), "{p:?}");
+        let a = axis_deg(&p[0]);
+        assert!(!(5.0..=175.0).contains(&a), "{a}");
+        assert!((p[0].length_px - 50.0 * 4.0).abs() < 20.0, "{p:?}");
+        // Two cells thick: 8 px.
+        assert!((p[0].width_px - 8.0).abs() <= 2.0, "{p:?}");
+        let wide = pieces(&line_cells((20.0, 10.0), (20.0, 60.0), 6), 7, 4.0);
+        assert_eq!(wide.len(), 1, "{wide:?}");
+        assert!((wide[0].width_px - 24.0).abs() <= 4.0, "{wide:?}");
+    }
+
+    #[test]
+    fn crossing_cracks_are_two_pieces_touched_away_from_the_crossing() {
+        let mut cells = line_cells((40.0, 5.0), (40.0, 75.0), 2);
+        for c in line_cells((5.0, 42.0), (75.0, 42.0), 2) {
+            if !cells.contains(&c) {
+                cells.push(c);
+            }
+        }
+        let p = pieces(&cells, 7, 1.0);
+        assert_eq!(p.len(), 2, "{p:?}");
+        let mut angles: Vec<f64> = p.iter().map(axis_deg).collect();
+        angles.sort_by(f64::total_cmp);
+        assert!(angles[0] < 10.0 || angles[1] > 170.0, "{angles:?}");
+        assert!(angles.iter().any(|a| (a - 90.0).abs() < 10.0), "{angles:?}");
+        for q in &p {
+            let d = (q.touch[0] - 42.5).hypot(q.touch[1] - 40.5);
+            assert!(d >= 3.0, "touched at the crossing: {q:?}");
+            assert!(q.length_px > 55.0, "{q:?}");
+        }
+    }
+
+    #[test]
+    fn a_branch_meeting_a_crack_is_its_own_piece_and_the_crack_goes_through() {
+        // A long crack along row 30 and a second one meeting it from above at column 40.
+        let mut cells = line_cells((30.0, 5.0), (30.0, 80.0), 2);
+        for c in line_cells((5.0, 40.0), (30.0, 40.0), 2) {
+            if !cells.contains(&c) {
+                cells.push(c);
+            }
+        }
+        let p = pieces(&cells, 7, 1.0);
+        assert_eq!(p.len(), 2, "{p:?}");
+        assert!(
+            p[0].length_px > 65.0,
+            "the through crack is one piece: {p:?}"
+        );
+        let a = axis_deg(&p[1]);
+        assert!((a - 90.0).abs() < 15.0, "{a}");
+        // The branch is touched on its own line, above the crack it meets.
+        assert!(p[1].touch[1] < 27.0, "{p:?}");
+    }
+
+    #[test]
+    fn a_broken_crack_is_one_piece_and_parallel_cracks_are_two() {
+        let mut broken = line_cells((20.0, 5.0), (20.0, 30.0), 2);
+        broken.extend(line_cells((20.0, 34.0), (20.0, 60.0), 2));
+        let p = pieces(&broken, 7, 1.0);
+        assert_eq!(p.len(), 1, "{p:?}");
+        let mut parallel = line_cells((20.0, 5.0), (20.0, 60.0), 2);
+        parallel.extend(line_cells((25.0, 5.0), (25.0, 60.0), 2));
+        let p = pieces(&parallel, 7, 1.0);
+        assert_eq!(p.len(), 2, "{p:?}");
+        // A speck is no piece: the detection keeps its main axis only.
+        assert!(pieces(&[(3, 3), (3, 4)], 7, 1.0).is_empty());
+        assert!(pieces(&[], 7, 1.0).is_empty());
     }
 
     #[test]

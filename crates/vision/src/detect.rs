@@ -57,6 +57,13 @@ pub struct DetectionReport {
     /// Length of the centre line on the surface, mm.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub length_mm: Option<f64>,
+    /// The cracks the detection holds and where to touch each, pixels
+    /// ([`crate::crack_map::CrackShape::pieces`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pieces_px: Vec<crate::crack_map::CrackPiece>,
+    /// Each piece's touch point on the surface, mm (with a homography that maps them all).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub touch_mm: Option<Vec<[f64; 2]>>,
 }
 
 /// One image of a [`DetectReport`].
@@ -161,6 +168,10 @@ pub fn detect_images(
                     .sum()
             }),
             polyline_mm,
+            pieces_px: shape.map(|s| s.pieces.clone()).unwrap_or_default(),
+            touch_mm: shape
+                .filter(|s| !s.pieces.is_empty())
+                .and_then(|s| points_mm(&s.pieces.iter().map(|p| p.touch).collect::<Vec<_>>())),
         }
     };
     let fused = config.fuse.as_ref().map(|params| {
@@ -242,24 +253,58 @@ pub fn draw_box(img: &mut image::RgbImage, d: &Detection, colour: [u8; 3]) {
 /// Colour of a crack's centre line in annotated images.
 pub const COURSE_COLOUR: [u8; 3] = [255, 230, 0];
 
-/// Draws the crack's centre line of `d` (one pixel wide), where the detector gives one.
+/// Colour of the touch points and the strokes across them in annotated images.
+pub const TOUCH_COLOUR: [u8; 3] = [255, 0, 200];
+
+/// Draws the crack's centre line of `d` (one pixel wide), where the detector gives one, and for
+/// each crack it holds ([`crate::crack_map::CrackPiece`]) a stroke across it through its touch
+/// point.
 fn draw_course(img: &mut image::RgbImage, d: &Detection) {
-    let (w, h) = (img.width() as i64, img.height() as i64);
     if let Some(shape) = &d.shape {
         for seg in shape.polyline.windows(2) {
-            let (a, b) = (seg[0], seg[1]);
-            let steps = ((b[0] - a[0]).abs().max((b[1] - a[1]).abs()).ceil() as usize).max(1);
-            for k in 0..=steps {
-                let t = k as f32 / steps as f32;
-                let (x, y) = (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
-                if !(x.is_finite() && y.is_finite()) {
-                    continue;
-                }
-                let (x, y) = (x.round() as i64, y.round() as i64);
-                if (0..w).contains(&x) && (0..h).contains(&y) {
-                    img.put_pixel(x as u32, y as u32, image::Rgb(COURSE_COLOUR));
-                }
+            draw_line(img, seg[0], seg[1], COURSE_COLOUR);
+        }
+        for piece in &shape.pieces {
+            let [a, b] = piece.axis;
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let l = dx.hypot(dy);
+            if l.is_nan() || l <= 0.0 {
+                continue;
             }
+            // Across the piece: its width and 8 px of sound surface on each side.
+            let half = piece.width_px / 2.0 + 8.0;
+            let (nx, ny) = (-dy / l * half, dx / l * half);
+            let t = piece.touch;
+            for o in [-1.0, 0.0, 1.0] {
+                // Three pixels wide: offsets along the piece.
+                let (ox, oy) = (dx / l * o, dy / l * o);
+                draw_line(
+                    img,
+                    [t[0] - nx + ox, t[1] - ny + oy],
+                    [t[0] + nx + ox, t[1] + ny + oy],
+                    TOUCH_COLOUR,
+                );
+            }
+        }
+    }
+}
+
+/// A one-pixel line from `a` to `b` (image pixels), clipped to the image.
+fn draw_line(img: &mut image::RgbImage, a: [f32; 2], b: [f32; 2], colour: [u8; 3]) {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    let steps = ((b[0] - a[0]).abs().max((b[1] - a[1]).abs()).ceil() as usize).max(1);
+    if steps > 100_000 {
+        return;
+    }
+    for k in 0..=steps {
+        let t = k as f32 / steps as f32;
+        let (x, y) = (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
+        if !(x.is_finite() && y.is_finite()) {
+            continue;
+        }
+        let (x, y) = (x.round() as i64, y.round() as i64);
+        if (0..w).contains(&x) && (0..h).contains(&y) {
+            img.put_pixel(x as u32, y as u32, image::Rgb(colour));
         }
     }
 }
@@ -290,7 +335,8 @@ mod tests {
         }
     }
 
-    /// One crack with its centre line, from (2, 2) over (6, 2) to (6, 6).
+    /// One crack with its centre line, from (2, 2) over (6, 2) to (6, 6), and a piece touched at
+    /// (24, 12) running along y.
     struct Shaped;
     impl Detector for Shaped {
         fn name(&self) -> String {
@@ -304,6 +350,12 @@ mod tests {
                     axis: [[2.0, 2.0], [6.0, 6.0]],
                     polyline: vec![[2.0, 2.0], [6.0, 2.0], [6.0, 6.0]],
                     length_px: 8.0,
+                    pieces: vec![crate::crack_map::CrackPiece {
+                        touch: [24.0, 12.0],
+                        axis: [[24.0, 9.0], [24.0, 15.0]],
+                        length_px: 6.0,
+                        width_px: 2.0,
+                    }],
                 }),
             }])
         }
@@ -313,7 +365,7 @@ mod tests {
     fn the_crack_course_is_reported_in_pixels_and_millimetres_and_drawn() {
         let dir = tempfile::tempdir().unwrap();
         let img = dir.path().join("f.png");
-        image::RgbImage::new(16, 8).save(&img).unwrap();
+        image::RgbImage::new(40, 16).save(&img).unwrap();
         let config = DetectConfig {
             threshold: 0.5,
             homography: Some(
@@ -340,6 +392,14 @@ mod tests {
         assert_eq!(drawn.get_pixel(4, 2).0, COURSE_COLOUR);
         assert_eq!(drawn.get_pixel(6, 4).0, COURSE_COLOUR);
         assert_eq!(drawn.get_pixel(4, 4).0, DETECTION_COLOUR);
+        // The piece: reported with its touch point in mm, and a stroke drawn across it (its
+        // width and 8 px on each side).
+        assert_eq!(d.pieces_px.len(), 1);
+        assert_eq!(d.touch_mm, Some(vec![[13.0, 6.0]]));
+        for x in [16, 24, 32] {
+            assert_eq!(drawn.get_pixel(x, 12).0, TOUCH_COLOUR, "x = {x}");
+        }
+        assert_ne!(drawn.get_pixel(24, 8).0, TOUCH_COLOUR);
         // Without a homography: pixels only.
         let r = detect_images(
             &mut Shaped,

@@ -82,6 +82,31 @@ impl std::str::FromStr for InspectMode {
     }
 }
 
+/// What the finger touches of what the camera saw.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CandidateSource {
+    /// Every crack a detection holds, on its centre line (`crackbot_vision::crack_map`, "Where
+    /// to touch"): cracks that the detection's dilation joined are touched one by one.
+    Cracks,
+    /// Every detection once, across the middle of its main axis: fewer strokes, but of cracks
+    /// that run close together or cross only one is touched.
+    Detections,
+}
+
+impl std::str::FromStr for CandidateSource {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "cracks" => Ok(CandidateSource::Cracks),
+            "detections" => Ok(CandidateSource::Detections),
+            _ => Err(format!(
+                "unknown candidate source {s:?}: cracks or detections"
+            )),
+        }
+    }
+}
+
 /// Real hardware in place of the simulated parts.
 #[derive(Debug, Clone)]
 pub struct Hardware {
@@ -123,6 +148,8 @@ pub struct InspectConfig {
     /// [`min_score`](Self::min_score): the finger confirms or rejects what the camera proposes,
     /// so a weak detection costs a slide, not a false report.
     pub proposal_min_score: f32,
+    /// What the finger touches (fused) and what is reported (vision).
+    pub candidates: CandidateSource,
     /// Simulation speed-up (1: real time).
     pub speedup: f64,
     /// Seed of the simulated sensor and camera.
@@ -170,6 +197,7 @@ impl InspectConfig {
             detector_model: None,
             min_score: 0.3,
             proposal_min_score: 0.3,
+            candidates: CandidateSource::Cracks,
             speedup: 1.0,
             seed: 7,
             planner: settings,

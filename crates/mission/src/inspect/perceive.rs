@@ -75,15 +75,39 @@ pub(super) fn perceive(
     let mut detector = build_detector(&choice, post)?;
     let detections = detector.detect(&image)?;
     let mut out = Vec::new();
-    for (i, d) in detections.iter().enumerate() {
+    let mut id = 0u64;
+    for d in &detections {
         if d.score < min_score {
             continue;
         }
         let to_mm = |p: [f32; 2]| h.pixel_to_surface([f64::from(p[0]), f64::from(p[1])]).ok();
-        let id = i as u64 + 1;
+        let score = f64::from(d.score);
+        // One candidate per crack the detection holds, touched on its centre line
+        // (`crackbot_vision::crack_map`, "Where to touch"): the dilation that joins a broken
+        // crack also joins cracks that run close together or cross.
+        let pieces = d
+            .shape
+            .as_ref()
+            .filter(|s| config.candidates == CandidateSource::Cracks && !s.pieces.is_empty());
+        if let Some(shape) = pieces {
+            for piece in &shape.pieces {
+                if let (Some(a), Some(b)) = (to_mm(piece.axis[0]), to_mm(piece.axis[1])) {
+                    id += 1;
+                    // Its width at the touch, by the axis's scale there (mm per pixel), so a
+                    // wide crack gets a stroke that starts and ends on sound surface.
+                    let mm_per_px =
+                        (b[0] - a[0]).hypot(b[1] - a[1]) / f64::from(piece.length_px.max(1.0));
+                    let width = f64::from(piece.width_px) * mm_per_px;
+                    let c = Candidate::from_axis(id, [a, b], Some(width), score);
+                    out.push((c, score));
+                }
+            }
+            continue;
+        }
+        id += 1;
         let c = match &d.shape {
             Some(shape) => match (to_mm(shape.axis[0]), to_mm(shape.axis[1])) {
-                (Some(a), Some(b)) => Candidate::from_axis(id, [a, b], None, f64::from(d.score)),
+                (Some(a), Some(b)) => Candidate::from_axis(id, [a, b], None, score),
                 _ => continue,
             },
             None => {
@@ -93,13 +117,13 @@ pub(super) fn perceive(
                         id,
                         [a[0].min(c[0]), a[1].min(c[1])],
                         [a[0].max(c[0]), a[1].max(c[1])],
-                        f64::from(d.score),
+                        score,
                     ),
                     _ => continue,
                 }
             }
         };
-        out.push((c, f64::from(d.score)));
+        out.push((c, score));
     }
     Ok((out, frame))
 }
