@@ -915,11 +915,7 @@ mod tests {
     #[test]
     fn crossing_cracks_are_two_pieces_touched_away_from_the_crossing() {
         let mut cells = line_cells((40.0, 5.0), (40.0, 75.0), 2);
-        for c in line_cells((5.0, 42.0), (75.0, 42.0), 2) {
-            if !cells.contains(&c) {
-                cells.push(c);
-            }
-        }
+        cells.extend(line_cells((5.0, 42.0), (75.0, 42.0), 2));
         let p = pieces(&cells, 7, 1.0);
         assert_eq!(p.len(), 2, "{p:?}");
         let mut angles: Vec<f64> = p.iter().map(axis_deg).collect();
@@ -937,11 +933,7 @@ mod tests {
     fn a_branch_meeting_a_crack_is_its_own_piece_and_the_crack_goes_through() {
         // A long crack along row 30 and a second one meeting it from above at column 40.
         let mut cells = line_cells((30.0, 5.0), (30.0, 80.0), 2);
-        for c in line_cells((5.0, 40.0), (30.0, 40.0), 2) {
-            if !cells.contains(&c) {
-                cells.push(c);
-            }
-        }
+        cells.extend(line_cells((5.0, 40.0), (30.0, 40.0), 2));
         let p = pieces(&cells, 7, 1.0);
         assert_eq!(p.len(), 2, "{p:?}");
         assert!(
