@@ -62,6 +62,10 @@ pub struct RunArgs {
     /// run close together or cross only one is touched).
     #[arg(long, default_value = "cracks", value_parser = ["cracks", "detections"])]
     pub candidates: String,
+    /// Confirm a crack on the recognition model's vote alone, also where the proximity channel
+    /// saw no dip (by default a crack must show one).
+    #[arg(long)]
+    pub confirm_without_dip: bool,
     /// Deployed recognition model.
     #[arg(long)]
     pub recognition_model: Option<PathBuf>,
@@ -178,6 +182,7 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
     config.min_score = args.min_score;
     config.proposal_min_score = args.proposal_min_score;
     config.candidates = args.candidates.parse().map_err(anyhow::Error::msg)?;
+    config.require_dip = !args.confirm_without_dip;
     config.planner.passes = args.passes;
     if let Some(v) = args.stroke_mm {
         config.planner.min_stroke_mm = v;

@@ -50,6 +50,10 @@ pub struct Common {
     /// across its main axis (detections).
     #[arg(long, default_value = "cracks", value_parser = ["cracks", "detections"])]
     candidates: String,
+    /// Confirm a crack on the recognition model's vote alone, also where the proximity channel
+    /// saw no dip (by default a crack must show one).
+    #[arg(long)]
+    confirm_without_dip: bool,
     /// Deployed recognition model (default: models/tactile/recognition.ctm).
     #[arg(long)]
     recognition_model: Option<PathBuf>,
@@ -105,6 +109,7 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
     }
     template.proposal_min_score = common.proposal_min_score;
     template.candidates = common.candidates.parse().map_err(anyhow::Error::msg)?;
+    template.require_dip = !common.confirm_without_dip;
     if let Some(p) = &common.recognition_model {
         template.recognition_model = p.clone();
     }
