@@ -58,6 +58,7 @@ fn unlike_surfaces_and_broken_channels_come_out_unknown() -> Result<(), Box<dyn 
         n_trees: 32,
         max_depth: Some(10),
         seed: 1,
+        ..TrainConfig::default()
     };
     let model = TactileModel::train(
         &train,

@@ -107,6 +107,7 @@ fn main() -> Result<()> {
         n_trees: 16,
         max_depth: Some(10),
         seed: 1,
+        ..TrainConfig::default()
     };
     println!("| params | seed | real→sim, rep-1 model: slides | real→sim, deployed: slides | sim→real 1: windows / slides | sim→real 2, 3: windows / slides | s |");
     println!("|---|---|---|---|---|---|---|");

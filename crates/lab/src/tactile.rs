@@ -70,6 +70,18 @@ pub struct TrainArgs {
     /// others calls the authors' 1, 8 and 10 mm cracks "bump".
     #[arg(long)]
     recognition_type_only: bool,
+    /// Who decides the recognition model's slide verdicts: `both` (the context forest's slide
+    /// mean summed with that of the forest on the paper's absolute window features) or
+    /// `context` (the context forest alone, whose features are relative to each slide's
+    /// baseline). `both` by default: alone, the context forest reads every simulated crack as
+    /// a wavy surface (models/tactile/MODEL_CARD.md, "Who votes").
+    #[arg(long, value_enum, default_value_t = SlideVoteArg::Both)]
+    recognition_vote: SlideVoteArg,
+    /// Who decides the width model's slide verdicts. `context` by default: the window forest
+    /// learns each width plate's fibre offsets, and a finger mounted with other offsets gets
+    /// one width for every crack (models/tactile/MODEL_CARD.md, "Who votes").
+    #[arg(long, value_enum, default_value_t = SlideVoteArg::Context)]
+    width_vote: SlideVoteArg,
 }
 
 /// Arguments of `crackbot tactile tradeoff`.
@@ -249,6 +261,15 @@ enum SlideVoteArg {
     Context,
 }
 
+impl From<SlideVoteArg> for crackbot_tactile::evaluation::SlideVote {
+    fn from(v: SlideVoteArg) -> Self {
+        match v {
+            SlideVoteArg::Both => Self::Both,
+            SlideVoteArg::Context => Self::Context,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum FeatureArg {
     Raw,
@@ -407,7 +428,7 @@ fn eval(args: EvalArgs) -> Result<()> {
     use crackbot_tactile::context::ContextConfig;
     use crackbot_tactile::dataset::PipelineConfig;
     use crackbot_tactile::eval::ForestTuning;
-    use crackbot_tactile::evaluation::{evaluate, EvalConfig, SlideVote};
+    use crackbot_tactile::evaluation::{evaluate, EvalConfig};
 
     let config = EvalConfig {
         experiment: args.pipeline.experiment.map(Into::into),
@@ -434,10 +455,7 @@ fn eval(args: EvalArgs) -> Result<()> {
             min_samples_leaf: args.min_samples_leaf,
         },
         seed: args.pipeline.seed,
-        slide_vote: match args.slide_vote {
-            SlideVoteArg::Both => SlideVote::Both,
-            SlideVoteArg::Context => SlideVote::Context,
-        },
+        slide_vote: args.slide_vote.into(),
     };
     let report = match &args.model {
         Some(path) => {
@@ -726,10 +744,11 @@ fn train(args: TrainArgs) -> Result<()> {
     }
     std::fs::create_dir_all(&args.out)
         .map_err(|e| anyhow::anyhow!("creating {}: {e}", args.out.display()))?;
-    let config = TrainConfig {
+    let config = |vote: SlideVoteArg| TrainConfig {
         n_trees: args.trees,
         max_depth: args.max_depth,
         seed: args.seed,
+        slide_vote: vote.into(),
     };
     // Each set is read once: the width recordings serve both models (recognition first, then
     // the width model takes them).
@@ -775,10 +794,14 @@ fn train(args: TrainArgs) -> Result<()> {
             args.trees
         );
         let mut bar = tree_bars(true);
+        let vote = match experiment {
+            Experiment::Recognition => args.recognition_vote,
+            Experiment::Width => args.width_vote,
+        };
         let model = TactileModel::train(
             &recordings,
             Some(experiment),
-            &config,
+            &config(vote),
             &mut |_, done, total| bar(done, total),
         )?;
         let path = args.out.join(format!("{}.ctm", experiment.name()));
@@ -793,6 +816,7 @@ fn train(args: TrainArgs) -> Result<()> {
             "classes": model.header.classes,
             "training": model.header.training,
             "pipeline": model.header.pipeline,
+            "slide_vote": model.header.slide_vote,
             "context_forest_nodes": model.context_forest.n_nodes(),
             "window_forest_nodes": model.window_forest.n_nodes(),
             "width_regressor_nodes": model.width.as_ref().map(|w| w.n_nodes()),

@@ -85,6 +85,8 @@ pub struct Score {
     pub missed: usize,
     /// Distance of each correct report from its crack's centre line, mm.
     pub localisation_mm: Vec<f64>,
+    /// Reported width − true width of each correct report that carries a width, mm.
+    pub width_error_mm: Vec<f64>,
 }
 
 impl Score {
@@ -126,6 +128,9 @@ pub fn score(scene: &Scene, report: &InspectReport) -> Score {
                 claimed[i] = true;
                 s.correct += 1;
                 s.localisation_mm.push(d);
+                if let Some(rw) = r.width_mm {
+                    s.width_error_mm.push(rw - w);
+                }
             }
             _ => s.false_reports += 1,
         }
@@ -288,6 +293,9 @@ pub struct TrialsReport {
     /// Mean localisation error of the fused mission's correct reports, mm (`None` when it made
     /// none).
     pub fused_localisation_mm: Option<f64>,
+    /// Mean absolute width error of the fused mission's correct reports, mm (`None` when none
+    /// carried a width).
+    pub fused_width_mae_mm: Option<f64>,
     /// The paper's figures: vision only, vision + tactile.
     pub paper: [f64; 2],
     /// The finger's error budget over every trial.
@@ -316,13 +324,15 @@ impl TrialsReport {
             );
         }
         out += &format!(
-            "\n| | vision only | vision + tactile |\n|---|---|---|\n| correct detections (this run) | {:.1} % | {:.1} % |\n| the paper | {:.2} % | {:.2} % |\n| localisation error of confirmed cracks | – | {} |\n",
+            "\n| | vision only | vision + tactile |\n|---|---|---|\n| correct detections (this run) | {:.1} % | {:.1} % |\n| the paper | {:.2} % | {:.2} % |\n| localisation error of confirmed cracks | – | {} |\n| width error of confirmed cracks (mean absolute) | – | {} |\n",
             100.0 * self.vision_correct,
             100.0 * self.fused_correct,
             self.paper[0],
             self.paper[1],
             self.fused_localisation_mm
-                .map_or_else(|| "– (no crack confirmed)".to_string(), |v| format!("{v:.2} mm"))
+                .map_or_else(|| "– (no crack confirmed)".to_string(), |v| format!("{v:.2} mm")),
+            self.fused_width_mae_mm
+                .map_or_else(|| "– (no width reported)".to_string(), |v| format!("{v:.2} mm"))
         );
         let f = &self.finger;
         let cracks: usize = self.trials.iter().map(|t| t.cracks).sum();
@@ -420,6 +430,10 @@ pub fn detection_trials(
         .iter()
         .flat_map(|t| t.fused.localisation_mm.iter().copied())
         .collect();
+    let width_errors: Vec<f64> = trials
+        .iter()
+        .flat_map(|t| t.fused.width_error_mm.iter().map(|e| e.abs()))
+        .collect();
     let mut finger = FingerBudget::default();
     for t in &trials {
         finger.add(&t.finger);
@@ -430,6 +444,8 @@ pub fn detection_trials(
         fused_correct: mean(&|t| t.fused.correct_fraction()),
         fused_localisation_mm: (!locs.is_empty())
             .then(|| locs.iter().sum::<f64>() / locs.len() as f64),
+        fused_width_mae_mm: (!width_errors.is_empty())
+            .then(|| width_errors.iter().sum::<f64>() / width_errors.len() as f64),
         trials,
         paper: [46.66, 92.85],
     })
@@ -552,6 +568,7 @@ mod tests {
             vision_correct: 0.5,
             fused_correct: 0.0,
             fused_localisation_mm: None,
+            fused_width_mae_mm: None,
             paper: [46.66, 92.85],
             finger: FingerBudget::default(),
         };
@@ -562,6 +579,9 @@ mod tests {
         );
         t.fused_localisation_mm = Some(1.234);
         assert!(t.markdown().contains("| 1.23 mm |"));
+        assert!(t.markdown().contains("– (no width reported)"));
+        t.fused_width_mae_mm = Some(0.75);
+        assert!(t.markdown().contains("(mean absolute) | – | 0.75 mm |"));
     }
 
     fn report_with(positions: &[[f64; 2]]) -> InspectReport {
@@ -693,6 +713,7 @@ mod tests {
             vision_correct: 0.5,
             fused_correct: 0.5,
             fused_localisation_mm: None,
+            fused_width_mae_mm: None,
             paper: [46.66, 92.85],
             finger: b,
         };
@@ -715,7 +736,15 @@ mod tests {
         assert_eq!(s.cracks, 4);
         assert_eq!((s.correct, s.false_reports, s.missed), (1, 2, 3), "{s:?}");
         assert!(s.localisation_mm[0] < 0.5, "{s:?}");
+        assert!(s.width_error_mm.is_empty(), "no report carried a width");
         assert!((s.correct_fraction() - 1.0 / 6.0).abs() < 1e-12);
+        // A width reported on the 1 mm crack is scored against it; one on the decoy is not.
+        let mut r = report_with(&[[37.5, 30.0], [40.0, 84.0]]);
+        for c in &mut r.cracks {
+            c.width_mm = Some(2.0);
+        }
+        let s = score(&scene, &r);
+        assert_eq!(s.width_error_mm, vec![1.0], "{s:?}");
         let none = score(&scene, &report_with(&[]));
         assert_eq!((none.correct, none.missed), (0, 4));
         assert_eq!(none.correct_fraction(), 0.0);

@@ -5,8 +5,14 @@
 //! and the width recordings read as surface types (0 mm "no crack", every other width "crack"),
 //! and tested on the held-out repetition of both.
 //!
+//! Each model votes as the committed one of its experiment does (recognition: both forests;
+//! width: the context forest alone; `CRACKBOT_SLIDE_VOTE=both|context` sets both). The column
+//! "offsets moved" tests the same model on the held-out recordings with D1, D2 and D3 each shifted
+//! by a whole 5–12 counts, up or down, fixed per recording (what remounting the fibres does;
+//! between the authors' two sessions the flat levels moved by about 10 counts).
+//!
 //! ```sh
-//! CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-tactile --example deployed_tables
+//! CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-tactile --example deployed_tables [recognition|width]
 //! ```
 //! Data: the authors' repetitions 1–3 only.
 
@@ -14,7 +20,7 @@ use std::path::PathBuf;
 
 use crackbot_recording::{collect_recordings, Recording};
 use crackbot_tactile::dataset::Experiment;
-use crackbot_tactile::evaluation::evaluate_model_recordings;
+use crackbot_tactile::evaluation::{evaluate_model_recordings, SlideVote};
 use crackbot_tactile::model::{TactileModel, TrainConfig};
 use crackbot_tactile::online::classify_recording;
 
@@ -28,12 +34,41 @@ fn pick(all: &Recs, reps: &[u32]) -> Recs {
         .collect()
 }
 
+/// `recs` with D1, D2 and D3 of each recording shifted by a whole 5–12 counts, up or down (a
+/// fixed pseudo-random draw per recording and channel).
+fn offsets_moved(recs: &Recs) -> Recs {
+    recs.iter()
+        .enumerate()
+        .map(|(i, (p, r))| {
+            let mut r = r.clone();
+            let by: [f64; 3] = std::array::from_fn(|c| {
+                let h = (i as u64 * 3 + c as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
+                let size = 5.0 + (h % 8) as f64;
+                if (h >> 8).is_multiple_of(2) {
+                    size
+                } else {
+                    -size
+                }
+            });
+            for row in &mut r.rows {
+                row.d1 += by[0];
+                row.d2 += by[1];
+                row.d3 += by[2];
+            }
+            (p.clone(), r)
+        })
+        .collect()
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let only = std::env::args().nth(1);
-    let config = TrainConfig {
-        n_trees: 32,
-        max_depth: Some(10),
-        seed: 1,
+    let forced = match std::env::var("CRACKBOT_SLIDE_VOTE").as_deref() {
+        Ok("both") => Some(SlideVote::Both),
+        Ok("context") => Some(SlideVote::Context),
+        Ok(other) => {
+            return Err(format!("CRACKBOT_SLIDE_VOTE must be both or context, got {other}").into())
+        }
+        Err(_) => None,
     };
     let mut folds: Vec<(Vec<u32>, u32)> = vec![(vec![2, 3], 1), (vec![1, 3], 2), (vec![1, 2], 3)];
     for a in 1..=3 {
@@ -66,14 +101,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         } else {
             Vec::new()
         };
-        println!("| {experiment:?}: train → test | windows | slides | width plates: windows / slides | width MAE posterior mean / mode / regressor (slides), mm |");
-        println!("|---|---|---|---|---|");
+        let config = TrainConfig {
+            n_trees: 32,
+            max_depth: Some(10),
+            seed: 1,
+            slide_vote: forced.unwrap_or(match experiment {
+                Experiment::Recognition => SlideVote::Both,
+                Experiment::Width => SlideVote::Context,
+            }),
+        };
+        println!("{experiment:?}, slide vote {}:", config.slide_vote.name());
+        println!("| {experiment:?}: train → test | windows | slides | offsets moved: windows / slides | width plates: windows / slides | width MAE posterior mean / mode / regressor (slides), mm |");
+        println!("|---|---|---|---|---|---|");
         for (train_reps, test_rep) in &folds {
             let mut train = pick(&all, train_reps);
             train.extend(pick(&width_plates, train_reps));
             let test = pick(&all, &[*test_rep]);
             let model = TactileModel::train(&train, Some(experiment), &config, &mut |_, _, _| {})?;
             let report = evaluate_model_recordings(&model, &test)?;
+            let moved = evaluate_model_recordings(&model, &offsets_moved(&test))?;
             let mut plates = String::from("–");
             if !width_plates.is_empty() {
                 let r = evaluate_model_recordings(&model, &pick(&width_plates, &[*test_rep]))?;
@@ -100,11 +146,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 width = format!("{:.2} / {:.2} / {:.2}", mean / n, mode / n, reg / n);
             }
             println!(
-                "| {:?} → {} | {:.1} % | {:.1} % | {} | {} |",
+                "| {:?} → {} | {:.1} % | {:.1} % | {:.1} % / {:.1} % | {} | {} |",
                 train_reps,
                 test_rep,
                 100.0 * report.window_accuracy,
                 100.0 * report.slide_accuracy,
+                100.0 * moved.window_accuracy,
+                100.0 * moved.slide_accuracy,
                 plates,
                 width
             );

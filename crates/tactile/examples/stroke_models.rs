@@ -109,6 +109,7 @@ fn train(
         n_trees: 32,
         max_depth: Some(10),
         seed: 1,
+        ..TrainConfig::default()
     };
     Ok(TactileModel::train_with_pipeline(
         recs,

@@ -14,10 +14,10 @@ use std::time::Instant;
 
 use crackbot_dsp::WindowConfig;
 use crackbot_recording::{collect_recordings, Recording};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::context::ContextConfig;
-use crate::dataset::{choose_experiment, Experiment, PipelineConfig};
+use crate::dataset::{choose_experiment, Experiment, PipelineConfig, WindowSet};
 use crate::eval::{
     check_n_trees, test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
     width_regression_tuned, ClassificationOutcome, ClassifierKind, ForestTuning, WidthOutcome,
@@ -26,14 +26,28 @@ use crate::model::TactileModel;
 use crate::TactileError;
 
 /// Who decides a slide's verdict when the windows carry context features.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum SlideVote {
     /// The context forest and a forest on the paper's window features: their slide means are summed
     /// ([`test_classifier_with_slide_voters`]).
     #[default]
     Both,
-    /// The context forest alone.
+    /// The context forest alone. Every context feature is relative to the slide's own baseline,
+    /// so the verdict does not move with the offsets that the fibres' mounting puts on the
+    /// channels; the paper's window features are absolute counts, and a forest on them learns
+    /// each plate's offsets along with its surface.
     Context,
+}
+
+impl SlideVote {
+    /// How the reports name it: `context+paper` or `context`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SlideVote::Both => "context+paper",
+            SlideVote::Context => "context",
+        }
+    }
 }
 
 /// What [`evaluate`] does.
@@ -287,11 +301,12 @@ pub fn evaluate_model_recordings(
     let pipeline = model.pipeline()?;
     let test_set = pipeline.build_windows(test, experiment)?;
     let vote_test = pipeline.without_context().build_windows(test, experiment)?;
-    let outcome = test_classifier_with_slide_voters(
-        &model.context_forest,
-        &test_set,
-        &[(&model.window_forest, &vote_test)],
-    )?;
+    let voters: &[(&(dyn crackbot_forest::Classifier + Send + Sync), &WindowSet)] =
+        match model.header.slide_vote {
+            SlideVote::Both => &[(&model.window_forest, &vote_test)],
+            SlideVote::Context => &[],
+        };
+    let outcome = test_classifier_with_slide_voters(&model.context_forest, &test_set, voters)?;
     let width = match &model.width {
         Some(w) => Some(crate::eval::width_outcome(w, &test_set)?),
         None => None,
@@ -312,7 +327,7 @@ pub fn evaluate_model_recordings(
                 min_samples_leaf: None,
             },
             n_features: test_set.n_features,
-            slide_vote: "context+paper",
+            slide_vote: h.slide_vote.name(),
             test_recordings: test.len(),
             test_windows: test_set.n_rows(),
             train_recordings: h.training.recordings.len(),

@@ -6,7 +6,11 @@
 //! * the **context forest** on the causal context features of each window ([`crate::context`],
 //!   computed online by [`crate::stream::StreamingContext`]);
 //! * the **window forest** on the paper's own window features (MAV of D1, D2, P), whose slide mean
-//!   joins the slide verdict (see [`crate::eval::test_classifier_with_slide_voters`]);
+//!   joins the slide verdict where the header's [`ModelHeader::slide_vote`] is
+//!   [`SlideVote::Both`] (see [`crate::eval::test_classifier_with_slide_voters`]). The window
+//!   features are absolute counts, so that forest also learns each plate's fibre offsets: the
+//!   committed width model votes with the context forest alone (`models/tactile/MODEL_CARD.md`,
+//!   "Who votes");
 //! * for the width experiment, a **width regressor** (mm) on the context features;
 //! * the **unknown-surface gate** ([`UnknownGate`]), fitted on the training windows;
 //! * the pipeline (segmentation, windows, features, context) and what it was trained on.
@@ -31,6 +35,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::context::ContextConfig;
 use crate::dataset::{detect_experiment, Experiment, Pipeline, PipelineConfig, WindowSet};
+pub use crate::evaluation::SlideVote;
 use crate::TactileError;
 
 /// Magic number at the start of every model file.
@@ -60,15 +65,20 @@ pub struct TrainConfig {
     pub max_depth: Option<usize>,
     /// Seed of the forests.
     pub seed: u64,
+    /// Who decides a slide's verdict ([`ModelHeader::slide_vote`]). Files written before this
+    /// setting existed read as [`SlideVote::Both`], the way they vote.
+    #[serde(default)]
+    pub slide_vote: SlideVote,
 }
 
 impl Default for TrainConfig {
-    /// 100 trees, fully grown, seed 1.
+    /// 100 trees, fully grown, seed 1, both forests voting.
     fn default() -> Self {
         TrainConfig {
             n_trees: 100,
             max_depth: None,
             seed: 1,
+            slide_vote: SlideVote::Both,
         }
     }
 }
@@ -297,6 +307,11 @@ pub struct ModelHeader {
     pub n_window_features: usize,
     /// The unknown-surface gate.
     pub gate: UnknownGate,
+    /// Who decides a slide's verdict: the context forest alone ([`SlideVote::Context`]), or the
+    /// context forest and the window forest, their slide means summed ([`SlideVote::Both`]; what
+    /// files written before this field do, hence the default).
+    #[serde(default)]
+    pub slide_vote: SlideVote,
     /// What it was trained on.
     pub training: TrainingInfo,
     /// The forests that follow the header, in order.
@@ -415,6 +430,7 @@ impl TactileModel {
             n_window_features: window_set.n_features,
             pipeline: pipeline_config,
             gate,
+            slide_vote: config.slide_vote,
             training: TrainingInfo {
                 recordings: recordings
                     .iter()

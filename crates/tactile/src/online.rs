@@ -4,10 +4,11 @@
 //! it updates the context features ([`StreamingContext`]) and the paper's window features
 //! ([`StreamingFeatures`]), keeps both rows of every sample of the slide in buffers reused from
 //! slide to slide (nothing is allocated per window once the longest slide has been seen), and
-//! every `step` samples classifies the newest window with both forests into a **running verdict**.
+//! every `step` samples classifies the newest window with the voting forests (the context forest,
+//! and the window forest where the model's [`SlideVote`] is `Both`) into a **running verdict**.
 //! [`OnlineClassifier::end_slide`] segments the slide (the paper's eq. 2 on P, as offline), takes
 //! the windows of the segment — the very windows `crackbot tactile eval` takes — and returns the
-//! **slide verdict**: the class of the largest summed slide mean of the two forests (the offline
+//! **slide verdict**: the class of the largest summed slide mean of the voting forests (the offline
 //! arithmetic, so the verdict and its probabilities equal the offline ones bit for bit; a test
 //! checks it on real recordings), its confidence, the width (the vote's posterior mean and
 //! standard deviation over the classes' widths, and the regressor's median with a robust spread) and, when the surface or the signals are unlike training, a [`Doubt`].
@@ -18,7 +19,7 @@ use crackbot_recording::Recording;
 use serde::Serialize;
 
 use crate::dataset::Segmentation;
-use crate::model::{Doubt, TactileModel};
+use crate::model::{Doubt, SlideVote, TactileModel};
 use crate::stream::StreamingContext;
 use crate::TactileError;
 
@@ -27,7 +28,7 @@ use crate::TactileError;
 pub struct RunningVerdict {
     /// Class index of the largest mean vote so far.
     pub class: u32,
-    /// Its vote (mean of both forests' mean probabilities), 0–1.
+    /// Its vote (the mean over the voting forests of their mean probabilities), 0–1.
     pub confidence: f64,
     /// Windows classified so far in this slide.
     pub windows: usize,
@@ -60,9 +61,10 @@ pub struct SlideVerdict {
     pub name: String,
     /// Class label (class id, or crack width in mm).
     pub label: f64,
-    /// The winning class's vote: the mean of the two forests' slide means, 0–1.
+    /// The winning class's vote: the mean of the voting forests' slide means, 0–1.
     pub confidence: f64,
-    /// Summed slide means of both forests, per class (0–2), as offline.
+    /// Summed slide means of the voting forests, per class (0–1 with the context forest alone,
+    /// 0–2 with both), as offline.
     pub votes: Vec<f64>,
     /// Width experiment: the regressor's estimate.
     pub width: Option<WidthEstimate>,
@@ -100,6 +102,8 @@ pub struct OnlineClassifier<'m> {
     n_ctx: usize,
     n_win: usize,
     k: usize,
+    /// Whether the window forest votes ([`SlideVote::Both`]).
+    window_votes: bool,
     min_slide_len: usize,
     samples: Vec<[f64; 4]>,
     positions: Vec<f64>,
@@ -144,6 +148,7 @@ impl<'m> OnlineClassifier<'m> {
             window,
             window_cfg,
             k,
+            window_votes: model.header.slide_vote == SlideVote::Both,
             min_slide_len: pipeline.min_slide_len.max(1),
             samples: Vec::new(),
             positions: Vec::new(),
@@ -162,6 +167,15 @@ impl<'m> OnlineClassifier<'m> {
     /// The model.
     pub fn model(&self) -> &TactileModel {
         self.model
+    }
+
+    /// Forests whose slide means are summed into a vote (1 or 2).
+    fn voters(&self) -> f64 {
+        if self.window_votes {
+            2.0
+        } else {
+            1.0
+        }
     }
 
     /// Forgets every earlier slide (the context spans stop reaching back).
@@ -220,11 +234,13 @@ impl<'m> OnlineClassifier<'m> {
         for (r, &p) in self.running.iter_mut().zip(&self.proba[..k]) {
             *r += f64::from(p);
         }
-        self.model
-            .window_forest
-            .predict_proba_into(win, &mut self.proba);
-        for (r, &p) in self.running.iter_mut().zip(&self.proba[..k]) {
-            *r += f64::from(p);
+        if self.window_votes {
+            self.model
+                .window_forest
+                .predict_proba_into(win, &mut self.proba);
+            for (r, &p) in self.running.iter_mut().zip(&self.proba[..k]) {
+                *r += f64::from(p);
+            }
         }
         self.running_windows += 1;
         let n = self.running_windows as f64;
@@ -244,7 +260,7 @@ impl<'m> OnlineClassifier<'m> {
                 );
         Ok(Some(RunningVerdict {
             class: class as u32,
-            confidence: best / (2.0 * n),
+            confidence: best / (self.voters() * n),
             windows: self.running_windows,
         }))
     }
@@ -301,16 +317,22 @@ impl<'m> OnlineClassifier<'m> {
             self.model
                 .context_forest
                 .predict_proba_into(ctx, &mut ctx_part[j * k..(j + 1) * k]);
-            let win = &self.win_rows[e * self.n_win..(e + 1) * self.n_win];
-            self.model
-                .window_forest
-                .predict_proba_into(win, &mut win_part[j * k..(j + 1) * k]);
+            if self.window_votes {
+                let win = &self.win_rows[e * self.n_win..(e + 1) * self.n_win];
+                self.model
+                    .window_forest
+                    .predict_proba_into(win, &mut win_part[j * k..(j + 1) * k]);
+            }
             novel += usize::from(self.model.header.gate.is_novel(ctx));
         }
-        let votes = slide_means(&[ctx_part, win_part], m, k);
+        let votes = if self.window_votes {
+            slide_means(&[ctx_part, win_part], m, k)
+        } else {
+            slide_means(&[ctx_part], m, k)
+        };
         let votes32: Vec<f32> = votes.iter().map(|&v| v as f32).collect();
         let class = crackbot_forest::argmax(&votes32);
-        let confidence = votes.get(class as usize).copied().unwrap_or(0.0) / 2.0;
+        let confidence = votes.get(class as usize).copied().unwrap_or(0.0) / self.voters();
         let width = match &self.model.width {
             None => None,
             Some(reg) => {

@@ -1,6 +1,7 @@
 //! The deployed model: trained, written, read back; corrupt, truncated and mismatched files are
 //! refused with a clear error; online classification (sample by sample) gives the offline slide
-//! verdicts bit for bit on real recordings, under random chunking of the stream too.
+//! verdicts bit for bit on real recordings, under random chunking of the stream too, with either
+//! slide vote; the context vote does not move with the fibres' offsets.
 
 // Helpers shared by the tests unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
@@ -8,10 +9,11 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use crackbot_forest::Classifier;
 use crackbot_recording::{collect_recordings, Recording};
-use crackbot_tactile::dataset::Experiment;
+use crackbot_tactile::dataset::{Experiment, WindowSet};
 use crackbot_tactile::eval::test_classifier_with_slide_voters;
-use crackbot_tactile::evaluation::evaluate_model_recordings;
+use crackbot_tactile::evaluation::{evaluate_model_recordings, SlideVote};
 use crackbot_tactile::model::{TactileModel, TrainConfig, FORMAT_VERSION, MAGIC};
 use crackbot_tactile::online::{classify_recording, OnlineClassifier};
 use crackbot_tactile::TactileError;
@@ -26,23 +28,49 @@ fn type_recordings(rep: u32) -> Vec<(PathBuf, Recording)> {
         .collect()
 }
 
-/// A small recognition model trained on repetition 1 (shared by the tests).
+/// A small recognition model trained on repetition 1, voting with the context forest alone (the
+/// default; shared by the tests).
 fn model() -> &'static TactileModel {
     static MODEL: OnceLock<TactileModel> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let config = TrainConfig {
-            n_trees: 12,
-            max_depth: Some(10),
-            seed: 3,
-        };
-        TactileModel::train(
-            &type_recordings(1),
-            Some(Experiment::Recognition),
-            &config,
-            &mut |_, _, _| {},
-        )
-        .unwrap()
-    })
+    MODEL.get_or_init(|| small_model(SlideVote::Context))
+}
+
+/// The same model with the window forest voting too.
+fn model_voting_both() -> &'static TactileModel {
+    static MODEL: OnceLock<TactileModel> = OnceLock::new();
+    MODEL.get_or_init(|| small_model(SlideVote::Both))
+}
+
+fn small_model(slide_vote: SlideVote) -> TactileModel {
+    let config = TrainConfig {
+        n_trees: 12,
+        max_depth: Some(10),
+        seed: 3,
+        slide_vote,
+    };
+    TactileModel::train(
+        &type_recordings(1),
+        Some(Experiment::Recognition),
+        &config,
+        &mut |_, _, _| {},
+    )
+    .unwrap()
+}
+
+/// `recordings` with a constant added to D1, D2 and D3 of each (as a remounted fibre shifts them).
+fn shifted(recordings: &[(PathBuf, Recording)], by: [f64; 3]) -> Vec<(PathBuf, Recording)> {
+    recordings
+        .iter()
+        .map(|(p, rec)| {
+            let mut rec = rec.clone();
+            for r in &mut rec.rows {
+                r.d1 += by[0];
+                r.d2 += by[1];
+                r.d3 += by[2];
+            }
+            (p.clone(), rec)
+        })
+        .collect()
 }
 
 #[test]
@@ -108,7 +136,12 @@ fn a_model_round_trips_and_bad_files_are_refused_by_name() {
 
 #[test]
 fn online_slide_verdicts_equal_the_offline_ones_bit_for_bit() {
-    let m = model();
+    for m in [model(), model_voting_both()] {
+        online_equals_offline(m);
+    }
+}
+
+fn online_equals_offline(m: &TactileModel) {
     let test = type_recordings(2);
     let pipeline = m.pipeline().unwrap();
     let ctx = pipeline
@@ -118,10 +151,13 @@ fn online_slide_verdicts_equal_the_offline_ones_bit_for_bit() {
         .without_context()
         .build_windows(&test, Experiment::Recognition)
         .unwrap();
-    let offline =
-        test_classifier_with_slide_voters(&m.context_forest, &ctx, &[(&m.window_forest, &win)])
-            .unwrap();
+    let voters: &[(&(dyn Classifier + Send + Sync), &WindowSet)] = match m.header.slide_vote {
+        SlideVote::Both => &[(&m.window_forest, &win)],
+        SlideVote::Context => &[],
+    };
+    let offline = test_classifier_with_slide_voters(&m.context_forest, &ctx, voters).unwrap();
     let report = evaluate_model_recordings(m, &test).unwrap();
+    assert_eq!(report.slide_vote, m.header.slide_vote.name());
     assert_eq!(report.slide_confusion, offline.slides.rows());
     // Online: every classified slide's verdict is the offline one.
     let mut online_confusion = vec![vec![0u64; 4]; 4];
@@ -145,6 +181,30 @@ fn online_slide_verdicts_equal_the_offline_ones_bit_for_bit() {
     }
     assert_eq!(online_confusion, offline.slides.rows());
     assert!(compared >= 40, "{compared}");
+}
+
+/// Every context feature is relative to the slide's baseline: a model voting with the context
+/// forest alone gives the same votes, bit for bit, when the deformation channels are shifted by
+/// whole counts (a remounted fibre). The window forest's absolute features do not: the model
+/// voting with both changes its votes.
+#[test]
+fn context_votes_do_not_move_with_the_fibres_offsets() {
+    let test = type_recordings(2);
+    let moved = shifted(&test, [11.0, -9.0, 7.0]);
+    let votes = |m: &TactileModel, set: &[(PathBuf, Recording)]| -> Vec<Vec<f64>> {
+        set.iter()
+            .flat_map(|(_, rec)| classify_recording(m, rec).unwrap())
+            .flatten()
+            .map(|v| v.votes)
+            .collect()
+    };
+    let before = votes(model(), &test);
+    assert!(before.len() >= 40, "{}", before.len());
+    assert_eq!(votes(model(), &moved), before);
+    assert_ne!(
+        votes(model_voting_both(), &moved),
+        votes(model_voting_both(), &test)
+    );
 }
 
 #[test]
@@ -223,6 +283,7 @@ fn width_of_an_unseen_repetition_is_measured_with_a_covering_uncertainty() {
         n_trees: 32,
         max_depth: Some(10),
         seed: 1,
+        ..TrainConfig::default()
     };
     let m =
         TactileModel::train(&train, Some(Experiment::Width), &config, &mut |_, _, _| {}).unwrap();
@@ -264,4 +325,17 @@ fn training_times_to_the_millisecond_read_back_exactly() {
             serde_json::from_str(&serde_json::to_string(&x).expect("json")).expect("a number");
         assert_eq!(back.to_bits(), x.to_bits(), "{x}");
     }
+}
+
+/// The committed models: the recognition model was written before the header said who votes
+/// and reads as both forests voting (as it was trained to); the width model votes with the
+/// context forest alone (models/tactile/MODEL_CARD.md, "Who votes").
+#[test]
+fn the_committed_models_vote_as_their_card_says() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/tactile");
+    let recognition = TactileModel::load(&dir.join("recognition.ctm")).unwrap();
+    assert_eq!(recognition.header.slide_vote, SlideVote::Both);
+    let width = TactileModel::load(&dir.join("width.ctm")).unwrap();
+    assert_eq!(width.header.slide_vote, SlideVote::Context);
+    assert_eq!(width.header.training.config.slide_vote, SlideVote::Context);
 }
