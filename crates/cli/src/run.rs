@@ -39,12 +39,13 @@ pub struct RunArgs {
     /// time (crates/mission/EXPERIMENTS.md).
     #[arg(long, default_value_t = 1)]
     pub passes: u32,
-    /// Shortest stroke across a candidate, mm (default: the scene's manipulator stroke, 16 mm
-    /// in the paper); a wide candidate still gets a stroke that starts and ends on sound surface.
+    /// Shortest stroke across a candidate, mm (default: 10, or the scene's manipulator stroke
+    /// if shorter; the paper's is 16); a wide candidate still gets a stroke that starts and
+    /// ends on sound surface.
     #[arg(long)]
     pub stroke_mm: Option<f64>,
     /// Sound surface wanted beyond a candidate's edge and the tip on each side of its stroke,
-    /// mm [default: 2].
+    /// mm [default: 0.5].
     #[arg(long)]
     pub margin_mm: Option<f64>,
     /// γ of the tactile-only scan (the paper's eq. 2), in (0, 1).

@@ -39,11 +39,11 @@ pub struct Common {
     /// Slide speed, mm/s (default: 4.6, the speed of the authors' recordings).
     #[arg(long)]
     slide_speed: Option<f64>,
-    /// Shortest stroke across a candidate, mm (default: 16, the paper's).
+    /// Shortest stroke across a candidate, mm (default: 10; the paper's is 16).
     #[arg(long)]
     stroke_mm: Option<f64>,
     /// Sound surface wanted beyond a candidate's edge and the tip on each side of its stroke,
-    /// mm (default: 2).
+    /// mm (default: 0.5).
     #[arg(long)]
     margin_mm: Option<f64>,
     /// What the finger touches: every crack a detection holds (cracks) or every detection once
