@@ -5,27 +5,33 @@
 //! is *simple* (Yokoi's 8-connectivity number is 1) and not a line end, so a crack never breaks
 //! or vanishes (plain Zhang–Suen erases 2 × 2 squares and two-pixel diagonals).
 
-/// The 8 neighbours of pixel `(x, y)` of a row-major `width`-wide image, counter-clockwise from
-/// east: E, NE, N, NW, W, SW, S, SE (y grows downwards). Pixels outside the image are `false`.
-pub fn neighbours(pixels: &[bool], width: usize, x: isize, y: isize) -> [bool; 8] {
+/// The offsets `(dx, dy)` of the 8 neighbours, counter-clockwise from east: E, NE, N, NW, W,
+/// SW, S, SE (y grows downwards); the order of [`neighbours`].
+pub const NEIGHBOUR_OFFSETS: [(isize, isize); 8] = [
+    (1, 0),
+    (1, -1),
+    (0, -1),
+    (-1, -1),
+    (-1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+];
+
+/// Pixel `(x, y)` of a row-major `width`-wide image; `false` outside the image.
+pub fn pixel(pixels: &[bool], width: usize, x: isize, y: isize) -> bool {
     let height = pixels.len() / width.max(1);
-    let get = |x: isize, y: isize| {
-        x >= 0
-            && y >= 0
-            && (x as usize) < width
-            && (y as usize) < height
-            && pixels[y as usize * width + x as usize]
-    };
-    [
-        get(x + 1, y),
-        get(x + 1, y - 1),
-        get(x, y - 1),
-        get(x - 1, y - 1),
-        get(x - 1, y),
-        get(x - 1, y + 1),
-        get(x, y + 1),
-        get(x + 1, y + 1),
-    ]
+    x >= 0
+        && y >= 0
+        && (x as usize) < width
+        && (y as usize) < height
+        && pixels[y as usize * width + x as usize]
+}
+
+/// The 8 neighbours of pixel `(x, y)` of a row-major `width`-wide image, in the order of
+/// [`NEIGHBOUR_OFFSETS`]. Pixels outside the image are `false`.
+pub fn neighbours(pixels: &[bool], width: usize, x: isize, y: isize) -> [bool; 8] {
+    NEIGHBOUR_OFFSETS.map(|(dx, dy)| pixel(pixels, width, x + dx, y + dy))
 }
 
 /// Yokoi's 8-connectivity number: 1 exactly when removing the pixel keeps the foreground's

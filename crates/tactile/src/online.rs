@@ -1,8 +1,8 @@
 //! Online classification with a deployed [`TactileModel`]: samples in, verdicts out.
 //!
 //! [`OnlineClassifier::push`] takes one sample (and the arm's position along the slide) at a time:
-//! it updates the context features ([`StreamingContext`]) and the paper's window features
-//! ([`StreamingFeatures`]), keeps both rows of every sample of the slide in buffers reused from
+//! it updates the context features ([`StreamingContext`]) and, where the window forest votes, the
+//! paper's window features ([`StreamingFeatures`]), keeps the rows of every sample of the slide in buffers reused from
 //! slide to slide (nothing is allocated per window once the longest slide has been seen), and
 //! every `step` samples classifies the newest window with the voting forests (the context forest,
 //! and the window forest where the model's [`SlideVote`] is `Both`) into a **running verdict**.
@@ -208,26 +208,27 @@ impl<'m> OnlineClassifier<'m> {
         position_mm: f64,
     ) -> Result<Option<RunningVerdict>, TactileError> {
         self.context.push(sample, direction)?;
-        let win = self.window.push(sample).map_err(TactileError::Pipeline)?;
+        // The paper's window features, only where the window forest votes.
+        if self.window_votes {
+            match self.window.push(sample).map_err(TactileError::Pipeline)? {
+                Some(row) => self.win_rows.extend_from_slice(row),
+                None => self.win_rows.extend(std::iter::repeat_n(0.0, self.n_win)),
+            }
+        }
         let i = self.samples.len();
         self.samples.push(sample);
         self.positions.push(position_mm);
         self.p.push(sample[3]);
         let len = self.window_cfg.len;
-        match win {
-            Some(row) => self.win_rows.extend_from_slice(row),
-            None => self.win_rows.extend(std::iter::repeat_n(0.0, self.n_win)),
-        }
         let at = self.ctx_rows.len();
         self.ctx_rows.resize(at + self.n_ctx, 0.0);
         self.context.row_into(&mut self.ctx_rows[at..])?;
         if i + 1 < len || !(i + 1 - len).is_multiple_of(self.window_cfg.step) {
             return Ok(None);
         }
-        // The running verdict: both forests on the newest window.
+        // The running verdict: the voting forests on the newest window.
         let k = self.k;
         let ctx = &self.ctx_rows[at..at + self.n_ctx];
-        let win = &self.win_rows[i * self.n_win..(i + 1) * self.n_win];
         self.model
             .context_forest
             .predict_proba_into(ctx, &mut self.proba);
@@ -235,6 +236,7 @@ impl<'m> OnlineClassifier<'m> {
             *r += f64::from(p);
         }
         if self.window_votes {
+            let win = &self.win_rows[i * self.n_win..(i + 1) * self.n_win];
             self.model
                 .window_forest
                 .predict_proba_into(win, &mut self.proba);

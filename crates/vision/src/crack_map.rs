@@ -401,6 +401,26 @@ impl Branch {
     }
 }
 
+/// The cells 8-connected to `start` through cells that `take` accepts (and marks as taken, so
+/// it accepts each once), `start` first, in breadth-first order.
+fn grow(
+    start: (isize, isize),
+    mut take: impl FnMut((isize, isize)) -> bool,
+) -> Vec<(isize, isize)> {
+    let mut cells = vec![start];
+    let mut k = 0;
+    while k < cells.len() {
+        let (r, c) = cells[k];
+        k += 1;
+        for (dx, dy) in crackbot_imaging::thinning::NEIGHBOUR_OFFSETS {
+            if take((r + dy, c + dx)) {
+                cells.push((r + dy, c + dx));
+            }
+        }
+    }
+    cells
+}
+
 /// Angle between two directions, degrees.
 fn angle_deg(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] * b[0] + a[1] * b[1])
@@ -426,24 +446,11 @@ fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPie
     }
     let crack = grid.clone();
     crackbot_imaging::thinning::thin(&mut grid, cols);
-    let on = |r: isize, c: isize| {
-        r >= 0
-            && c >= 0
-            && (r as usize) < rows
-            && (c as usize) < cols
-            && grid[r as usize * cols + c as usize]
-    };
-    const AROUND: [(isize, isize); 8] = [
-        (0, 1),
-        (-1, 1),
-        (-1, 0),
-        (-1, -1),
-        (0, -1),
-        (1, -1),
-        (1, 0),
-        (1, 1),
-    ];
-    let degree = |r: isize, c: isize| AROUND.iter().filter(|d| on(r + d.0, c + d.1)).count();
+    use crackbot_imaging::thinning::{neighbours, pixel, NEIGHBOUR_OFFSETS};
+    let on = |r: isize, c: isize| pixel(&grid, cols, c, r);
+    // The neighbour offsets as (row, column).
+    let around = NEIGHBOUR_OFFSETS.map(|(dx, dy)| (dy, dx));
+    let degree = |r: isize, c: isize| neighbours(&grid, cols, c, r).iter().filter(|&&n| n).count();
     // Junction cells (three or more neighbours), grouped into junctions by 8-adjacency.
     let mut junction_of = vec![usize::MAX; rows * cols];
     let mut junction_cells: Vec<Vec<(isize, isize)>> = Vec::new();
@@ -454,23 +461,18 @@ fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPie
                 continue;
             }
             let id = junction_cells.len();
-            let mut group = vec![(r, c)];
             junction_of[i] = id;
-            let mut k = 0;
-            while k < group.len() {
-                let (gr, gc) = group[k];
-                k += 1;
-                for d in AROUND {
-                    let (nr, nc) = (gr + d.0, gc + d.1);
-                    if on(nr, nc) && degree(nr, nc) >= 3 {
-                        let j = nr as usize * cols + nc as usize;
-                        if junction_of[j] == usize::MAX {
-                            junction_of[j] = id;
-                            group.push((nr, nc));
-                        }
-                    }
+            let group = grow((r, c), |(nr, nc)| {
+                if !on(nr, nc) || degree(nr, nc) < 3 {
+                    return false;
                 }
-            }
+                let j = nr as usize * cols + nc as usize;
+                let take = junction_of[j] == usize::MAX;
+                if take {
+                    junction_of[j] = id;
+                }
+                take
+            });
             junction_cells.push(group);
         }
     }
@@ -486,25 +488,18 @@ fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPie
                 continue;
             }
             // The run's cells, then walk it from one end.
-            let mut run = vec![(r, c)];
             seen[i] = true;
-            let mut k = 0;
-            while k < run.len() {
-                let (gr, gc) = run[k];
-                k += 1;
-                for d in AROUND {
-                    let (nr, nc) = (gr + d.0, gc + d.1);
-                    if on(nr, nc) && !is_junction(nr, nc) {
-                        let j = nr as usize * cols + nc as usize;
-                        if !seen[j] {
-                            seen[j] = true;
-                            run.push((nr, nc));
-                        }
-                    }
+            let run = grow((r, c), |(nr, nc)| {
+                if !on(nr, nc) || is_junction(nr, nc) {
+                    return false;
                 }
-            }
+                let j = nr as usize * cols + nc as usize;
+                let take = !seen[j];
+                seen[j] = true;
+                take
+            });
             let inside = |p: (isize, isize)| {
-                AROUND
+                around
                     .iter()
                     .filter(|d| run.contains(&(p.0 + d.0, p.1 + d.1)))
                     .count()
@@ -524,7 +519,7 @@ fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPie
             loop {
                 let (gr, gc) = ordered[ordered.len() - 1];
                 let mut next = None;
-                for d in [0, 2, 4, 6, 1, 3, 5, 7].map(|k| AROUND[k]) {
+                for d in [0, 2, 4, 6, 1, 3, 5, 7].map(|k| around[k]) {
                     if let Some(k) = run
                         .iter()
                         .position(|&p| p == (gr + d.0, gc + d.1))
@@ -543,7 +538,7 @@ fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPie
                 }
             }
             let touching = |p: (isize, isize)| {
-                AROUND.iter().find_map(|d| {
+                around.iter().find_map(|d| {
                     let (nr, nc) = (p.0 + d.0, p.1 + d.1);
                     (on(nr, nc) && is_junction(nr, nc))
                         .then(|| junction_of[nr as usize * cols + nc as usize])
