@@ -36,7 +36,7 @@ fn planned_slides_take_the_estimated_time_in_the_simulator_and_cross_their_crack
     let settings = Settings {
         slide_speed_mm_s: m.slide_speed_mm_s,
         travel_speed_mm_s: m.travel_speed_mm_s,
-        tip_radius_mm: tip,
+        reach_mm: tip,
         ..Settings::default()
     };
     let planner = Planner::new(ws, Limits::default(), settings.clone()).expect("planner");
@@ -203,7 +203,7 @@ fn a_whole_plan_takes_the_estimated_time_on_the_simulated_controller() {
     let settings = Settings {
         slide_speed_mm_s: scene.manipulator.slide_speed_mm_s,
         travel_speed_mm_s: scene.manipulator.travel_speed_mm_s,
-        tip_radius_mm: scene.sensor.finger.tip_radius_mm,
+        reach_mm: scene.sensor.finger.tip_radius_mm,
         settle_s: 0.0,
         ..Settings::default()
     };

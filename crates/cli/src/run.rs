@@ -39,15 +39,20 @@ pub struct RunArgs {
     /// time (crates/mission/EXPERIMENTS.md).
     #[arg(long, default_value_t = 1)]
     pub passes: u32,
-    /// Shortest stroke across a candidate, mm (default: 10, or the scene's manipulator stroke
+    /// Shortest stroke across a candidate, mm (default: 6, or the scene's manipulator stroke
     /// if shorter; the paper's is 16); a wide candidate still gets a stroke that starts and
     /// ends on sound surface.
     #[arg(long)]
     pub stroke_mm: Option<f64>,
-    /// Sound surface wanted beyond a candidate's edge and the tip on each side of its stroke,
+    /// Sound surface wanted beyond a candidate's edge and the finger's reach on each side of its stroke,
     /// mm [default: 0.5].
     #[arg(long)]
     pub margin_mm: Option<f64>,
+    /// How far beyond a candidate's edge the finger still feels it, mm: each stroke starts and
+    /// ends this far plus the margin beyond the edge [default: the proximity fibre's reach,
+    /// 2.4 mm for the simulated finger; 4.4 keeps the whole tip on sound surface].
+    #[arg(long)]
+    pub reach_mm: Option<f64>,
     /// γ of the tactile-only scan (the paper's eq. 2), in (0, 1).
     #[arg(long, default_value_t = 0.5)]
     pub gamma: f64,
@@ -187,6 +192,9 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
     config.planner.passes = args.passes;
     if let Some(v) = args.stroke_mm {
         config.planner.min_stroke_mm = v;
+    }
+    if let Some(v) = args.reach_mm {
+        config.planner.reach_mm = v;
     }
     if let Some(v) = args.margin_mm {
         config.planner.margin_mm = v;

@@ -39,13 +39,18 @@ pub struct Common {
     /// Slide speed, mm/s (default: 4.6, the speed of the authors' recordings).
     #[arg(long)]
     slide_speed: Option<f64>,
-    /// Shortest stroke across a candidate, mm (default: 10; the paper's is 16).
+    /// Shortest stroke across a candidate, mm (default: 6; the paper's is 16).
     #[arg(long)]
     stroke_mm: Option<f64>,
-    /// Sound surface wanted beyond a candidate's edge and the tip on each side of its stroke,
+    /// Sound surface wanted beyond a candidate's edge and the finger's reach on each side of its stroke,
     /// mm (default: 0.5).
     #[arg(long)]
     margin_mm: Option<f64>,
+    /// How far beyond a candidate's edge the finger still feels it, mm: each stroke starts and
+    /// ends this far plus the margin beyond the edge (default: the proximity fibre's reach,
+    /// 2.4 mm; 4.4 keeps the whole tip on sound surface).
+    #[arg(long)]
+    reach_mm: Option<f64>,
     /// What the finger touches: every crack a detection holds (cracks) or every detection once
     /// across its main axis (detections).
     #[arg(long, default_value = "cracks", value_parser = ["cracks", "detections"])]
@@ -125,6 +130,9 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
     if let Some(v) = common.margin_mm {
         template.planner.margin_mm = v;
         template.planner.min_margin_mm = template.planner.min_margin_mm.min(v);
+    }
+    if let Some(v) = common.reach_mm {
+        template.planner.reach_mm = v;
     }
     if let Some(v) = common.slide_speed {
         template.planner.slide_speed_mm_s = v;

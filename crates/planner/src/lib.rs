@@ -50,9 +50,9 @@
 //!   nearest the start.
 //! * [`Planner::targeted`]: per candidate one slide perpendicular to its main axis through its
 //!   centre (or [`Settings::along_spacing_mm`]-spaced slides along it), from sound surface to
-//!   sound surface: `width/2 + tip radius + margin` each side of the crack's centre line (at least
+//!   sound surface: `width/2 + reach + margin` each side of the crack's centre line (at least
 //!   half the paper's 16 mm stroke). A slide the workspace cuts is shifted along itself or
-//!   shortened, as long as `min_margin_mm` of sound surface stays beyond the tip on both sides;
+//!   shortened, as long as `min_margin_mm` of sound surface stays beyond the reach on both sides;
 //!   else moved along the crack to where it fits; else the candidate is listed as unreachable
 //!   (or refused, [`OnUnreachable::Error`]). Every endpoint lies inside the workspace, and since
 //!   the workspace is a rectangle, so does every straight move between them. Overlapping

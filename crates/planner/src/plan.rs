@@ -27,9 +27,10 @@ pub struct Slide {
     pub speed_mm_s: f64,
     /// [`slide_time_s`] of this slide, s (settling not included).
     pub duration_s: f64,
-    /// For a candidate: the run with the whole tip on sound surface before it reaches the
-    /// crack's edge, at the start side and at the end side, mm
-    /// (`distance to the crack's edge − tip radius`); `None` for scan rows.
+    /// For a candidate: the run on sound surface before the finger's reach meets the crack's
+    /// edge, at the start side and at the end side, mm
+    /// (`distance to the crack's edge − reach`, [`crate::Settings::reach_mm`]); `None` for scan
+    /// rows.
     pub sound_run_mm: Option<[f64; 2]>,
     /// How far the slide was shifted along itself to stay inside the workspace, mm (0: centred
     /// on the crack).

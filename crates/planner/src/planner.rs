@@ -37,7 +37,7 @@ pub enum OnUnreachable {
 }
 
 /// How the finger moves and how slides are laid out. Defaults: the paper's slide speed and
-/// stroke, the simulator's travel speed and fitted tip radius.
+/// stroke, the simulator's travel speed and fitted tip radius (as the finger's reach).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Settings {
@@ -58,13 +58,19 @@ pub struct Settings {
     pub passes: u32,
     /// One-way passes per row of the tactile-only scan (1: a boustrophedon sweep).
     pub scan_passes: u32,
-    /// Sound surface wanted beyond the crack's edge and the tip's radius on each side of a
+    /// Sound surface wanted beyond the crack's edge and the finger's reach on each side of a
     /// targeted slide, mm.
     pub margin_mm: f64,
     /// The least sound surface accepted there when the workspace cuts a slide short, mm.
     pub min_margin_mm: f64,
-    /// Radius of the finger's tip, mm (the simulator's fit: 4.4).
-    pub tip_radius_mm: f64,
+    /// How far beyond a crack's edge the finger still feels it, mm: a targeted slide starts and
+    /// ends this far plus the margin beyond the edge. The default is the simulator's fitted tip
+    /// radius (4.4), which keeps the whole tip on sound surface; the proximity fibre, which
+    /// looks 1.8 mm ahead of the tip over a 1.13 mm spot, reaches 2.4 mm
+    /// (`crackbot_mission`'s missions use that). Files written before 2026-11-26 call it
+    /// `tip_radius_mm`.
+    #[serde(alias = "tip_radius_mm")]
+    pub reach_mm: f64,
     /// Shortest targeted stroke, mm (the paper's periodic slide: 16 mm).
     pub min_stroke_mm: f64,
     /// Width assumed for a candidate that gives none, mm (the widest crack of the paper's
@@ -97,7 +103,7 @@ impl Default for Settings {
             scan_passes: 1,
             margin_mm: 10.0,
             min_margin_mm: 2.0,
-            tip_radius_mm: 4.4,
+            reach_mm: 4.4,
             min_stroke_mm: crate::PAPER_STROKE_MM,
             assumed_width_mm: 10.0,
             along_spacing_mm: None,
@@ -211,7 +217,7 @@ impl Planner {
         for (f, v) in [
             ("settings.margin_mm", s.margin_mm),
             ("settings.min_margin_mm", s.min_margin_mm),
-            ("settings.tip_radius_mm", s.tip_radius_mm),
+            ("settings.reach_mm", s.reach_mm),
             ("settings.min_stroke_mm", s.min_stroke_mm),
             ("settings.assumed_width_mm", s.assumed_width_mm),
         ] {
@@ -231,10 +237,10 @@ impl Planner {
                 expected: "at most settings.margin_mm",
             });
         }
-        if s.tip_radius_mm + s.min_margin_mm <= 0.0 {
+        if s.reach_mm + s.min_margin_mm <= 0.0 {
             return Err(PlanError::InvalidParam {
-                field: "settings.tip_radius_mm + settings.min_margin_mm".into(),
-                value: s.tip_radius_mm + s.min_margin_mm,
+                field: "settings.reach_mm + settings.min_margin_mm".into(),
+                value: s.reach_mm + s.min_margin_mm,
                 expected: "> 0 (a slide must start and end off the crack)",
             });
         }
@@ -322,11 +328,11 @@ impl Planner {
             if fitted.is_empty() {
                 let reason = format!(
                     "no slide across it fits in the workspace {} with at least {} mm of sound \
-                     surface beyond the crack's edge and the {} mm tip on both sides (centre \
+                     surface beyond the crack's edge and the finger's {} mm reach on both sides (centre \
                      ({:.3}, {:.3}) mm, axis {:.1}°, length {:.3} mm, width {:.3} mm)",
                     self.workspace,
                     s.min_margin_mm,
-                    s.tip_radius_mm,
+                    s.reach_mm,
                     t.centre[0],
                     t.centre[1],
                     t.axis[1].atan2(t.axis[0]).to_degrees(),
@@ -518,8 +524,8 @@ impl Planner {
     fn sides(&self, width: f64) -> (f64, f64) {
         let s = &self.settings;
         let hw = width / 2.0;
-        let side = (hw + s.tip_radius_mm + s.margin_mm).max(s.min_stroke_mm / 2.0);
-        (side, hw + s.tip_radius_mm + s.min_margin_mm)
+        let side = (hw + s.reach_mm + s.margin_mm).max(s.min_stroke_mm / 2.0);
+        (side, hw + s.reach_mm + s.min_margin_mm)
     }
 
     /// The slide across `t` at `along` on its axis, fitted into the workspace: centred when it
@@ -602,7 +608,7 @@ impl Planner {
     fn variants(&self, t: &Target, fitted: &[Fitted]) -> Vec<Vec<Slide>> {
         let s = &self.settings;
         let n = [-t.axis[1], t.axis[0]];
-        let (hw, tip) = (t.width / 2.0, s.tip_radius_mm);
+        let (hw, tip) = (t.width / 2.0, s.reach_mm);
         let dirs: &[bool] = if fitted.len() > 1 {
             &[true, false]
         } else {

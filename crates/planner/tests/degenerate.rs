@@ -407,7 +407,7 @@ fn settings_and_limits_are_checked_once() {
     })
     .contains("settings.min_margin_mm"));
     assert!(err(Settings {
-        tip_radius_mm: 0.0,
+        reach_mm: 0.0,
         min_margin_mm: 0.0,
         ..Settings::default()
     })
@@ -545,4 +545,9 @@ fn plans_serialise() {
         (4.6, Overlap::Merge, 2)
     );
     assert!(serde_json::from_str::<Settings>(r#"{"slide_speed": 4.6}"#).is_err());
+    // Settings written before the reach was named keep their meaning.
+    let old: Settings = serde_json::from_str(r#"{"tip_radius_mm": 2.5}"#).unwrap();
+    assert_eq!(old.reach_mm, 2.5);
+    let new: Settings = serde_json::from_str(r#"{"reach_mm": 2.5}"#).unwrap();
+    assert_eq!(new, old);
 }

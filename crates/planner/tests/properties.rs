@@ -71,7 +71,7 @@ fn settings(ws: Workspace, limits: Limits) -> impl Strategy<Value = Settings> {
                 margin_mm: margin,
                 min_margin_mm: min_frac * margin,
                 // Keep tip + min margin > 0 (checked by Planner::new).
-                tip_radius_mm: tip.max(0.01),
+                reach_mm: tip.max(0.01),
                 min_stroke_mm: min_stroke,
                 assumed_width_mm: assumed,
                 along_spacing_mm: spacing,

@@ -176,9 +176,20 @@ pub struct InspectConfig {
 
 /// Shortest stroke across a candidate by default, mm (or the scene's manipulator stroke, if
 /// shorter).
-pub const TOUCH_MIN_STROKE_MM: f64 = 10.0;
-/// Sound surface beyond a candidate's edge and the tip on each side of its stroke by default, mm.
+pub const TOUCH_MIN_STROKE_MM: f64 = 6.0;
+/// Sound surface beyond a candidate's edge and the finger's reach on each side of its stroke by
+/// default, mm.
 pub const TOUCH_MARGIN_MM: f64 = 0.5;
+
+/// How far beyond a crack's edge the finger of `sensor` feels it, mm: its proximity fibre looks
+/// `proximity_offset_mm` ahead of the tip over a spot `proximity_spot_mm` wide, so it sees the
+/// crack that much before the tip's centre gets there (2.4 mm for the fitted finger). The tip
+/// itself, a sphere on a flat plate, touches the surface only under its centre and feels the
+/// crack only over it.
+pub fn finger_reach_mm(sensor: &crackbot_sim::SensorParams) -> f64 {
+    let o = &sensor.optics;
+    (o.proximity_offset_mm.abs() + o.proximity_spot_mm.max(0.0) / 2.0).max(0.0)
+}
 
 impl InspectConfig {
     /// A fused mission over `scene` with the committed models, writing into `out_dir`.
@@ -189,15 +200,18 @@ impl InspectConfig {
             // models were trained on (4.6 mm/s, the simulator's fit to them:
             // crates/sim/docs/calibration.md). One stroke per candidate: on the simulated
             // trials it was as accurate as the authors' four (forth and back, twice) at a third
-            // of the time. Each stroke reaches 0.5 mm of sound surface beyond the tip on both
-            // sides of the crack, at least 10 mm in all (not the paper's 16 mm): on 60 trial
-            // scenes as accurate, 13 % faster (EXPERIMENTS.md, "Error against run time").
+            // of the time. Each stroke starts and ends 0.5 mm beyond what the finger can feel of
+            // the crack (its proximity fibre's reach, 2.4 mm past the crack's edge; was the
+            // tip's 4.4 mm radius), at least 6 mm in all (not the paper's 16 mm): on 60 trial
+            // scenes more cracks confirmed and 19-23 % faster (EXPERIMENTS.md, "Strokes as long
+            // as the finger's reach").
             slide_speed_mm_s: crackbot_planner::SIM_SLIDE_SPEED_MM_S,
             passes: 1,
             margin_mm: TOUCH_MARGIN_MM,
             min_margin_mm: TOUCH_MARGIN_MM,
             assumed_width_mm: 2.0,
             min_stroke_mm: TOUCH_MIN_STROKE_MM.min(scene.manipulator.stroke_mm),
+            reach_mm: finger_reach_mm(&scene.sensor),
             settle_s: 0.1,
             ..Settings::default()
         };
@@ -968,4 +982,44 @@ fn mission(
     report.sensor_clock = rig.sensor.sync.fit();
     report.controller_clock = rig.arm.sync.fit();
     Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strokes_reach_as_far_as_the_proximity_fibre_sees_and_no_further() {
+        let scene = Scene::builtin_default();
+        let o = &scene.sensor.optics;
+        let reach = finger_reach_mm(&scene.sensor);
+        // The fitted fibre looks 1.8 mm ahead of the tip over a 1.13 mm spot.
+        assert!((reach - (o.proximity_offset_mm + o.proximity_spot_mm / 2.0)).abs() < 1e-12);
+        assert!((2.0..3.0).contains(&reach), "{reach}");
+        let config = InspectConfig::new(scene.clone(), "unused");
+        assert_eq!(config.planner.reach_mm, reach);
+        assert!(reach < scene.sensor.finger.tip_radius_mm);
+
+        // A 3 mm crack across the middle of the plate: the stroke starts and ends reach +
+        // margin beyond its edges; a 0.1 mm one gets the shortest stroke.
+        let planner = Planner::new(
+            Workspace::new(0.0, 200.0, 0.0, 100.0).unwrap(),
+            Limits::default(),
+            config.planner.clone(),
+        )
+        .unwrap();
+        for (width, stroke) in [
+            (3.0, 3.0 + 2.0 * (reach + TOUCH_MARGIN_MM)),
+            (0.1, TOUCH_MIN_STROKE_MM),
+        ] {
+            let c = Candidate::from_axis(1, [[100.0, 30.0], [100.0, 70.0]], Some(width), 0.9);
+            let plan = planner.targeted(&[c]).unwrap();
+            let s = &plan.slides[0];
+            assert!(
+                (s.stroke_mm - stroke).abs() < 1e-9,
+                "{width} mm: {}",
+                s.stroke_mm
+            );
+        }
+    }
 }
