@@ -281,6 +281,66 @@ pub struct Trial {
     pub finger: FingerBudget,
 }
 
+/// The goal for a fused mission's exploration, s (the paper's vision + tactile trials:
+/// 31.85 s).
+pub const EXPLORATION_GOAL_S: f64 = 15.0;
+
+/// Reports summed over trials.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Totals {
+    /// Reports that match a true crack.
+    pub correct: usize,
+    /// Reports that match none.
+    pub false_reports: usize,
+    /// True cracks without a correct report.
+    pub missed: usize,
+}
+
+impl Totals {
+    fn of<'a>(scores: impl Iterator<Item = &'a Score>) -> Self {
+        scores.fold(Totals::default(), |t, s| Totals {
+            correct: t.correct + s.correct,
+            false_reports: t.false_reports + s.false_reports,
+            missed: t.missed + s.missed,
+        })
+    }
+}
+
+/// Mean, sample standard deviation and range of some values.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Spread {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (0 for one value).
+    pub sd: f64,
+    /// Smallest.
+    pub min: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+impl Spread {
+    /// `None` for no values.
+    pub fn of(values: &[f64]) -> Option<Self> {
+        if values.is_empty() {
+            return None;
+        }
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let var = if values.len() > 1 {
+            values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
+        } else {
+            0.0
+        };
+        Some(Spread {
+            mean,
+            sd: var.sqrt(),
+            min: values.iter().copied().fold(f64::INFINITY, f64::min),
+            max: values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        })
+    }
+}
+
 /// The trials' table.
 #[derive(Debug, Clone, Serialize)]
 pub struct TrialsReport {
@@ -300,6 +360,14 @@ pub struct TrialsReport {
     pub paper: [f64; 2],
     /// The finger's error budget over every trial.
     pub finger: FingerBudget,
+    /// Vision only: reports and misses summed over the trials.
+    pub vision_totals: Totals,
+    /// Vision + tactile: reports and misses summed over the trials.
+    pub fused_totals: Totals,
+    /// The fused missions' exploration times, s (`None` without trials).
+    pub fused_exploration_s: Option<Spread>,
+    /// Fused missions that explored within [`EXPLORATION_GOAL_S`].
+    pub fused_within_goal: usize,
 }
 
 impl TrialsReport {
@@ -324,7 +392,7 @@ impl TrialsReport {
             );
         }
         out += &format!(
-            "\n| | vision only | vision + tactile |\n|---|---|---|\n| correct detections (this run) | {:.1} % | {:.1} % |\n| the paper | {:.2} % | {:.2} % |\n| localisation error of confirmed cracks | – | {} |\n| width error of confirmed cracks (mean absolute) | – | {} |\n",
+            "\n| | vision only | vision + tactile |\n|---|---|---|\n| correct detections (this run) | {:.1} % | {:.1} % |\n| the paper | {:.2} % | {:.2} % |\n| localisation error of confirmed cracks | – | {} |\n| width error of confirmed cracks (mean absolute) | – | {} |\n| correct / false / missed, all trials | {} / {} / {} | {} / {} / {} |\n| exploration, mean ± sd (range) | – | {} |\n| trials explored within {} s | – | {} of {} |\n",
             100.0 * self.vision_correct,
             100.0 * self.fused_correct,
             self.paper[0],
@@ -332,7 +400,20 @@ impl TrialsReport {
             self.fused_localisation_mm
                 .map_or_else(|| "– (no crack confirmed)".to_string(), |v| format!("{v:.2} mm")),
             self.fused_width_mae_mm
-                .map_or_else(|| "– (no width reported)".to_string(), |v| format!("{v:.2} mm"))
+                .map_or_else(|| "– (no width reported)".to_string(), |v| format!("{v:.2} mm")),
+            self.vision_totals.correct,
+            self.vision_totals.false_reports,
+            self.vision_totals.missed,
+            self.fused_totals.correct,
+            self.fused_totals.false_reports,
+            self.fused_totals.missed,
+            self.fused_exploration_s.map_or_else(
+                || "–".to_string(),
+                |e| format!("{:.1} ± {:.1} s ({:.1}–{:.1})", e.mean, e.sd, e.min, e.max)
+            ),
+            EXPLORATION_GOAL_S,
+            self.fused_within_goal,
+            self.trials.len()
         );
         let f = &self.finger;
         let cracks: usize = self.trials.iter().map(|t| t.cracks).sum();
@@ -438,8 +519,16 @@ pub fn detection_trials(
     for t in &trials {
         finger.add(&t.finger);
     }
+    let explored: Vec<f64> = trials.iter().map(|t| t.fused_exploration_s).collect();
     Ok(TrialsReport {
         finger,
+        vision_totals: Totals::of(trials.iter().map(|t| &t.vision)),
+        fused_totals: Totals::of(trials.iter().map(|t| &t.fused)),
+        fused_exploration_s: Spread::of(&explored),
+        fused_within_goal: explored
+            .iter()
+            .filter(|&&e| e <= EXPLORATION_GOAL_S)
+            .count(),
         vision_correct: mean(&|t| t.vision.correct_fraction()),
         fused_correct: mean(&|t| t.fused.correct_fraction()),
         fused_localisation_mm: (!locs.is_empty())
@@ -571,6 +660,10 @@ mod tests {
             fused_width_mae_mm: None,
             paper: [46.66, 92.85],
             finger: FingerBudget::default(),
+            vision_totals: Totals::default(),
+            fused_totals: Totals::default(),
+            fused_exploration_s: None,
+            fused_within_goal: 0,
         };
         let md = t.markdown();
         assert!(
@@ -582,6 +675,47 @@ mod tests {
         assert!(t.markdown().contains("– (no width reported)"));
         t.fused_width_mae_mm = Some(0.75);
         assert!(t.markdown().contains("(mean absolute) | – | 0.75 mm |"));
+        assert!(t
+            .markdown()
+            .contains("| exploration, mean ± sd (range) | – | – |"));
+        t.fused_exploration_s = Spread::of(&[10.0, 14.0, 24.0]);
+        t.fused_within_goal = 2;
+        t.fused_totals = Totals {
+            correct: 5,
+            false_reports: 2,
+            missed: 1,
+        };
+        let md = t.markdown();
+        assert!(md.contains("| – | 16.0 ± 7.2 s (10.0–24.0) |"), "{md}");
+        assert!(
+            md.contains("| trials explored within 15 s | – | 2 of 0 |"),
+            "{md}"
+        );
+        assert!(md.contains("| 0 / 0 / 0 | 5 / 2 / 1 |"), "{md}");
+    }
+
+    #[test]
+    fn spreads_and_totals_add_up() {
+        assert_eq!(Spread::of(&[]), None);
+        let one = Spread::of(&[3.0]).unwrap();
+        assert_eq!((one.mean, one.sd, one.min, one.max), (3.0, 0.0, 3.0, 3.0));
+        let s = Spread::of(&[1.0, 2.0, 3.0, 4.0]).unwrap();
+        assert!((s.sd - 1.2909944487358056).abs() < 1e-12, "{s:?}");
+        let score = |c, f, m| Score {
+            correct: c,
+            false_reports: f,
+            missed: m,
+            ..Score::default()
+        };
+        let scores = [score(1, 2, 3), score(4, 0, 1)];
+        assert_eq!(
+            Totals::of(scores.iter()),
+            Totals {
+                correct: 5,
+                false_reports: 2,
+                missed: 4
+            }
+        );
     }
 
     fn report_with(positions: &[[f64; 2]]) -> InspectReport {
@@ -716,6 +850,10 @@ mod tests {
             fused_width_mae_mm: None,
             paper: [46.66, 92.85],
             finger: b,
+            vision_totals: Totals::default(),
+            fused_totals: Totals::default(),
+            fused_exploration_s: None,
+            fused_within_goal: 0,
         };
         t.finger.add(&b);
         assert_eq!(t.finger.crack, [2, 0]);
