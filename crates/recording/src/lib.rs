@@ -196,6 +196,15 @@ impl Recording {
         out
     }
 
+    /// Adds `by` to D1, D2 and D3 of every row, as a remounted fibre shifts its offsets (P is left alone).
+    pub fn shift_deformation(&mut self, by: [f64; 3]) {
+        for r in &mut self.rows {
+            r.d1 += by[0];
+            r.d2 += by[1];
+            r.d3 += by[2];
+        }
+    }
+
     /// The label ([`Row::label`]) when every row has the same one; `None` when it varies or there are no rows.
     pub fn label(&self) -> Option<f64> {
         let first = self.rows.first()?.label;
@@ -404,6 +413,33 @@ fn create_folder(dir: &Path) -> Result<(), RecordingError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shifting_the_deformation_moves_d1_to_d3_and_nothing_else() {
+        let row = Row {
+            x_mm: 3.0,
+            d1: 1.0,
+            d2: 2.0,
+            d3: 3.0,
+            p: 4.0,
+            direction: 1,
+            slide: 2,
+            label: 5.0,
+            repetition: 1,
+        };
+        let mut r = Recording {
+            rows: vec![row; 3],
+            extra: None,
+        };
+        r.shift_deformation([10.0, -5.0, 0.5]);
+        for got in &r.rows {
+            assert_eq!((got.d1, got.d2, got.d3), (11.0, -3.0, 3.5));
+            assert_eq!(
+                (got.x_mm, got.p, got.direction, got.slide, got.label),
+                (3.0, 4.0, 1, 2, 5.0)
+            );
+        }
+    }
 
     #[test]
     fn width_recordings_read_as_surface_types_and_bad_widths_are_named() {

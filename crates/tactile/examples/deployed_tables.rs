@@ -50,11 +50,7 @@ fn offsets_moved(recs: &Recs) -> Recs {
                     -size
                 }
             });
-            for row in &mut r.rows {
-                row.d1 += by[0];
-                row.d2 += by[1];
-                row.d3 += by[2];
-            }
+            r.shift_deformation(by);
             (p.clone(), r)
         })
         .collect()

@@ -63,11 +63,7 @@ fn shifted(recordings: &[(PathBuf, Recording)], by: [f64; 3]) -> Vec<(PathBuf, R
         .iter()
         .map(|(p, rec)| {
             let mut rec = rec.clone();
-            for r in &mut rec.rows {
-                r.d1 += by[0];
-                r.d2 += by[1];
-                r.d3 += by[2];
-            }
+            rec.shift_deformation(by);
             (p.clone(), rec)
         })
         .collect()

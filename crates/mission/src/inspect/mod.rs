@@ -188,7 +188,7 @@ pub const TOUCH_MARGIN_MM: f64 = 0.5;
 /// crack only over it.
 pub fn finger_reach_mm(sensor: &crackbot_sim::SensorParams) -> f64 {
     let o = &sensor.optics;
-    (o.proximity_offset_mm.abs() + o.proximity_spot_mm.max(0.0) / 2.0).max(0.0)
+    o.proximity_offset_mm.abs() + o.proximity_spot_mm / 2.0
 }
 
 impl InspectConfig {
