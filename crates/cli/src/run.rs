@@ -72,6 +72,11 @@ pub struct RunArgs {
     /// saw no dip (by default a crack must show one).
     #[arg(long)]
     pub confirm_without_dip: bool,
+    /// Fused missions: height of the print check's raised pass over each candidate the finger
+    /// confirmed, mm above the plate (a print's dip keeps its share of the signal there, a
+    /// crack's does not); 0 turns the check off.
+    #[arg(long, default_value_t = crackbot_mission::PRINT_CHECK_HEIGHT_MM)]
+    pub print_check_mm: f64,
     /// Deployed recognition model.
     #[arg(long)]
     pub recognition_model: Option<PathBuf>,
@@ -189,6 +194,8 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
     config.proposal_min_score = args.proposal_min_score;
     config.candidates = args.candidates.parse().map_err(anyhow::Error::msg)?;
     config.require_dip = !args.confirm_without_dip;
+    config.print_check_mm =
+        crackbot_mission::print_check_height(args.print_check_mm).context("--print-check-mm")?;
     config.planner.passes = args.passes;
     if let Some(v) = args.stroke_mm {
         config.planner.min_stroke_mm = v;

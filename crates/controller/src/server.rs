@@ -334,6 +334,7 @@ fn serve(
                     }
                     Message::MoveTo(m) => Some(s.world.move_to(
                         [f64::from(m.pose.x_mm), f64::from(m.pose.y_mm)],
+                        f64::from(m.pose.z_mm),
                         f64::from(m.speed_mm_s),
                     )),
                     Message::Slide(sl) => {

@@ -17,6 +17,12 @@ use serde::Serialize;
 /// Height of the finger above the plate while it travels between slides, mm.
 pub const TRAVEL_HEIGHT_MM: f64 = 5.0;
 
+/// Lowest height a move may hold the finger's tip above the plate's plane, mm (lower would
+/// drag it over the plate's roughness).
+pub const MIN_MOVE_HEIGHT_MM: f64 = 0.5;
+/// Highest height a move may take the finger to, mm.
+pub const MAX_MOVE_HEIGHT_MM: f64 = 50.0;
+
 /// What the controller refuses to do.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Refusal {
@@ -157,6 +163,8 @@ enum Activity {
     Moving {
         from: [f64; 2],
         to: [f64; 2],
+        /// Height of the tip above the plate's plane during the move, mm.
+        z: f64,
         ticks: u64,
         done: u64,
         then: Option<PendingSlide>,
@@ -200,8 +208,11 @@ pub struct World {
     velocity: [f64; 3],
     tick: u64,
     activity: Activity,
-    /// Channel values with the finger lifted (travel, idle), counts.
-    lifted: [f64; 4],
+    /// Deformation channels with the finger lifted (travel, idle), counts. Its proximity
+    /// channel sees the surface below it ([`crackbot_sim::run::hover_view`]).
+    lifted: [f64; 3],
+    /// The way the arm last moved (the proximity fibre looks ahead along it).
+    heading: [f64; 2],
     noise: Normal<f64>,
     rng: ChaCha8Rng,
     seed: u64,
@@ -216,9 +227,9 @@ impl World {
         let limits = Limits::of_scene(scene);
         let surface = scene.surface();
         let reflectivity = scene.plate.material.reflectivity;
-        // The lifted finger: what a slide's first sample reads (at rest, before it moves), on a
-        // clean spot of the plate. The proximity channel then sees the plate from the travel
-        // height; the rest value is close enough for the robot, which classifies slides only.
+        // The lifted finger's deformation channels: what a slide's first sample reads (at rest,
+        // before it moves) on a clean spot of the plate. Its proximity channel is worked out at
+        // each pose from the surface below (`lifted_counts`).
         let probe = SlideSim::new(
             &Surface::flat([200.0, 100.0]),
             reflectivity,
@@ -243,7 +254,8 @@ impl World {
             velocity: [0.0; 3],
             tick: 0,
             activity: Activity::Idle,
-            lifted: probe.counts,
+            lifted: [probe.counts[0], probe.counts[1], probe.counts[2]],
+            heading: [1.0, 0.0],
             noise: Normal::new(0.0, 0.6).map_err(|e| SimError::Invalid(e.to_string()))?,
             rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5eed),
             seed,
@@ -286,11 +298,19 @@ impl World {
         )
     }
 
-    /// Travel to `to` at `speed` (finger lifted). Replaces what the arm was doing.
-    pub fn move_to(&mut self, to: [f64; 2], speed: f64) -> Result<(), Refusal> {
+    /// Travel to `to` at `speed` with the tip held `z` mm above the plate's plane (the finger
+    /// goes to that height first, then moves level). Replaces what the arm was doing.
+    pub fn move_to(&mut self, to: [f64; 2], z: f64, speed: f64) -> Result<(), Refusal> {
         self.limits.check_point("target", to)?;
         Limits::check_speed("travel", speed, self.limits.max_travel_speed_mm_s)?;
-        self.start_move(to, speed, None);
+        if !(MIN_MOVE_HEIGHT_MM..=MAX_MOVE_HEIGHT_MM).contains(&z) {
+            return Err(Refusal::Invalid(format!(
+                "move height {z} mm is not in [{MIN_MOVE_HEIGHT_MM}, {MAX_MOVE_HEIGHT_MM}] mm"
+            )));
+        }
+        // The finger leaves the surface: a later slide starts afresh.
+        self.resting = None;
+        self.start_move(to, z, speed, None);
         Ok(())
     }
 
@@ -320,7 +340,7 @@ impl World {
             speed,
         };
         let speed = self.travel_speed.min(self.limits.max_travel_speed_mm_s);
-        self.start_move(start, speed, Some(pending));
+        self.start_move(start, TRAVEL_HEIGHT_MM, speed, Some(pending));
         Ok(())
     }
 
@@ -331,14 +351,18 @@ impl World {
         self.velocity = [0.0; 3];
     }
 
-    fn start_move(&mut self, to: [f64; 2], speed: f64, then: Option<PendingSlide>) {
+    fn start_move(&mut self, to: [f64; 2], z: f64, speed: f64, then: Option<PendingSlide>) {
         let from = [self.pose[0], self.pose[1]];
         let dist = (to[0] - from[0]).hypot(to[1] - from[1]);
         let ticks = (dist / speed * SAMPLE_RATE_HZ).ceil() as u64;
-        self.pose[2] = TRAVEL_HEIGHT_MM;
+        if dist > 1e-9 {
+            self.heading = [(to[0] - from[0]) / dist, (to[1] - from[1]) / dist];
+        }
+        self.pose[2] = z;
         self.activity = Activity::Moving {
             from,
             to,
+            z,
             ticks,
             done: 0,
             then,
@@ -349,6 +373,7 @@ impl World {
         let d = [p.end[0] - p.start[0], p.end[1] - p.start[1]];
         let len = d[0].hypot(d[1]);
         let dir = [d[0] / len, d[1] / len];
+        self.heading = dir;
         self.slides += 1;
         // Straight back (or forth again) along the line just slid: the finger never left the
         // surface, so its simulation goes on (the wait between the commands is a pause at the
@@ -407,11 +432,27 @@ impl World {
         Ok(())
     }
 
+    /// The channels with the finger off the surface at the current pose: the deformation
+    /// channels at rest, the proximity channel seeing the surface below (noise added).
     fn lifted_counts(&mut self) -> [f64; 4] {
-        let mut c = self.lifted;
-        for v in &mut c {
+        let o = &self.sensor.optics;
+        let view = crackbot_sim::run::hover_view(
+            o,
+            &self.surface,
+            self.reflectivity,
+            [self.pose[0], self.pose[1]],
+            self.heading,
+            self.pose[2],
+        );
+        let p = o.proximity_dark_counts + o.proximity_peak_counts * view.intensity;
+        let p_noise = o.noise_counts[3].max(0.0);
+        let sat = o.saturation_counts;
+        let mut c = [self.lifted[0], self.lifted[1], self.lifted[2], 0.0];
+        for v in &mut c[..3] {
             *v += self.noise.sample(&mut self.rng);
         }
+        let n: f64 = rand::Rng::sample(&mut self.rng, rand_distr::StandardNormal);
+        c[3] = o.saturate((p + p_noise * n).min(sat));
         c
     }
 
@@ -430,6 +471,7 @@ impl World {
             Activity::Moving {
                 from,
                 to,
+                z,
                 ticks,
                 done,
                 then,
@@ -440,7 +482,7 @@ impl World {
                 } else {
                     (*done as f64 / *ticks as f64).min(1.0)
                 };
-                let (from, to, then, arrived) = (*from, *to, *then, *done >= *ticks);
+                let (from, to, z, then, arrived) = (*from, *to, *z, *then, *done >= *ticks);
                 let next = [
                     from[0] + f * (to[0] - from[0]),
                     from[1] + f * (to[1] - from[1]),
@@ -450,7 +492,7 @@ impl World {
                     (next[1] - self.pose[1]) * SAMPLE_RATE_HZ,
                     0.0,
                 ];
-                self.pose = [next[0], next[1], TRAVEL_HEIGHT_MM];
+                self.pose = [next[0], next[1], z];
                 counts = self.lifted_counts();
                 if arrived {
                     match then {
@@ -536,13 +578,15 @@ mod tests {
     fn motion_outside_the_workspace_or_over_the_limits_is_refused_and_nothing_moves() {
         let mut w = world();
         let before = w.pose();
-        let err = w.move_to([250.0, 50.0], 10.0).unwrap_err();
+        let err = w
+            .move_to([250.0, 50.0], TRAVEL_HEIGHT_MM, 10.0)
+            .unwrap_err();
         assert!(matches!(err, Refusal::OutsideWorkspace { .. }), "{err}");
         assert!(err.to_string().contains("250.00"), "{err}");
-        let err = w.move_to([50.0, 50.0], 1e6).unwrap_err();
+        let err = w.move_to([50.0, 50.0], TRAVEL_HEIGHT_MM, 1e6).unwrap_err();
         assert!(matches!(err, Refusal::OverSpeed { .. }), "{err}");
-        assert!(w.move_to([50.0, 50.0], f64::NAN).is_err());
-        assert!(w.move_to([f64::NAN, 50.0], 10.0).is_err());
+        assert!(w.move_to([50.0, 50.0], TRAVEL_HEIGHT_MM, f64::NAN).is_err());
+        assert!(w.move_to([f64::NAN, 50.0], TRAVEL_HEIGHT_MM, 10.0).is_err());
         let err = w.slide(1, [10.0, 10.0], [10.0, 150.0], 3.89).unwrap_err();
         assert!(err.to_string().contains("slide end"), "{err}");
         let err = w.slide(1, [10.0, 10.0], [20.0, 10.0], 100.0).unwrap_err();
@@ -635,7 +679,8 @@ mod tests {
     #[test]
     fn stop_halts_the_arm_where_it_is() {
         let mut w = world();
-        w.move_to([150.0, 80.0], 50.0).expect("move");
+        w.move_to([150.0, 80.0], TRAVEL_HEIGHT_MM, 50.0)
+            .expect("move");
         for _ in 0..100 {
             w.step().expect("step");
         }
@@ -647,5 +692,80 @@ mod tests {
         }
         assert_eq!(w.pose(), here);
         assert!(here[0] > 0.0 && here[0] < 150.0);
+    }
+
+    /// The proximity channel along a level move at height `z` from x = 50 to 130 mm at y = 50,
+    /// as `(x, P)` per tick.
+    fn raised_pass(w: &mut World, z: f64) -> Vec<(f64, f64)> {
+        w.move_to([50.0, 50.0], z, 50.0).expect("to the start");
+        while w.is_busy() {
+            w.step().expect("step");
+        }
+        w.move_to([130.0, 50.0], z, 20.0).expect("the pass");
+        let mut out = Vec::new();
+        while w.is_busy() {
+            let t = w.step().expect("step");
+            assert_eq!(t.pose[2], z);
+            out.push((t.pose[0], t.counts[3]));
+        }
+        out
+    }
+
+    /// The dip's depth over `[x0, x1]` as a share of the flat surface's signal above dark.
+    fn dip_share(pass: &[(f64, f64)], x0: f64, x1: f64, dark: f64) -> f64 {
+        let flat: Vec<f64> = pass
+            .iter()
+            .filter(|(x, _)| *x < 55.0)
+            .map(|(_, p)| *p)
+            .collect();
+        let flat = flat.iter().sum::<f64>() / flat.len() as f64;
+        let floor = pass
+            .iter()
+            .filter(|(x, _)| (x0..=x1).contains(x))
+            .map(|(_, p)| *p)
+            .fold(f64::INFINITY, f64::min);
+        (flat - floor) / (flat - dark)
+    }
+
+    #[test]
+    fn a_raised_finger_sees_ink_darken_alike_at_every_height_and_a_crack_less_higher_up() {
+        use crackbot_sim::Feature;
+        let mut scene = Scene::builtin_default();
+        scene.sensor.optics.noise_counts = [0.0; 4];
+        scene.features = vec![
+            Feature::Decoy {
+                path: vec![[70.0, 30.0], [70.0, 70.0]],
+                width_mm: 3.0,
+                reflectivity: 0.3,
+            },
+            Feature::Crack {
+                path: vec![[110.0, 30.0], [110.0, 70.0]],
+                width_mm: 3.0,
+                depth_mm: 2.5,
+                edge_radius_mm: 0.2,
+                wall_angle_deg: 90.0,
+            },
+        ];
+        let dark = scene.sensor.optics.proximity_dark_counts;
+        let mut w = World::new(&scene, 5).expect("scene");
+        let (low, high) = (raised_pass(&mut w, 1.0), raised_pass(&mut w, 3.0));
+        // The fibre looks 1.8 mm ahead of the tip: the marks show up that much early.
+        let (ink_low, ink_high) = (
+            dip_share(&low, 64.0, 70.0, dark),
+            dip_share(&high, 64.0, 70.0, dark),
+        );
+        let (crack_low, crack_high) = (
+            dip_share(&low, 104.0, 110.0, dark),
+            dip_share(&high, 104.0, 110.0, dark),
+        );
+        assert!((ink_low - 0.7).abs() < 0.03, "{ink_low}");
+        assert!((ink_high - ink_low).abs() < 0.03, "{ink_low} {ink_high}");
+        assert!(crack_low > 0.5, "{crack_low}");
+        assert!(crack_high < 0.85 * crack_low, "{crack_low} {crack_high}");
+        // Heights the arm must not hold are refused.
+        for z in [0.0, 0.2, 60.0, f64::NAN] {
+            let err = w.move_to([60.0, 50.0], z, 20.0).unwrap_err();
+            assert!(matches!(err, Refusal::Invalid(_)), "{err}");
+        }
     }
 }

@@ -59,6 +59,11 @@ pub struct Common {
     /// saw no dip (by default a crack must show one).
     #[arg(long)]
     confirm_without_dip: bool,
+    /// Fused missions: height of the print check's raised pass over each candidate the finger
+    /// confirmed, mm above the plate (a print's dip keeps its share of the signal there, a
+    /// crack's does not); 0 turns the check off.
+    #[arg(long, default_value_t = crackbot_mission::PRINT_CHECK_HEIGHT_MM)]
+    print_check_mm: f64,
     /// Deployed recognition model (default: models/tactile/recognition.ctm).
     #[arg(long)]
     recognition_model: Option<PathBuf>,
@@ -115,6 +120,8 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
     template.proposal_min_score = common.proposal_min_score;
     template.candidates = common.candidates.parse().map_err(anyhow::Error::msg)?;
     template.require_dip = !common.confirm_without_dip;
+    template.print_check_mm =
+        crackbot_mission::print_check_height(common.print_check_mm).context("--print-check-mm")?;
     if let Some(p) = &common.recognition_model {
         template.recognition_model = p.clone();
     }

@@ -751,6 +751,7 @@ mod tests {
                     slides: Vec::new(),
                     votes: Vec::new(),
                     doubts: Vec::new(),
+                    height_ratio: None,
                 },
             });
         }

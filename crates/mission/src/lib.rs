@@ -24,7 +24,10 @@ pub mod inspect;
 pub mod sync;
 
 pub use demo::{run_demo, DemoConfig, DemoReport, DemoSurface};
-pub use inspect::{run_inspection, InspectConfig, InspectMode, InspectReport, Progress};
+pub use inspect::{
+    print_check_height, run_inspection, InspectConfig, InspectMode, InspectReport, Progress,
+    PRINT_CHECK_HEIGHT_MM,
+};
 
 /// Errors of a mission.
 #[derive(Debug, thiserror::Error)]

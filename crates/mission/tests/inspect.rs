@@ -360,3 +360,46 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
         .iter()
         .all(|h| h.state_age_ms.is_some_and(|a| a < 500.0)));
 }
+
+#[test]
+fn printed_decoys_are_rejected_by_the_raised_pass_and_cracks_kept() {
+    use crackbot_mission::experiments::{as_printed, finger_budget, trial_params};
+    use crackbot_tactile::print_check::PRINT_RATIO;
+    // A trial scene (seed 1000, one of those the check's threshold was chosen on): two cracks of
+    // the authors' printed profile and two printed decoys, all proposed by the detector.
+    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 1000).unwrap());
+    let decoys = scene
+        .features
+        .iter()
+        .filter(|f| matches!(f, crackbot_sim::Feature::Decoy { .. }))
+        .count();
+    assert_eq!(decoys, 2);
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = InspectConfig::new(scene.clone(), dir.path());
+    c.speedup = 8.0;
+    let r = mission(&c).expect("mission");
+    let budget = finger_budget(&scene, &r);
+    assert_eq!(budget.decoy[0], 0, "a decoy was confirmed: {budget:?}");
+    assert!(budget.decoy[1] >= 1, "{budget:?}");
+    assert!(budget.crack[0] >= 1, "no crack confirmed: {budget:?}");
+    // Every candidate the contact slide read as a crack was passed over raised, and its ratio
+    // decided: cracks below the threshold, prints above it.
+    for c in &r.cracks {
+        let ratio = c
+            .evidence
+            .height_ratio
+            .expect("a confirmed crack was checked");
+        assert!(ratio < PRINT_RATIO, "{ratio}");
+        let id = c.candidate.expect("a candidate");
+        assert!(dir.path().join(format!("raised-{id:03}.csv")).is_file());
+    }
+    let prints: Vec<_> = r
+        .rejected
+        .iter()
+        .filter(|x| x.felt.starts_with("a print"))
+        .collect();
+    assert!(!prints.is_empty(), "{:?}", r.rejected);
+    for p in prints {
+        assert!(p.height_ratio.is_some_and(|h| h > PRINT_RATIO), "{p:?}");
+    }
+}

@@ -157,6 +157,44 @@ impl ProximityGeometry {
     }
 }
 
+/// What the proximity fibre of a finger held off the surface sees: the tip's lowest point
+/// `tip_height_mm` above the plate's plane at `tip` (plate frame, mm), the fibre looking
+/// `offset` ahead along `dir` (a unit vector; the way the arm moves). The spot's
+/// [`SPOT_POINTS`] points look straight down at the [`Surface`]'s height and reflectivity there
+/// (a cone is not traced off the slide line: the fibre is far enough above a crack's walls that
+/// they shade little). A point at or below the surface sees nothing (the curve is 0 at contact).
+///
+/// This is what the arm's hover passes measure: ink darkens the fibre by the same share at
+/// every height, while a crack's floor, farther away, darkens it by less the higher the
+/// fibre is (`crackbot_tactile::print_check`).
+pub fn hover_view(
+    optics: &OpticsParams,
+    surface: &Surface,
+    plate_reflectivity: f64,
+    tip: Point,
+    dir: [f64; 2],
+    tip_height_mm: f64,
+) -> Scene1d {
+    let fibre = [
+        tip[0] + optics.proximity_offset_mm * dir[0],
+        tip[1] + optics.proximity_offset_mm * dir[1],
+    ];
+    let fibre_z = tip_height_mm + optics.proximity_height_mm;
+    let spot = optics.proximity_spot_mm.max(0.0);
+    let (mut intensity, mut distance) = (0.0, 0.0);
+    for k in 0..SPOT_POINTS {
+        let u = (k as f64 + 0.5) / SPOT_POINTS as f64 - 0.5;
+        let p = [fibre[0] + u * spot * dir[0], fibre[1] + u * spot * dir[1]];
+        let d = fibre_z - surface.height_mm(p);
+        distance += d;
+        intensity += proximity_intensity(d, optics.proximity_peak_mm) * surface.reflectivity(p);
+    }
+    Scene1d {
+        proximity_distance_mm: distance / SPOT_POINTS as f64,
+        intensity: plate_reflectivity * intensity / SPOT_POINTS as f64,
+    }
+}
+
 /// Rays across the proximity fibre's cone.
 pub const CONE_RAYS: usize = 9;
 

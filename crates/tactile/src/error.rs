@@ -192,6 +192,12 @@ pub enum TactileError {
         /// What is wrong.
         reason: &'static str,
     },
+    /// The two-height print check cannot judge these passes ([`crate::print_check`]).
+    #[error("print check: {reason}")]
+    PrintCheck {
+        /// Why.
+        reason: String,
+    },
     /// A statistical test cannot be computed on these values.
     #[error("{reason}")]
     Statistics {

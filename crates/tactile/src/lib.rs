@@ -29,6 +29,7 @@ pub mod model;
 pub mod online;
 #[cfg(feature = "research")]
 pub mod paper;
+pub mod print_check;
 #[cfg(feature = "research")]
 pub mod stats;
 pub mod stream;

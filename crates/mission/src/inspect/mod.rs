@@ -40,6 +40,7 @@ use crackbot_planner::{Candidate, Limits, Plan, Planner, Settings, Workspace};
 use crackbot_sim::Scene;
 use crackbot_tactile::model::{Doubt, TactileModel};
 use crackbot_tactile::online::{OnlineClassifier, SlideVerdict};
+use crackbot_tactile::print_check;
 use serde::Serialize;
 
 use crate::sync::{ClockFit, ClockSync};
@@ -156,6 +157,12 @@ pub struct InspectConfig {
     /// flat plate); a flat print the model takes for a crack often does not. `false`: the vote
     /// alone decides.
     pub require_dip: bool,
+    /// Fused missions: the print check. A candidate the finger confirmed is passed over once
+    /// more with the finger raised this high (mm above the plate, not touching), and rejected
+    /// as a print when its proximity dip keeps its share of the signal there
+    /// ([`crackbot_tactile::print_check`]: ink darkens the fibre alike at every height, a
+    /// crack's floor less when the fibre is farther). `None`: no raised pass.
+    pub print_check_mm: Option<f64>,
     /// Simulation speed-up (1: real time).
     pub speedup: f64,
     /// Seed of the simulated sensor and camera.
@@ -180,6 +187,31 @@ pub const TOUCH_MIN_STROKE_MM: f64 = 6.0;
 /// Sound surface beyond a candidate's edge and the finger's reach on each side of its stroke by
 /// default, mm.
 pub const TOUCH_MARGIN_MM: f64 = 0.5;
+
+/// Height of the print check's raised pass by default, mm above the plate: high enough that a
+/// 0.5–4 mm deep crack's floor darkens the fibre by a clearly smaller share than in contact,
+/// low enough that the sound surface still reads about 27 counts above the fibre's dark level.
+pub const PRINT_CHECK_HEIGHT_MM: f64 = 2.0;
+/// The print check's height from a user's value (mm): 0 turns the check off; otherwise it must
+/// lie in 0.5–20 mm (below, the finger would drag over the plate's roughness; above, the
+/// sound surface reads within a few counts of the fibre's dark level).
+pub fn print_check_height(h: f64) -> Result<Option<f64>, MissionError> {
+    if h == 0.0 {
+        Ok(None)
+    } else if (0.5..=20.0).contains(&h) {
+        Ok(Some(h))
+    } else {
+        Err(MissionError::Invalid(format!(
+            "the print check's height must be 0 (off) or in [0.5, 20] mm, got {h}"
+        )))
+    }
+}
+
+/// How far the print check's raised pass runs past each end of the candidate's stroke, mm.
+pub const PRINT_CHECK_OVERRUN_MM: f64 = 1.5;
+/// Speed of the print check's raised pass, mm/s (or the manipulator's travel limit, if lower):
+/// 0.1 mm between the sensor's samples, a tenth of the fibre's spot.
+pub const PRINT_CHECK_SPEED_MM_S: f64 = 40.0;
 
 /// How far beyond a crack's edge the finger of `sensor` feels it, mm: its proximity fibre looks
 /// `proximity_offset_mm` ahead of the tip over a spot `proximity_spot_mm` wide, so it sees the
@@ -227,6 +259,7 @@ impl InspectConfig {
             proposal_min_score: 0.3,
             candidates: CandidateSource::Cracks,
             require_dip: true,
+            print_check_mm: Some(PRINT_CHECK_HEIGHT_MM),
             speedup: 1.0,
             seed: 7,
             planner: settings,
@@ -420,6 +453,10 @@ pub struct Evidence {
     pub votes: Vec<f64>,
     /// Doubts raised.
     pub doubts: Vec<String>,
+    /// The print check's ratio (the dip's share of the signal raised over in contact; about 1
+    /// for a print), when the candidate was passed over raised.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_ratio: Option<f64>,
 }
 
 /// A candidate the finger rejected.
@@ -435,6 +472,9 @@ pub struct RejectedCandidate {
     pub detector_score: f64,
     /// The slides.
     pub slides: Vec<u32>,
+    /// The print check's ratio, when the candidate was passed over raised.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_ratio: Option<f64>,
 }
 
 /// Wall time per stage, s.
@@ -705,6 +745,7 @@ fn mission(
                     slides: Vec::new(),
                     votes: Vec::new(),
                     doubts: Vec::new(),
+                    height_ratio: None,
                 },
             });
         }
@@ -737,6 +778,8 @@ fn mission(
         crossings: Vec<Crossing>,
         unknown: usize,
         passes: usize,
+        /// The print check's ratio.
+        height_ratio: Option<f64>,
     }
     let k = recognition.header.classes.len();
     let crack_class = recognition
@@ -766,6 +809,10 @@ fn mission(
         let at = |s: f64| [slide.start_mm[0] + s * u[0], slide.start_mm[1] + s * u[1]];
         let n_passes = slide.passes.max(1);
         let mut p = 0;
+        // Each stroke's proximity channel and positions (for the print check), and where the
+        // finger ended.
+        let mut strokes: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+        let mut finger_at = slide.start_mm;
         while p < n_passes {
             // One classification unit: a stroke forth and back, as the authors' slides are
             // (direction 0 then 1); a single stroke when the plan has no way back.
@@ -790,6 +837,8 @@ fn mission(
                     rig.slide_and_record(id, (a, b), slide.speed_mm_s, dir, &mut feel)?;
                 let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
                 save_pass(&rec_path, &s, &x, dir)?;
+                strokes.push((s.iter().map(|v| v[3]).collect(), x.clone()));
+                finger_at = b;
                 records.push((id, a, b, s.len(), rec_path, attempts));
                 // Positions along the slide's axis, from its start.
                 along.extend(x.iter().map(|&v| if forth { v } else { len - v }));
@@ -869,6 +918,7 @@ fn mission(
                                 crossings: Vec::new(),
                                 unknown: 0,
                                 passes: 0,
+                                height_ratio: None,
                             },
                         ));
                         &mut felt.last_mut().expect("just pushed").1
@@ -902,6 +952,57 @@ fn mission(
                 }
             }
         }
+        if let (Some(c), Some(h)) = (cand, config.print_check_mm) {
+            let confirmed = felt.iter_mut().find(|(k, _)| *k == c).map(|(_, f)| f);
+            if let Some(f) = confirmed {
+                let class = f
+                    .votes
+                    .iter()
+                    .enumerate()
+                    .max_by(|a, b| a.1.total_cmp(b.1))
+                    .map_or(0, |(i, _)| i);
+                let dip = f.crossings.iter().any(|c| c.1.is_some());
+                if class == crack_class
+                    && f.unknown < f.passes
+                    && !f.crossings.is_empty()
+                    && (dip || !config.require_dip)
+                {
+                    let other_end = if finger_at == slide.start_mm {
+                        slide.end_mm
+                    } else {
+                        slide.start_mm
+                    };
+                    let speed = PRINT_CHECK_SPEED_MM_S.min(limits.max_travel_speed_mm_s);
+                    // The finger rises and backs off PRINT_CHECK_OVERRUN_MM, then passes raised
+                    // to as far past the other end (inside the workspace): both ends of the
+                    // raised pass are sound surface, whatever the state stream's spacing.
+                    let d = passes::unit(finger_at, other_end);
+                    let beyond = |p: [f64; 2], s: f64| {
+                        [
+                            (p[0] + s * PRINT_CHECK_OVERRUN_MM * d[0])
+                                .clamp(workspace.x_min_mm, workspace.x_max_mm),
+                            (p[1] + s * PRINT_CHECK_OVERRUN_MM * d[1])
+                                .clamp(workspace.y_min_mm, workspace.y_max_mm),
+                        ]
+                    };
+                    let (from, to) = (beyond(finger_at, -1.0), beyond(other_end, 1.0));
+                    rig.hover_and_record(finger_at, from, h, speed)?;
+                    let (hs, hx) = rig.hover_and_record(from, to, h, speed)?;
+                    let rec_path = config.out_dir.join(format!("raised-{c:03}.csv"));
+                    save_pass(&rec_path, &hs, &hx, u8::from(other_end == slide.start_mm))?;
+                    let dark = config.scene.sensor.optics.proximity_dark_counts;
+                    let contact: Vec<_> = strokes
+                        .iter()
+                        .filter_map(|(p, x)| print_check::dip_area(p, x, dark).ok())
+                        .collect();
+                    let hp: Vec<f64> = hs.iter().map(|v| v[3]).collect();
+                    match print_check::dip_area(&hp, &hx, dark) {
+                        Ok(raised) => f.height_ratio = print_check::height_ratio(&contact, &raised),
+                        Err(e) => f.doubts.push(e.to_string()),
+                    }
+                }
+            }
+        }
     }
     stages.explore_s = explore.elapsed().as_secs_f64();
 
@@ -928,7 +1029,12 @@ fn mission(
         // Dead or saturated channels on every pass: the finger could not judge.
         let judged = f.unknown < f.passes;
         let dip = f.crossings.iter().any(|c| c.1.is_some());
-        if class == crack_class && judged && !f.crossings.is_empty() && (dip || !config.require_dip)
+        let print = f.height_ratio.is_some_and(|r| r > print_check::PRINT_RATIO);
+        if class == crack_class
+            && judged
+            && !f.crossings.is_empty()
+            && (dip || !config.require_dip)
+            && !print
         {
             let n = f.crossings.len() as f64;
             let pos = [
@@ -956,6 +1062,7 @@ fn mission(
                     slides: f.slides,
                     votes: f.votes,
                     doubts: f.doubts,
+                    height_ratio: f.height_ratio,
                 },
             });
         } else if let Some((c, score)) = detection {
@@ -964,6 +1071,13 @@ fn mission(
                 position_mm: c.centre_mm,
                 felt: if !judged {
                     "unknown".into()
+                } else if print {
+                    format!(
+                        "a print: its proximity dip keeps {:.0} % of its share with the finger \
+                         raised {} mm",
+                        100.0 * f.height_ratio.unwrap_or(1.0),
+                        config.print_check_mm.unwrap_or(0.0)
+                    )
                 } else if class == crack_class && !f.crossings.is_empty() {
                     // Read as a crack, but the proximity channel saw no dip.
                     format!("{name} without a proximity dip")
@@ -972,6 +1086,7 @@ fn mission(
                 },
                 detector_score: *score,
                 slides: f.slides,
+                height_ratio: f.height_ratio,
             });
         }
     }
@@ -987,6 +1102,20 @@ fn mission(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_print_check_height_is_off_at_zero_and_refused_out_of_range() {
+        assert_eq!(print_check_height(0.0).unwrap(), None);
+        assert_eq!(print_check_height(2.0).unwrap(), Some(2.0));
+        for bad in [0.2, -1.0, 25.0, f64::NAN, f64::INFINITY] {
+            let e = print_check_height(bad).unwrap_err().to_string();
+            assert!(e.contains("print check"), "{e}");
+        }
+        assert_eq!(
+            InspectConfig::new(Scene::builtin_default(), "/tmp").print_check_mm,
+            Some(PRINT_CHECK_HEIGHT_MM)
+        );
+    }
 
     #[test]
     fn strokes_reach_as_far_as_the_proximity_fibre_sees_and_no_further() {

@@ -345,6 +345,115 @@ impl<'a> Rig<'a> {
     }
 }
 
+impl Rig<'_> {
+    /// Moves the finger, held `z` mm above the plate, from where it is to `to` at `speed` and
+    /// records the pass: the samples taken after the command while the arm was at that height
+    /// (moving, or at rest at either end), with their
+    /// position along the line from `line_start` towards `to` (mm). The print check's raised
+    /// pass ([`crackbot_tactile::print_check`]).
+    pub(super) fn hover_and_record(
+        &mut self,
+        line_start: [f64; 2],
+        to: [f64; 2],
+        z: f64,
+        speed: f64,
+    ) -> Result<Recorded, MissionError> {
+        let first_sample = self.sensor.samples.len();
+        self.arm.errors.clear();
+        let seq = self.arm.command(&Message::MoveTo(crackbot_link::MoveTo {
+            pose: crackbot_link::Pose {
+                x_mm: to[0] as f32,
+                y_mm: to[1] as f32,
+                z_mm: z as f32,
+            },
+            speed_mm_s: speed as f32,
+        }))?;
+        let here = self
+            .arm
+            .states
+            .back()
+            .map(|s| pose(&s.state))
+            .unwrap_or([0.0; 3]);
+        let dist = (to[0] - here[0]).hypot(to[1] - here[1]);
+        let budget = Duration::from_secs_f64(dist / speed / self.config.speedup * 1.5 + 3.0);
+        let deadline = Instant::now() + budget;
+        let arrived =
+            |p: [f64; 3]| (p[0] - to[0]).hypot(p[1] - to[1]) < 0.05 && (p[2] - z).abs() < 0.05;
+        loop {
+            if self.stop.load(Ordering::Relaxed) {
+                return Err(MissionError::Interrupted);
+            }
+            self.pump(Duration::from_millis(2))?;
+            if let Some(e) = self.arm.errors.iter().find(|e| e.seq == seq) {
+                return Err(MissionError::Refused {
+                    what: "the print check's raised pass".into(),
+                    reason: e.text.to_string(),
+                });
+            }
+            if let Some(s) = self.arm.states.back() {
+                if s.state.mode == crackbot_link::Mode::Idle && arrived(pose(&s.state)) {
+                    break;
+                }
+            }
+            if self.arm.restarted {
+                return Err(MissionError::ControllerRestarted);
+            }
+            if self
+                .arm
+                .last_state_at
+                .is_some_and(|t| t.elapsed() > Duration::from_secs(2))
+            {
+                self.arm.stop();
+                return Err(MissionError::ControllerUnreachable {
+                    addr: self.arm.ep.peer_addr().to_string(),
+                });
+            }
+            if Instant::now() > deadline {
+                self.arm.stop();
+                return Err(MissionError::Timeout {
+                    what: "the print check's raised pass".into(),
+                    seconds: budget.as_secs_f64(),
+                });
+            }
+        }
+        // The sensor's samples lag the arm's states: wait (100 ms at most) until one taken
+        // after the arm arrived has come in.
+        let arrived_us = mapped_states(self.arm).last().map(|(h, _)| *h);
+        let wait_until = Instant::now() + Duration::from_millis(100);
+        while let Some(t) = arrived_us {
+            let latest = self
+                .sensor
+                .samples
+                .last()
+                .map(|s| self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us));
+            if latest.is_some_and(|l| l >= t) || Instant::now() > wait_until {
+                break;
+            }
+            self.pump(Duration::from_millis(2))?;
+        }
+        let u = unit(line_start, to);
+        let mapped = mapped_states(self.arm);
+        let (mut samples, mut positions) = (Vec::new(), Vec::new());
+        for s in &self.sensor.samples[first_sample..] {
+            let host = self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
+            let Some((p, mode)) = position_at(&mapped, host) else {
+                continue;
+            };
+            // Moving, or still at rest at the start or already at the end (at a simulation
+            // speed-up the states come far apart and the mode flips between them).
+            let level = matches!(
+                mode,
+                crackbot_link::Mode::Moving | crackbot_link::Mode::Idle
+            );
+            if level && (p[2] - z).abs() < 0.05 {
+                samples.push(s.raw.map(f64::from));
+                positions.push(along(line_start, u, p));
+            }
+        }
+        Ok((samples, positions))
+    }
+}
+
 /// Writes one pass in the recordings' CSV layout (the acquisition's columns plus the position).
 pub(super) fn save_pass(
     path: &Path,

@@ -1,0 +1,294 @@
+//! Telling a mark printed on the surface from a crack with the proximity fibre at two heights.
+//!
+//! # Why
+//!
+//! The proximity fibre returns `R · f(d)`: the surface's reflectivity `R` times a curve of the
+//! distance `d` to it. A crack darkens it by moving the surface away (its floor is farther); a
+//! printed crack (the paper's decoys: flat paper, dark ink) by lowering `R` at the same
+//! distance. One contact slide cannot tell them apart: both dip, and the deformation channels
+//! do not move over cracks under a few millimetres (the authors' own 1 and 2 mm plates leave
+//! D1–D3 as still as the flat plate does), so a dark enough print of a narrow crack reads as a
+//! crack. The authors trained their classifier on two printed cracks for this; we have no
+//! recording of one.
+//!
+//! Raised by `h`, the fibre sees ink darken it by the same share `1 − R` as in contact, while a
+//! crack's floor, `depth` below the plate, darkens it by less: `f(d₀ + h + depth) / f(d₀ + h)`
+//! is closer to 1 than `f(d₀ + depth) / f(d₀)` where `f` falls off (`1/d²` beyond its peak).
+//! The measure is the dip's **depth** (of the signal smoothed over 0.2 mm) as a share of the
+//! baseline's height above the fibre's dark level; the share of the spot a narrow mark covers
+//! cancels in the ratio of the two heights. So [`height_ratio`] = relative depth raised /
+//! relative depth in contact is about 1 for ink of any darkness or width (0.91–1.09 on the
+//! simulated trials) and below 1 for a crack (0.72–0.82 for 0.5–4.6 mm cracks 2.53 mm deep,
+//! raised 2 mm). [`area_ratio`] uses the dip's area (∫ (baseline − P) dx) instead, which a spot
+//! that widens with height blurs but keeps; in contact it is noisier (see [`height_ratio`]).
+//!
+//! # What it needs and does not do
+//!
+//! * The fibre's dark level (P with nothing in view, the sensor's calibration), to within a
+//!   few counts: at 2 mm the flat surface is only about 27 counts above it.
+//! * A pass at a known height over the same line; the arm must not meet anything on the way
+//!   (the check is meant for candidates the finger already slid over and found no bump on).
+//! * It does not tell a crack from a groove or step of the same depth, nor see a crack filled
+//!   with dark dirt as anything but ink.
+
+use crate::TactileError;
+
+/// Width of the moving average over position that finds the dip's floor and window, mm (the
+/// same distance at any speed, so a narrow dip keeps the same depth on a slow pass in contact
+/// and a fast raised one).
+const SMOOTH_MM: f64 = 0.2;
+/// The window extends this far beyond where the smoothed dip is back to within
+/// [`EDGE_SHARE`] of its depth, mm.
+const WINDOW_MARGIN_MM: f64 = 0.5;
+/// The dip's edge: where the smoothed signal comes back to this share of the depth.
+const EDGE_SHARE: f64 = 0.1;
+/// Fewest samples a pass needs.
+pub const MIN_SAMPLES: usize = 20;
+/// Least height of the sound surface's signal above the dark level, counts: below it the fibre
+/// sees too little for a ratio.
+pub const MIN_SIGNAL_COUNTS: f64 = 3.0;
+
+/// The proximity dip of one pass.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DipArea {
+    /// P over the sound surface beside the dip (median outside the window), counts.
+    pub baseline: f64,
+    /// ∫ (baseline − P) dx over the window, counts · mm.
+    pub area: f64,
+    /// `area / (baseline − dark)`, mm: the dip's area as a share of the signal.
+    pub relative_mm: f64,
+    /// `(baseline − floor) / (baseline − dark)`: the dip's depth (of the signal smoothed over
+    /// 0.2 mm) as a share of the signal.
+    pub relative_depth: f64,
+    /// The window the area is taken over, mm along the pass.
+    pub window_mm: [f64; 2],
+}
+
+fn err(reason: String) -> TactileError {
+    TactileError::PrintCheck { reason }
+}
+
+/// The proximity dip of one pass: `p` the proximity channel (counts) and `along` the position of
+/// each sample along the line (mm; any order, any direction), `dark` the fibre's dark level
+/// (counts). The dip is found around the smoothed minimum; its window runs to where the dip is
+/// back within 10 % of its depth, plus 0.5 mm; the baseline is the median outside it.
+///
+/// Errors name what is wrong: lengths that differ, fewer than [`MIN_SAMPLES`] samples, a value
+/// that is not finite, a pass that does not move, or a baseline less than
+/// [`MIN_SIGNAL_COUNTS`] above `dark`.
+pub fn dip_area(p: &[f64], along: &[f64], dark: f64) -> Result<DipArea, TactileError> {
+    if p.len() != along.len() {
+        return Err(err(format!(
+            "{} proximity samples but {} positions",
+            p.len(),
+            along.len()
+        )));
+    }
+    if p.len() < MIN_SAMPLES {
+        return Err(err(format!(
+            "{} samples in the pass, at least {MIN_SAMPLES} needed",
+            p.len()
+        )));
+    }
+    if let Some(i) = (0..p.len()).find(|&i| !(p[i].is_finite() && along[i].is_finite())) {
+        return Err(err(format!(
+            "sample {i} is not a finite number (P {}, position {} mm)",
+            p[i], along[i]
+        )));
+    }
+    if !dark.is_finite() {
+        return Err(err(format!("the dark level {dark} is not a finite number")));
+    }
+    let mut order: Vec<usize> = (0..p.len()).collect();
+    order.sort_by(|&a, &b| along[a].total_cmp(&along[b]));
+    let x: Vec<f64> = order.iter().map(|&i| along[i]).collect();
+    let v: Vec<f64> = order.iter().map(|&i| p[i]).collect();
+    let n = v.len();
+    if x[n - 1] - x[0] < 1.0 {
+        return Err(err(format!(
+            "the pass spans {:.3} mm; at least 1 mm needed",
+            x[n - 1] - x[0]
+        )));
+    }
+    // Moving average over ±SMOOTH_MM/2 of position (two pointers over the sorted samples).
+    let (mut a, mut b, mut sum) = (0usize, 0usize, 0.0);
+    let smooth: Vec<f64> = (0..n)
+        .map(|i| {
+            while b < n && x[b] <= x[i] + SMOOTH_MM / 2.0 {
+                sum += v[b];
+                b += 1;
+            }
+            while x[a] < x[i] - SMOOTH_MM / 2.0 {
+                sum -= v[a];
+                a += 1;
+            }
+            sum / (b - a) as f64
+        })
+        .collect();
+    let (m, floor) = smooth
+        .iter()
+        .copied()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or((0, v[0]));
+    let mut sorted = smooth.clone();
+    sorted.sort_by(f64::total_cmp);
+    let level = sorted[(0.8 * (n - 1) as f64).round() as usize];
+    let edge = level - EDGE_SHARE * (level - floor).max(0.0);
+    let mut lo = m;
+    while lo > 0 && smooth[lo] < edge {
+        lo -= 1;
+    }
+    let mut hi = m;
+    while hi + 1 < n && smooth[hi] < edge {
+        hi += 1;
+    }
+    let window = [x[lo] - WINDOW_MARGIN_MM, x[hi] + WINDOW_MARGIN_MM];
+    let inside = |xi: f64| xi >= window[0] && xi <= window[1];
+    let mut outside: Vec<f64> = (0..n).filter(|&i| !inside(x[i])).map(|i| v[i]).collect();
+    let baseline = if outside.len() >= MIN_SAMPLES / 2 {
+        outside.sort_by(f64::total_cmp);
+        outside[outside.len() / 2]
+    } else {
+        level
+    };
+    if baseline - dark < MIN_SIGNAL_COUNTS {
+        return Err(err(format!(
+            "the sound surface reads {baseline:.1} counts, within {MIN_SIGNAL_COUNTS} of the \
+             fibre's dark level {dark:.1}: too far away to judge"
+        )));
+    }
+    // Trapezoid weights: each sample stands for half the gaps to its neighbours.
+    let mut area = 0.0;
+    for i in 0..n {
+        if !inside(x[i]) {
+            continue;
+        }
+        let left = if i > 0 { x[i] - x[i - 1] } else { 0.0 };
+        let right = if i + 1 < n { x[i + 1] - x[i] } else { 0.0 };
+        area += (baseline - v[i]) * 0.5 * (left + right);
+    }
+    Ok(DipArea {
+        baseline,
+        area,
+        relative_mm: area / (baseline - dark),
+        relative_depth: (baseline - floor) / (baseline - dark),
+        window_mm: window,
+    })
+}
+
+/// The dip's relative depth raised over its relative depth in contact (the mean of the contact
+/// passes): about 1 for a print, below 1 for a crack. `None` when the contact passes show no
+/// dip worth a ratio (under 5 % of the signal): nothing to tell apart.
+///
+/// The depth, not the area: in the simulator the area's ratio scatters over 0.8–1.2 for prints
+/// (the finger's stick-slip in contact stretches and squeezes the dip along the arm's position),
+/// the depth's over 0.85–1.05 (seeds 1000–1029, `crates/mission/EXPERIMENTS.md`). A real fibre
+/// whose spot widens with distance would make a print narrower than the raised spot look
+/// shallower raised, and crack-like; its area ratio ([`area_ratio`]) would not.
+pub fn height_ratio(contact: &[DipArea], raised: &DipArea) -> Option<f64> {
+    if contact.is_empty() {
+        return None;
+    }
+    let c = contact.iter().map(|d| d.relative_depth).sum::<f64>() / contact.len() as f64;
+    (c > 0.05).then(|| raised.relative_depth / c)
+}
+
+/// As [`height_ratio`], with the dip's area instead of its depth (blur-proof, noisier in
+/// contact). `None` when the contact passes' relative area is under 0.05 mm.
+pub fn area_ratio(contact: &[DipArea], raised: &DipArea) -> Option<f64> {
+    if contact.is_empty() {
+        return None;
+    }
+    let c = contact.iter().map(|d| d.relative_mm).sum::<f64>() / contact.len() as f64;
+    (c > 0.05).then(|| raised.relative_mm / c)
+}
+
+/// Above this [`height_ratio`] a dip is a print's, not a crack's (chosen on simulated trial
+/// scenes 1000–1029, `crates/mission/EXPERIMENTS.md`, "Prints told by two heights").
+pub const PRINT_RATIO: f64 = 0.85;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A pass over a dip of relative depth `share` and width `w` centred at 5 mm, the sound
+    /// surface `signal` counts above a dark level of 280, blurred by a spot of `spot` mm.
+    fn pass(share: f64, w: f64, signal: f64, spot: f64) -> (Vec<f64>, Vec<f64>) {
+        let along: Vec<f64> = (0..400).map(|i| i as f64 * 0.025).collect();
+        let p = along
+            .iter()
+            .map(|&x| {
+                // Coverage of the spot [x - spot/2, x + spot/2] by the mark [5 - w/2, 5 + w/2].
+                let (a, b) = (x - spot / 2.0, x + spot / 2.0);
+                let cover = ((b.min(5.0 + w / 2.0) - a.max(5.0 - w / 2.0)).max(0.0)) / spot;
+                280.0 + signal * (1.0 - share * cover)
+            })
+            .collect();
+        (p, along)
+    }
+
+    #[test]
+    fn ink_keeps_its_share_at_any_height_and_blur() {
+        // Ink of reflectivity 0.4, 0.5 mm wide: contact (224 counts of signal, 1.1 mm spot)
+        // against raised (27 counts, a spot twice as wide).
+        let (p, x) = pass(0.6, 0.5, 224.0, 1.1);
+        let c = dip_area(&p, &x, 280.0).unwrap();
+        let (p, x) = pass(0.6, 0.5, 27.0, 2.2);
+        let r = dip_area(&p, &x, 280.0).unwrap();
+        assert!((c.area - 0.6 * 0.5 * 224.0).abs() < 1.0, "{c:?}");
+        let ratio = area_ratio(&[c], &r).unwrap();
+        assert!((ratio - 1.0).abs() < 0.02, "{ratio}");
+        // The depth keeps its share where the spot does not widen.
+        let (p, x) = pass(0.6, 0.5, 27.0, 1.1);
+        let r = dip_area(&p, &x, 280.0).unwrap();
+        let ratio = height_ratio(&[c], &r).unwrap();
+        assert!((ratio - 1.0).abs() < 0.02, "{ratio}");
+        assert!(ratio > PRINT_RATIO);
+    }
+
+    #[test]
+    fn a_crack_loses_share_when_raised() {
+        // A 1 mm crack 2 mm deep under the calibrated curve (far side, 1/d²): the floor is
+        // 3.03 mm away in contact and 5.03 mm raised by 2 mm.
+        let share = |d0: f64, depth: f64| 1.0 - (d0 / (d0 + depth)).powi(2);
+        let (p, x) = pass(share(1.026, 2.0), 1.0, 224.0, 1.1);
+        let c = dip_area(&p, &x, 280.0).unwrap();
+        let (p, x) = pass(share(3.026, 2.0), 1.0, 27.0, 1.1);
+        let r = dip_area(&p, &x, 280.0).unwrap();
+        let ratio = height_ratio(&[c], &r).unwrap();
+        assert!(ratio < 0.75, "{ratio}");
+        assert!(ratio < PRINT_RATIO);
+        let ratio = area_ratio(&[c], &r).unwrap();
+        assert!(ratio < 0.75, "{ratio}");
+    }
+
+    #[test]
+    fn bad_passes_are_named() {
+        let (p, x) = pass(0.5, 1.0, 100.0, 1.0);
+        let e = dip_area(&p[..10], &x[..10], 280.0).unwrap_err().to_string();
+        assert!(e.contains("10 samples"), "{e}");
+        let e = dip_area(&p, &x[..300], 280.0).unwrap_err().to_string();
+        assert!(e.contains("400 proximity samples but 300 positions"), "{e}");
+        let mut q = p.clone();
+        q[7] = f64::NAN;
+        let e = dip_area(&q, &x, 280.0).unwrap_err().to_string();
+        assert!(e.contains("sample 7"), "{e}");
+        let still = vec![3.0; 400];
+        let e = dip_area(&p, &still, 280.0).unwrap_err().to_string();
+        assert!(e.contains("spans 0.000 mm"), "{e}");
+        let e = dip_area(&p, &x, 379.0).unwrap_err().to_string();
+        assert!(e.contains("dark level"), "{e}");
+        assert!(dip_area(&p, &x, f64::INFINITY).is_err());
+    }
+
+    #[test]
+    fn a_pass_without_a_dip_has_no_ratio_and_noise_is_no_dip() {
+        let (p, x) = pass(0.0, 1.0, 224.0, 1.1);
+        let c = dip_area(&p, &x, 280.0).unwrap();
+        assert!(c.area.abs() < 1e-9);
+        assert_eq!(height_ratio(&[c], &c), None);
+        assert_eq!(height_ratio(&[], &c), None);
+        assert_eq!(area_ratio(&[c], &c), None);
+    }
+}
