@@ -655,6 +655,15 @@ pub fn run_inspection(
     Ok(report)
 }
 
+/// The class with the most votes (the last of those tied; 0 when there are none).
+fn top_class(votes: &[f64]) -> usize {
+    votes
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .map_or(0, |(i, _)| i)
+}
+
 fn mission(
     rig: &mut Rig<'_>,
     recognition: &TactileModel,
@@ -955,12 +964,7 @@ fn mission(
         if let (Some(c), Some(h)) = (cand, config.print_check_mm) {
             let confirmed = felt.iter_mut().find(|(k, _)| *k == c).map(|(_, f)| f);
             if let Some(f) = confirmed {
-                let class = f
-                    .votes
-                    .iter()
-                    .enumerate()
-                    .max_by(|a, b| a.1.total_cmp(b.1))
-                    .map_or(0, |(i, _)| i);
+                let class = top_class(&f.votes);
                 let dip = f.crossings.iter().any(|c| c.1.is_some());
                 if class == crack_class
                     && f.unknown < f.passes
@@ -1008,12 +1012,7 @@ fn mission(
 
     for (key, f) in felt {
         let total: f64 = f.votes.iter().sum();
-        let class = f
-            .votes
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-            .map_or(0, |(i, _)| i);
+        let class = top_class(&f.votes);
         let name = recognition
             .header
             .classes

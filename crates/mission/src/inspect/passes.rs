@@ -197,6 +197,34 @@ impl<'a> Rig<'a> {
         }
     }
 
+    /// Stops the arm and fails when its state stream has been silent for 2 s (the controller is
+    /// unreachable) or the command `what` outlasted its `budget` (ending at `deadline`).
+    fn check_progress(
+        &mut self,
+        deadline: Instant,
+        budget: Duration,
+        what: impl FnOnce() -> String,
+    ) -> Result<(), MissionError> {
+        if self
+            .arm
+            .last_state_at
+            .is_some_and(|t| t.elapsed() > Duration::from_secs(2))
+        {
+            self.arm.stop();
+            return Err(MissionError::ControllerUnreachable {
+                addr: self.arm.ep.peer_addr().to_string(),
+            });
+        }
+        if Instant::now() > deadline {
+            self.arm.stop();
+            return Err(MissionError::Timeout {
+                what: what(),
+                seconds: budget.as_secs_f64(),
+            });
+        }
+        Ok(())
+    }
+
     /// One attempt of [`Self::slide_and_record`].
     fn try_slide(
         &mut self,
@@ -267,23 +295,7 @@ impl<'a> Rig<'a> {
                     detail: format!("no sample for {} ms", stall_limit.as_millis()),
                 });
             }
-            if self
-                .arm
-                .last_state_at
-                .is_some_and(|t| t.elapsed() > Duration::from_secs(2))
-            {
-                self.arm.stop();
-                return Err(MissionError::ControllerUnreachable {
-                    addr: self.arm.ep.peer_addr().to_string(),
-                });
-            }
-            if Instant::now() > deadline {
-                self.arm.stop();
-                return Err(MissionError::Timeout {
-                    what: format!("slide {id}"),
-                    seconds: budget.as_secs_f64(),
-                });
-            }
+            self.check_progress(deadline, budget, || format!("slide {id}"))?;
         }
         // A few more states, so the end of the stroke is bracketed.
         let settle = Instant::now() + Duration::from_millis(40);
@@ -398,23 +410,7 @@ impl Rig<'_> {
             if self.arm.restarted {
                 return Err(MissionError::ControllerRestarted);
             }
-            if self
-                .arm
-                .last_state_at
-                .is_some_and(|t| t.elapsed() > Duration::from_secs(2))
-            {
-                self.arm.stop();
-                return Err(MissionError::ControllerUnreachable {
-                    addr: self.arm.ep.peer_addr().to_string(),
-                });
-            }
-            if Instant::now() > deadline {
-                self.arm.stop();
-                return Err(MissionError::Timeout {
-                    what: "the print check's raised pass".into(),
-                    seconds: budget.as_secs_f64(),
-                });
-            }
+            self.check_progress(deadline, budget, || "the print check's raised pass".into())?;
         }
         // The sensor's samples lag the arm's states: wait (100 ms at most) until one taken
         // after the arm arrived has come in.
