@@ -77,6 +77,14 @@ pub struct RunArgs {
     /// crack's does not); 0 turns the check off.
     #[arg(long, default_value_t = crackbot_mission::PRINT_CHECK_HEIGHT_MM)]
     pub print_check_mm: f64,
+    /// Shallowest proximity dip a confirmed crack needs, counts (100 suits missions without the
+    /// print check).
+    #[arg(long, default_value_t = crackbot_mission::inspect::MIN_DIP_COUNTS)]
+    pub min_dip_counts: f64,
+    /// Fused missions: report confirmed candidates whose detections continue each other
+    /// across at most this gap (mm, within 30° of one direction) as one crack; 0 reports each.
+    #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_GAP_MM)]
+    pub piece_gap_mm: f64,
     /// Deployed recognition model.
     #[arg(long)]
     pub recognition_model: Option<PathBuf>,
@@ -196,6 +204,8 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
     config.require_dip = !args.confirm_without_dip;
     config.print_check_mm =
         crackbot_mission::print_check_height(args.print_check_mm).context("--print-check-mm")?;
+    config.min_dip_counts = args.min_dip_counts;
+    config.piece_gap_mm = (args.piece_gap_mm != 0.0).then_some(args.piece_gap_mm);
     config.planner.passes = args.passes;
     if let Some(v) = args.stroke_mm {
         config.planner.min_stroke_mm = v;

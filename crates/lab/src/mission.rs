@@ -64,6 +64,14 @@ pub struct Common {
     /// crack's does not); 0 turns the check off.
     #[arg(long, default_value_t = crackbot_mission::PRINT_CHECK_HEIGHT_MM)]
     print_check_mm: f64,
+    /// Shallowest proximity dip a confirmed crack needs, counts (100 suits missions without the
+    /// print check).
+    #[arg(long, default_value_t = crackbot_mission::inspect::MIN_DIP_COUNTS)]
+    min_dip_counts: f64,
+    /// Fused missions: report confirmed candidates whose detections continue each other
+    /// across at most this gap (mm, within 30° of one direction) as one crack; 0 reports each.
+    #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_GAP_MM)]
+    piece_gap_mm: f64,
     /// Deployed recognition model (default: models/tactile/recognition.ctm).
     #[arg(long)]
     recognition_model: Option<PathBuf>,
@@ -122,6 +130,8 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
     template.require_dip = !common.confirm_without_dip;
     template.print_check_mm =
         crackbot_mission::print_check_height(common.print_check_mm).context("--print-check-mm")?;
+    template.min_dip_counts = common.min_dip_counts;
+    template.piece_gap_mm = (common.piece_gap_mm != 0.0).then_some(common.piece_gap_mm);
     if let Some(p) = &common.recognition_model {
         template.recognition_model = p.clone();
     }

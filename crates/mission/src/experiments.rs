@@ -752,6 +752,7 @@ mod tests {
                     votes: Vec::new(),
                     doubts: Vec::new(),
                     height_ratio: None,
+                    pieces: Vec::new(),
                 },
             });
         }

@@ -403,3 +403,20 @@ fn printed_decoys_are_rejected_by_the_raised_pass_and_cracks_kept() {
         assert!(p.height_ratio.is_some_and(|h| h > PRINT_RATIO), "{p:?}");
     }
 }
+
+#[test]
+fn bad_confirmation_settings_are_refused_before_anything_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = config(dir.path());
+    c.min_dip_counts = f64::NAN;
+    let err = mission(&c).unwrap_err().to_string();
+    assert!(err.contains("min_dip_counts"), "{err}");
+    let mut c = config(dir.path());
+    c.print_check_mm = Some(0.1);
+    let err = mission(&c).unwrap_err().to_string();
+    assert!(err.contains("print check"), "{err}");
+    let mut c = config(dir.path());
+    c.piece_gap_mm = Some(-1.0);
+    let err = mission(&c).unwrap_err().to_string();
+    assert!(err.contains("piece_gap_mm"), "{err}");
+}

@@ -1,0 +1,176 @@
+//! Pieces of one crack: confirmed candidates whose detections continue each other.
+//!
+//! The detector's crack map breaks a long, bent crack where it fades, and each piece becomes a
+//! candidate of its own ([`super::CandidateSource::Cracks`]). When the finger confirms two
+//! pieces, the report would name one crack twice. Confirmed candidates whose detected segments
+//! come within [`PIECE_GAP_MM`] of each other and run within [`PIECE_ANGLE_DEG`] of the same
+//! direction are reported as one crack: the most confident piece's entry, carrying the others'
+//! slides and ids.
+
+use super::{Candidate, ReportedCrack};
+
+/// Largest gap between two confirmed pieces of one crack by default, mm.
+pub const PIECE_GAP_MM: f64 = 10.0;
+/// Largest difference of direction between two pieces of one crack, degrees.
+pub const PIECE_ANGLE_DEG: f64 = 30.0;
+
+/// The ends of a candidate's detected segment, mm.
+fn ends(c: &Candidate) -> [[f64; 2]; 2] {
+    let (s, co) = c.axis_deg.to_radians().sin_cos();
+    let h = c.length_mm / 2.0;
+    let [x, y] = c.centre_mm;
+    [[x - h * co, y - h * s], [x + h * co, y + h * s]]
+}
+
+/// Distance from `p` to the segment `[a, b]`, mm.
+fn to_segment(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
+    let v = [b[0] - a[0], b[1] - a[1]];
+    let l2 = v[0] * v[0] + v[1] * v[1];
+    let t = if l2 > 0.0 {
+        (((p[0] - a[0]) * v[0] + (p[1] - a[1]) * v[1]) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * v[0]).hypot(p[1] - a[1] - t * v[1])
+}
+
+/// Whether two detected segments are pieces of one crack: an end of one within `gap_mm` of
+/// the other, directions within [`PIECE_ANGLE_DEG`].
+pub(super) fn same_crack(a: &Candidate, b: &Candidate, gap_mm: f64) -> bool {
+    let (ea, eb) = (ends(a), ends(b));
+    let gap = ea
+        .iter()
+        .map(|&p| to_segment(p, eb))
+        .chain(eb.iter().map(|&p| to_segment(p, ea)))
+        .fold(f64::INFINITY, f64::min);
+    let turn = (a.axis_deg - b.axis_deg).rem_euclid(180.0);
+    gap <= gap_mm && turn.min(180.0 - turn) <= PIECE_ANGLE_DEG
+}
+
+/// Joins the confirmed reports whose candidates are pieces of one crack ([`same_crack`]): each
+/// group becomes its most confident report, with the other pieces' slides added to its
+/// evidence and their candidate ids in `evidence.pieces`. Reports without a candidate stay.
+pub(super) fn join_pieces(
+    cracks: Vec<ReportedCrack>,
+    candidates: &[Candidate],
+    gap_mm: f64,
+) -> Vec<ReportedCrack> {
+    let geometry = |r: &ReportedCrack| {
+        r.candidate
+            .and_then(|id| candidates.iter().find(|c| c.id == id))
+    };
+    let n = cracks.len();
+    let mut group: Vec<usize> = (0..n).collect();
+    fn root(group: &mut [usize], mut i: usize) -> usize {
+        while group[i] != i {
+            group[i] = group[group[i]];
+            i = group[i];
+        }
+        i
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            if let (Some(a), Some(b)) = (geometry(&cracks[i]), geometry(&cracks[j])) {
+                if same_crack(a, b, gap_mm) {
+                    let (ri, rj) = (root(&mut group, i), root(&mut group, j));
+                    group[ri] = rj;
+                }
+            }
+        }
+    }
+    let roots: Vec<usize> = (0..n).map(|i| root(&mut group, i)).collect();
+    let mut members: Vec<Vec<ReportedCrack>> = vec![Vec::new(); n];
+    for (r, c) in roots.into_iter().zip(cracks) {
+        members[r].push(c);
+    }
+    members
+        .into_iter()
+        .filter(|m| !m.is_empty())
+        .map(|mut m| {
+            m.sort_by(|a, b| b.confidence.total_cmp(&a.confidence));
+            let mut best = m.remove(0);
+            for other in m {
+                best.evidence.slides.extend(other.evidence.slides);
+                best.evidence.pieces.extend(other.candidate);
+            }
+            best
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Evidence;
+    use super::*;
+
+    fn cand(id: u64, centre: [f64; 2], axis: f64, len: f64) -> Candidate {
+        Candidate {
+            id,
+            centre_mm: centre,
+            axis_deg: axis,
+            length_mm: len,
+            width_mm: None,
+            score: 0.9,
+        }
+    }
+
+    fn report(id: u64, conf: f64) -> ReportedCrack {
+        ReportedCrack {
+            candidate: Some(id),
+            position_mm: [0.0, 0.0],
+            extent_mm: None,
+            class: "crack".into(),
+            width_mm: None,
+            width_std_mm: None,
+            confidence: conf,
+            evidence: Evidence {
+                detector_score: Some(0.9),
+                slides: vec![id as u32],
+                votes: Vec::new(),
+                doubts: Vec::new(),
+                height_ratio: None,
+                pieces: Vec::new(),
+            },
+        }
+    }
+
+    #[test]
+    fn pieces_that_continue_each_other_are_one_crack_and_others_stay_apart() {
+        let c = [
+            // 1 and 2: one crack along x, broken by an 8 mm gap, the second bent by 20°.
+            cand(1, [20.0, 50.0], 0.0, 20.0),
+            cand(2, [47.0, 50.0 + 5.0], 20.0, 20.0),
+            // 3: parallel to 1 but 15 mm away; 4: close to 1's end but across it.
+            cand(3, [20.0, 65.0], 0.0, 20.0),
+            cand(4, [34.0, 50.0], 90.0, 6.0),
+        ];
+        assert!(same_crack(&c[0], &c[1], PIECE_GAP_MM));
+        assert!(!same_crack(&c[0], &c[2], PIECE_GAP_MM));
+        assert!(!same_crack(&c[0], &c[3], PIECE_GAP_MM));
+        // Direction wraps at 180°: 175° and 5° differ by 10°.
+        assert!(same_crack(
+            &cand(5, [0.0, 0.0], 175.0, 10.0),
+            &cand(6, [12.0, 0.0], 5.0, 10.0),
+            PIECE_GAP_MM
+        ));
+        let joined = join_pieces(
+            vec![
+                report(1, 0.6),
+                report(2, 0.8),
+                report(3, 0.7),
+                report(4, 0.5),
+            ],
+            &c,
+            PIECE_GAP_MM,
+        );
+        assert_eq!(joined.len(), 3);
+        let one = joined.iter().find(|r| r.candidate == Some(2)).unwrap();
+        assert_eq!(one.evidence.pieces, vec![1]);
+        assert_eq!(one.evidence.slides, vec![2, 1]);
+        // A gap of 0 joins only touching pieces.
+        assert_eq!(
+            join_pieces(vec![report(1, 0.6), report(2, 0.8)], &c, 0.0).len(),
+            2
+        );
+    }
+}
