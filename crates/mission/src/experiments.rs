@@ -244,7 +244,11 @@ pub fn finger_budget(scene: &Scene, report: &InspectReport) -> FingerBudget {
             }
         }
         met[3] = !met[..3].iter().any(|&m| m);
-        let confirmed = report.cracks.iter().any(|c| c.candidate == Some(id));
+        // A piece joined to another confirmed piece of its crack was confirmed too.
+        let confirmed = report
+            .cracks
+            .iter()
+            .any(|c| c.candidate == Some(id) || c.evidence.pieces.contains(&id));
         let slot = match met.iter().position(|&m| m) {
             Some(0) => &mut b.crack,
             Some(1) => &mut b.decoy,
@@ -838,6 +842,9 @@ mod tests {
                 untouched_cracks: 3,
             }
         );
+        // Candidate 3 joined to candidate 1 as a piece of its crack counts as confirmed.
+        r.cracks[0].evidence.pieces.push(3);
+        assert_eq!(finger_budget(&scene, &r).relief, [1, 0]);
         // The 5 mm crack's centre line crosses x = 100 mm at y = 64.9 mm. A stroke that ends
         // 3.4 mm before it (perpendicular 3.3 mm) does not touch it; one that ends 1.9 mm before
         // it (inside its 2.5 mm half width) does.

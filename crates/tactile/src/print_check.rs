@@ -14,13 +14,15 @@
 //! Raised by `h`, the fibre sees ink darken it by the same share `1 − R` as in contact, while a
 //! crack's floor, `depth` below the plate, darkens it by less: `f(d₀ + h + depth) / f(d₀ + h)`
 //! is closer to 1 than `f(d₀ + depth) / f(d₀)` where `f` falls off (`1/d²` beyond its peak).
-//! The measure is the dip's **depth** (of the signal smoothed over 0.2 mm) as a share of the
-//! baseline's height above the fibre's dark level; the share of the spot a narrow mark covers
-//! cancels in the ratio of the two heights. So [`height_ratio`] = relative depth raised /
-//! relative depth in contact is about 1 for ink of any darkness or width (0.91–1.09 on the
-//! simulated trials) and below 1 for a crack (0.72–0.82 for 0.5–4.6 mm cracks 2.53 mm deep,
-//! raised 2 mm). [`area_ratio`] uses the dip's area (∫ (baseline − P) dx) instead, which a spot
-//! that widens with height blurs but keeps; in contact it is noisier (see [`height_ratio`]).
+//! The measure the robot uses is [`profile_ratio`]: the least-squares factor between the raised
+//! dip and the contact dip (each as a share of its signal above the fibre's dark level), at the
+//! shift where they line up. It is about 1 for ink of any darkness or width and below 1 for a
+//! crack. The share of the spot a narrow mark covers cancels in the ratio of the two heights.
+//! Two simpler measures are kept for comparison: [`height_ratio`] (the dips' floors: biased
+//! towards "print" where the raised dip is only a few counts deep, as the minimum of noisy
+//! samples lies below the true floor) and [`area_ratio`] (the dips' areas: blur-proof, but in
+//! contact the finger's stick-slip stretches the dip along the arm's position). Figures:
+//! `crates/mission/EXPERIMENTS.md`, "Prints told by two heights".
 //!
 //! # What it needs and does not do
 //!
@@ -179,13 +181,11 @@ pub fn dip_area(p: &[f64], along: &[f64], dark: f64) -> Result<DipArea, TactileE
 
 /// The dip's relative depth raised over its relative depth in contact (the mean of the contact
 /// passes): about 1 for a print, below 1 for a crack. `None` when the contact passes show no
-/// dip worth a ratio (under 5 % of the signal): nothing to tell apart.
-///
-/// The depth, not the area: in the simulator the area's ratio scatters over 0.8–1.2 for prints
-/// (the finger's stick-slip in contact stretches and squeezes the dip along the arm's position),
-/// the depth's over 0.85–1.05 (seeds 1000–1029, `crates/mission/EXPERIMENTS.md`). A real fibre
-/// whose spot widens with distance would make a print narrower than the raised spot look
-/// shallower raised, and crack-like; its area ratio ([`area_ratio`]) would not.
+/// dip worth a ratio (under 5 % of the signal): nothing to tell apart. A simpler measure than
+/// [`profile_ratio`]: on the simulated trials it separated deep dips as well, and called
+/// shallow cracks prints (seeds 3000–3029: five cracks above 0.9). A real fibre whose spot
+/// widens with distance would also make a print narrower than the raised spot look shallower
+/// raised, and crack-like; its area ratio ([`area_ratio`]) would not.
 pub fn height_ratio(contact: &[DipArea], raised: &DipArea) -> Option<f64> {
     if contact.is_empty() {
         return None;
@@ -204,9 +204,117 @@ pub fn area_ratio(contact: &[DipArea], raised: &DipArea) -> Option<f64> {
     (c > 0.05).then(|| raised.relative_mm / c)
 }
 
-/// Above this [`height_ratio`] a dip is a print's, not a crack's (chosen on simulated trial
-/// scenes 1000–1029, `crates/mission/EXPERIMENTS.md`, "Prints told by two heights").
-pub const PRINT_RATIO: f64 = 0.85;
+/// Spacing of the grid the passes' dip profiles are binned onto for [`profile_ratio`], mm.
+const GRID_MM: f64 = 0.05;
+/// Largest shift between the contact and the raised dip [`profile_ratio`] searches, mm (the
+/// fibre looks ahead along the motion, so passes in opposite directions see the dip about
+/// twice its look-ahead apart).
+const MAX_SHIFT_MM: f64 = 6.0;
+
+/// A pass's dip profile `(baseline − P) / (baseline − dark)` binned every [`GRID_MM`] from
+/// `x0`; empty bins between samples interpolated, `NaN` beyond the samples.
+fn profile(p: &[f64], along: &[f64], dip: &DipArea, dark: f64, x0: f64, n: usize) -> Vec<f64> {
+    let mut sum = vec![0.0; n];
+    let mut count = vec![0u32; n];
+    for (&v, &x) in p.iter().zip(along) {
+        let i = ((x - x0) / GRID_MM).floor();
+        if i >= 0.0 && (i as usize) < n {
+            sum[i as usize] += (dip.baseline - v) / (dip.baseline - dark);
+            count[i as usize] += 1;
+        }
+    }
+    let mut out: Vec<f64> = sum
+        .iter()
+        .zip(&count)
+        .map(|(s, &c)| if c > 0 { s / f64::from(c) } else { f64::NAN })
+        .collect();
+    // Bins between samples (a pass sampled more sparsely than the grid) are interpolated.
+    let mut last: Option<usize> = None;
+    for i in 0..n {
+        if out[i].is_nan() {
+            continue;
+        }
+        if let Some(l) = last.filter(|&l| i > l + 1) {
+            for k in l + 1..i {
+                let f = (k - l) as f64 / (i - l) as f64;
+                out[k] = out[l] + f * (out[i] - out[l]);
+            }
+        }
+        last = Some(i);
+    }
+    out
+}
+
+/// The raised pass's dip as a multiple of the contact pass's: the least-squares factor `k` in
+/// `raised(x) ≈ k · contact(x + shift)`, both as shares of their signal above `dark`, at the
+/// shift (within ±6 mm) where the two profiles correlate best. About 1 for a print, below 1
+/// for a crack, like [`height_ratio`], but from every sample of the dip rather than its
+/// floor: a shallow dip's raised floor, a few counts deep, is mostly noise, and its minimum is
+/// biased deep (the least-squares factor is not). `None` when the contact dip is under 5 % of
+/// its signal or the profiles never overlap over the dip.
+///
+/// Errors as [`dip_area`] for either pass.
+pub fn profile_ratio(
+    contact: (&[f64], &[f64]),
+    raised: (&[f64], &[f64]),
+    dark: f64,
+) -> Result<Option<f64>, TactileError> {
+    let dc = dip_area(contact.0, contact.1, dark)?;
+    let dr = dip_area(raised.0, raised.1, dark)?;
+    if dc.relative_depth < 0.05 {
+        return Ok(None);
+    }
+    let span = |x: &[f64]| {
+        x.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            })
+    };
+    let (c0, c1) = span(contact.1);
+    let (r0, r1) = span(raised.1);
+    let nc = ((c1 - c0) / GRID_MM).ceil() as usize + 1;
+    let nr = ((r1 - r0) / GRID_MM).ceil() as usize + 1;
+    let c = profile(contact.0, contact.1, &dc, dark, c0, nc);
+    let r = profile(raised.0, raised.1, &dr, dark, r0, nr);
+    // The contact dip's window, in grid cells: the part of the profile that must overlap.
+    let w0 = (((dc.window_mm[0] - c0) / GRID_MM).floor().max(0.0) as usize).min(nc - 1);
+    let w1 = (((dc.window_mm[1] - c0) / GRID_MM).ceil().max(0.0) as usize).min(nc - 1);
+    let max_shift = (MAX_SHIFT_MM / GRID_MM).round() as i64;
+    let offset = ((c0 - r0) / GRID_MM).round() as i64;
+    let mut best: Option<(f64, f64)> = None;
+    for s in -max_shift..=max_shift {
+        let (mut rc, mut cc, mut rr, mut n) = (0.0, 0.0, 0.0, 0usize);
+        for (i, &cv) in c.iter().enumerate().take(w1 + 1).skip(w0) {
+            let j = i as i64 + offset + s;
+            if j < 0 || j >= nr as i64 {
+                continue;
+            }
+            let rv = r[j as usize];
+            if cv.is_nan() || rv.is_nan() {
+                continue;
+            }
+            rc += rv * cv;
+            cc += cv * cv;
+            rr += rv * rv;
+            n += 1;
+        }
+        // Most of the contact window must be seen by the raised pass.
+        if n * 4 < (w1 - w0 + 1) * 3 || cc <= 0.0 || rr <= 0.0 {
+            continue;
+        }
+        let corr = rc / (cc * rr).sqrt();
+        if best.is_none_or(|(b, _)| corr > b) {
+            best = Some((corr, rc / cc));
+        }
+    }
+    Ok(best.map(|(_, k)| k))
+}
+
+/// Above this [`profile_ratio`] a dip is a print's, not a crack's (chosen on simulated trial
+/// scenes 1000–1029, where cracks came out at 0.56–0.87 but for one at 1.06 and decoys at
+/// 0.90 or more but for one at 0.84; `crates/mission/EXPERIMENTS.md`, "Prints told by two
+/// heights").
+pub const PRINT_RATIO: f64 = 0.88;
 
 #[cfg(test)]
 mod tests {
@@ -261,6 +369,56 @@ mod tests {
         assert!(ratio < PRINT_RATIO);
         let ratio = area_ratio(&[c], &r).unwrap();
         assert!(ratio < 0.75, "{ratio}");
+    }
+
+    /// `pass` with deterministic noise of about `sigma` counts, the positions shifted by
+    /// `shift` mm and taken every `step` mm.
+    fn noisy(
+        share: f64,
+        w: f64,
+        signal: f64,
+        shift: f64,
+        step: f64,
+        sigma: f64,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let (p, x) = pass(share, w, signal, 1.1);
+        let mut seed = 12345u64;
+        let mut out = (Vec::new(), Vec::new());
+        let every = (step / 0.025).round().max(1.0) as usize;
+        for (i, (v, xi)) in p.iter().zip(&x).enumerate() {
+            if i % every != 0 {
+                continue;
+            }
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            out.0.push(v + sigma * 3.46 * u);
+            out.1.push(xi + shift);
+        }
+        out
+    }
+
+    #[test]
+    fn the_profile_fit_finds_the_shifted_raised_dip_and_its_share_through_noise() {
+        // A shallow print: 20 % of the signal, 0.8 mm wide. In contact (224 counts, slow) and
+        // raised (27 counts, 0.1 mm a sample, 0.5 counts of noise, seen 3.6 mm later).
+        let (cp, cx) = noisy(0.2, 0.8, 224.0, 0.0, 0.025, 0.5);
+        let (rp, rx) = noisy(0.2, 0.8, 27.0, 3.6, 0.1, 0.5);
+        let k = profile_ratio((&cp, &cx), (&rp, &rx), 280.0)
+            .unwrap()
+            .unwrap();
+        assert!((k - 1.0).abs() < 0.08, "{k}");
+        // The same dip raised at 70 % of its share: a crack.
+        let (rp, rx) = noisy(0.14, 0.8, 27.0, -3.6, 0.1, 0.5);
+        let k = profile_ratio((&cp, &cx), (&rp, &rx), 280.0)
+            .unwrap()
+            .unwrap();
+        assert!((k - 0.7).abs() < 0.08, "{k}");
+        // No dip in contact: nothing to compare.
+        let (fp, fx) = noisy(0.0, 0.8, 224.0, 0.0, 0.025, 0.5);
+        assert_eq!(profile_ratio((&fp, &fx), (&rp, &rx), 280.0).unwrap(), None);
+        assert!(profile_ratio((&cp[..5], &cx[..5]), (&rp, &rx), 280.0).is_err());
     }
 
     #[test]

@@ -889,7 +889,10 @@ fn mission(
                     rig.slide_and_record(id, (a, b), slide.speed_mm_s, dir, &mut feel)?;
                 let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
                 save_pass(&rec_path, &s, &x, dir)?;
-                strokes.push((s.iter().map(|v| v[3]).collect(), x.clone()));
+                strokes.push((
+                    s.iter().map(|v| v[3]).collect(),
+                    x.iter().map(|&v| if forth { v } else { len - v }).collect(),
+                ));
                 finger_at = b;
                 records.push((id, a, b, s.len(), rec_path, attempts));
                 // Positions along the slide's axis, from its start.
@@ -1041,14 +1044,25 @@ fn mission(
                     let rec_path = config.out_dir.join(format!("raised-{c:03}.csv"));
                     save_pass(&rec_path, &hs, &hx, u8::from(other_end == slide.start_mm))?;
                     let dark = config.scene.sensor.optics.proximity_dark_counts;
-                    let contact: Vec<_> = strokes
-                        .iter()
-                        .filter_map(|(p, x)| print_check::dip_area(p, x, dark).ok())
-                        .collect();
+                    // The raised pass's positions on the slide's axis, as the strokes'.
                     let hp: Vec<f64> = hs.iter().map(|v| v[3]).collect();
-                    match print_check::dip_area(&hp, &hx, dark) {
-                        Ok(raised) => f.height_ratio = print_check::height_ratio(&contact, &raised),
-                        Err(e) => f.doubts.push(e.to_string()),
+                    let hx: Vec<f64> = hx
+                        .iter()
+                        .map(|&v| {
+                            let p = [from[0] + v * d[0], from[1] + v * d[1]];
+                            (p[0] - slide.start_mm[0]) * u[0] + (p[1] - slide.start_mm[1]) * u[1]
+                        })
+                        .collect();
+                    let mut ratios = Vec::new();
+                    for (p, x) in &strokes {
+                        match print_check::profile_ratio((p, x), (&hp, &hx), dark) {
+                            Ok(Some(k)) => ratios.push(k),
+                            Ok(None) => {}
+                            Err(e) => f.doubts.push(e.to_string()),
+                        }
+                    }
+                    if !ratios.is_empty() {
+                        f.height_ratio = Some(ratios.iter().sum::<f64>() / ratios.len() as f64);
                     }
                 }
             }

@@ -13,6 +13,9 @@ use super::{Candidate, ReportedCrack};
 pub const PIECE_GAP_MM: f64 = 10.0;
 /// Largest difference of direction between two pieces of one crack, degrees.
 pub const PIECE_ANGLE_DEG: f64 = 30.0;
+/// Pieces continue each other end to end: along the first one's direction they may overlap by
+/// at most this much, mm (two cracks running side by side overlap by far more).
+pub const PIECE_OVERLAP_MM: f64 = 2.0;
 
 /// The ends of a candidate's detected segment, mm.
 fn ends(c: &Candidate) -> [[f64; 2]; 2] {
@@ -35,7 +38,8 @@ fn to_segment(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
 }
 
 /// Whether two detected segments are pieces of one crack: an end of one within `gap_mm` of
-/// the other, directions within [`PIECE_ANGLE_DEG`].
+/// the other, directions within [`PIECE_ANGLE_DEG`], and end to end rather than side by side
+/// (overlapping by at most [`PIECE_OVERLAP_MM`] along the first one's direction).
 pub(super) fn same_crack(a: &Candidate, b: &Candidate, gap_mm: f64) -> bool {
     let (ea, eb) = (ends(a), ends(b));
     let gap = ea
@@ -44,7 +48,15 @@ pub(super) fn same_crack(a: &Candidate, b: &Candidate, gap_mm: f64) -> bool {
         .chain(eb.iter().map(|&p| to_segment(p, ea)))
         .fold(f64::INFINITY, f64::min);
     let turn = (a.axis_deg - b.axis_deg).rem_euclid(180.0);
-    gap <= gap_mm && turn.min(180.0 - turn) <= PIECE_ANGLE_DEG
+    let (s, c) = a.axis_deg.to_radians().sin_cos();
+    let along = |p: [f64; 2]| p[0] * c + p[1] * s;
+    let span = |e: [[f64; 2]; 2]| {
+        let (u, v) = (along(e[0]), along(e[1]));
+        (u.min(v), u.max(v))
+    };
+    let ((a0, a1), (b0, b1)) = (span(ea), span(eb));
+    let overlap = a1.min(b1) - a0.max(b0);
+    gap <= gap_mm && turn.min(180.0 - turn) <= PIECE_ANGLE_DEG && overlap <= PIECE_OVERLAP_MM
 }
 
 /// Joins the confirmed reports whose candidates are pieces of one crack ([`same_crack`]): each
@@ -147,6 +159,12 @@ mod tests {
         assert!(same_crack(&c[0], &c[1], PIECE_GAP_MM));
         assert!(!same_crack(&c[0], &c[2], PIECE_GAP_MM));
         assert!(!same_crack(&c[0], &c[3], PIECE_GAP_MM));
+        // Two cracks side by side, 5 mm apart and overlapping along their length: not one.
+        assert!(!same_crack(
+            &c[0],
+            &cand(7, [25.0, 55.0], 5.0, 20.0),
+            PIECE_GAP_MM
+        ));
         // Direction wraps at 180°: 175° and 5° differ by 10°.
         assert!(same_crack(
             &cand(5, [0.0, 0.0], 175.0, 10.0),
