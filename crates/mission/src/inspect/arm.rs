@@ -115,6 +115,24 @@ pub(super) fn position_at(
     ))
 }
 
+/// The arm's pose at host time `host_us` when the states on both sides of it show the finger
+/// down (z below 0.5 mm) in slide `id`: a sample between the last state before touchdown and
+/// the first one after it may have been taken in the air, and a lifted finger's signals are
+/// not the surface's.
+pub(super) fn down_at(mapped: &[(f64, State)], host_us: f64, id: u32) -> Option<[f64; 3]> {
+    let idx = mapped.partition_point(|(h, _)| *h <= host_us);
+    if idx == 0 || idx >= mapped.len() {
+        return None;
+    }
+    let down =
+        |s: &State| s.mode == (crackbot_link::Mode::Sliding { id }) && f64::from(s.pose.z_mm) < 0.5;
+    if down(&mapped[idx - 1].1) && down(&mapped[idx].1) {
+        position_at(mapped, host_us).map(|(p, _)| p)
+    } else {
+        None
+    }
+}
+
 pub(super) fn pose(s: &State) -> [f64; 3] {
     [
         f64::from(s.pose.x_mm),
@@ -125,4 +143,43 @@ pub(super) fn pose(s: &State) -> [f64; 3] {
 
 pub(super) fn link_err(e: crackbot_link::LinkError) -> MissionError {
     MissionError::Link(e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state(z: f32, mode: crackbot_link::Mode) -> State {
+        State {
+            controller_time_us: 0,
+            pose: crackbot_link::Pose {
+                x_mm: 0.0,
+                y_mm: 0.0,
+                z_mm: z,
+            },
+            velocity: crackbot_link::Velocity::default(),
+            mode,
+            slide_progress: 0.0,
+        }
+    }
+
+    #[test]
+    fn only_samples_between_two_down_states_are_in_the_stroke() {
+        use crackbot_link::Mode;
+        let mapped = [
+            (0.0, state(5.0, Mode::Sliding { id: 3 })),
+            (10.0, state(0.0, Mode::Sliding { id: 3 })),
+            (20.0, state(0.0, Mode::Sliding { id: 3 })),
+            (30.0, state(5.0, Mode::Idle)),
+        ];
+        // Before touchdown (even where z interpolates below 0.5), after lift-off, outside the
+        // states, or in another slide: not in the stroke.
+        for t in [-1.0, 5.0, 9.5, 20.5, 29.0, 31.0] {
+            assert_eq!(down_at(&mapped, t, 3), None, "{t}");
+        }
+        for t in [10.0, 15.0, 19.9] {
+            assert!(down_at(&mapped, t, 3).is_some(), "{t}");
+        }
+        assert_eq!(down_at(&mapped, 15.0, 4), None);
+    }
 }

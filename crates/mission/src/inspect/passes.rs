@@ -302,7 +302,7 @@ impl<'a> Rig<'a> {
         while Instant::now() < settle {
             self.pump(Duration::from_millis(2))?;
         }
-        // The stroke's samples: the arm down (z ≈ 0) in slide `id`.
+        // The stroke's samples: the arm down (z ≈ 0) in slide `id` by the states on both sides.
         let mut samples = Vec::new();
         let mut positions = Vec::new();
         let u = unit(a, b);
@@ -313,31 +313,21 @@ impl<'a> Rig<'a> {
         let mut last_down: Option<f64> = None;
         for s in taken.iter() {
             let host = self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
-            if let Some((p, mode)) = position_at(&mapped, host) {
-                if p[2] < 0.5 && mode == (crackbot_link::Mode::Sliding { id }) {
-                    // (The floor keeps scheduling hiccups of a loaded host from reading as stalls.)
-                    if let Some(l) =
-                        last_down.filter(|l| host - l > (40.0 * nominal_us).max(200_000.0))
-                    {
-                        return Err(MissionError::SensorStalled {
-                            port: self.sensor.path.clone(),
-                            detail: format!(
-                                "no sample for {:.0} ms of the stroke",
-                                (host - l) / 1e3
-                            ),
-                        });
-                    }
-                    last_down = Some(host);
+            if down_at(&mapped, host, id).is_some() {
+                // (The floor keeps scheduling hiccups of a loaded host from reading as stalls.)
+                if let Some(l) = last_down.filter(|l| host - l > (40.0 * nominal_us).max(200_000.0))
+                {
+                    return Err(MissionError::SensorStalled {
+                        port: self.sensor.path.clone(),
+                        detail: format!("no sample for {:.0} ms of the stroke", (host - l) / 1e3),
+                    });
                 }
+                last_down = Some(host);
             }
         }
         for s in taken {
             let host = self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
-            let Some((p, mode)) = position_at(&mapped, host) else {
-                continue;
-            };
-            let down = p[2] < 0.5 && mode == crackbot_link::Mode::Sliding { id };
-            if down {
+            if let Some(p) = down_at(&mapped, host, id) {
                 samples.push(s.raw.map(f64::from));
                 positions.push(along(a, u, p));
             }
