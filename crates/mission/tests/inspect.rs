@@ -120,7 +120,11 @@ fn a_fused_mission_finds_the_crack_with_synchronised_positions_and_saves_everyth
         }
     }
     assert!(dips >= 1, "no pass located the crack");
-    assert_eq!(r.cracks.len() + r.rejected.len(), r.candidates.len());
+    let pieces: usize = r.cracks.iter().map(|c| c.evidence.pieces.len()).sum();
+    assert_eq!(
+        r.cracks.len() + pieces + r.rejected.len(),
+        r.candidates.len()
+    );
 }
 
 #[test]
