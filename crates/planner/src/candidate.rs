@@ -165,6 +165,14 @@ impl Candidate {
         [r.cos(), r.sin()]
     }
 
+    /// The ends of the candidate's segment: its centre ∓ half its length along its axis, mm.
+    pub fn ends(&self) -> [Point; 2] {
+        let u = self.axis();
+        let h = self.length_mm / 2.0;
+        let [x, y] = self.centre_mm;
+        [[x - h * u[0], y - h * u[1]], [x + h * u[0], y + h * u[1]]]
+    }
+
     /// Checks every field (`index`: the position in the request, for the message).
     pub(crate) fn validate(&self, index: usize) -> Result<(), PlanError> {
         let err = |field, value, expected| PlanError::InvalidCandidate {

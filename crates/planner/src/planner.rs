@@ -697,33 +697,5 @@ fn overlap_groups(candidates: &[Candidate], assumed_width_mm: f64) -> Vec<Vec<us
         .iter()
         .map(|c| c.rect(assumed_width_mm))
         .collect();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn find(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for i in 0..n {
-        for j in i + 1..n {
-            if rectangles_overlap(&rects[i], &rects[j]) {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                if a != b {
-                    parent[a.max(b)] = a.min(b);
-                }
-            }
-        }
-    }
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    let mut index_of_root = vec![usize::MAX; n];
-    for i in 0..n {
-        let r = find(&mut parent, i);
-        if index_of_root[r] == usize::MAX {
-            index_of_root[r] = groups.len();
-            groups.push(Vec::new());
-        }
-        groups[index_of_root[r]].push(i);
-    }
-    groups
+    crate::geometry::connected_groups(n, |i, j| rectangles_overlap(&rects[i], &rects[j]))
 }

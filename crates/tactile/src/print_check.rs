@@ -187,21 +187,22 @@ pub fn dip_area(p: &[f64], along: &[f64], dark: f64) -> Result<DipArea, TactileE
 /// widens with distance would also make a print narrower than the raised spot look shallower
 /// raised, and crack-like; its area ratio ([`area_ratio`]) would not.
 pub fn height_ratio(contact: &[DipArea], raised: &DipArea) -> Option<f64> {
+    ratio_of(contact, raised, |d| d.relative_depth)
+}
+
+/// `measure` of `raised` over its mean over `contact`; `None` when that mean is 0.05 or less.
+fn ratio_of(contact: &[DipArea], raised: &DipArea, measure: fn(&DipArea) -> f64) -> Option<f64> {
     if contact.is_empty() {
         return None;
     }
-    let c = contact.iter().map(|d| d.relative_depth).sum::<f64>() / contact.len() as f64;
-    (c > 0.05).then(|| raised.relative_depth / c)
+    let c = contact.iter().map(measure).sum::<f64>() / contact.len() as f64;
+    (c > 0.05).then(|| measure(raised) / c)
 }
 
 /// As [`height_ratio`], with the dip's area instead of its depth (blur-proof, noisier in
 /// contact). `None` when the contact passes' relative area is under 0.05 mm.
 pub fn area_ratio(contact: &[DipArea], raised: &DipArea) -> Option<f64> {
-    if contact.is_empty() {
-        return None;
-    }
-    let c = contact.iter().map(|d| d.relative_mm).sum::<f64>() / contact.len() as f64;
-    (c > 0.05).then(|| raised.relative_mm / c)
+    ratio_of(contact, raised, |d| d.relative_mm)
 }
 
 /// Spacing of the grid the passes' dip profiles are binned onto for [`profile_ratio`], mm.

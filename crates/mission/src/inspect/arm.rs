@@ -65,6 +65,14 @@ impl Arm {
         self.ep.send_reliable(m).map_err(link_err)
     }
 
+    /// Where the arm last said it was (the origin before any state came).
+    pub(super) fn here(&self) -> [f64; 3] {
+        self.states
+            .back()
+            .map(|s| pose(&s.state))
+            .unwrap_or([0.0; 3])
+    }
+
     pub(super) fn stop(&mut self) {
         // Best effort: the link retries; a dead controller's watchdog stops it anyway.
         let _ = self.ep.send_reliable(&Message::Stop);

@@ -842,6 +842,14 @@ fn mission(
         .ok_or_else(|| {
             MissionError::Invalid("the recognition model has no `crack` class".into())
         })?;
+    // The contact slides read the candidate as a crack: the vote, a judged pass, a crossing,
+    // and the proximity dip a crack makes (unless not required).
+    let reads_as_crack = |f: &Felt| {
+        top_class(&f.votes) == crack_class
+            && f.unknown < f.passes
+            && !f.crossings.is_empty()
+            && (f.crossings.iter().any(|c| c.1.is_some()) || !config.require_dip)
+    };
     let mut felt: Vec<(u64, Felt)> = Vec::new();
     let mut online = OnlineClassifier::new(recognition)?;
     let mut online_width = OnlineClassifier::new(width)?;
@@ -1013,13 +1021,7 @@ fn mission(
         if let (Some(c), Some(h)) = (cand, config.print_check_mm) {
             let confirmed = felt.iter_mut().find(|(k, _)| *k == c).map(|(_, f)| f);
             if let Some(f) = confirmed {
-                let class = top_class(&f.votes);
-                let dip = f.crossings.iter().any(|c| c.1.is_some());
-                if class == crack_class
-                    && f.unknown < f.passes
-                    && !f.crossings.is_empty()
-                    && (dip || !config.require_dip)
-                {
+                if reads_as_crack(f) {
                     let other_end = if finger_at == slide.start_mm {
                         slide.end_mm
                     } else {
@@ -1087,14 +1089,8 @@ fn mission(
         let detection = candidates.iter().find(|(c, _)| c.id == key);
         // Dead or saturated channels on every pass: the finger could not judge.
         let judged = f.unknown < f.passes;
-        let dip = f.crossings.iter().any(|c| c.1.is_some());
         let print = f.height_ratio.is_some_and(|r| r > print_check::PRINT_RATIO);
-        if class == crack_class
-            && judged
-            && !f.crossings.is_empty()
-            && (dip || !config.require_dip)
-            && !print
-        {
+        if reads_as_crack(&f) && !print {
             let n = f.crossings.len() as f64;
             let pos = [
                 f.crossings.iter().map(|c| c.0[0]).sum::<f64>() / n,

@@ -253,12 +253,7 @@ impl<'a> Rig<'a> {
             speed_mm_s: speed as f32,
             contact: Contact::DepthMm(1.0),
         }))?;
-        let here = self
-            .arm
-            .states
-            .back()
-            .map(|s| pose(&s.state))
-            .unwrap_or([0.0; 3]);
+        let here = self.arm.here();
         let travel =
             (a[0] - here[0]).hypot(a[1] - here[1]) / config.scene.manipulator.travel_speed_mm_s;
         let stroke = (b[0] - a[0]).hypot(b[1] - a[1]) / speed;
@@ -370,12 +365,7 @@ impl Rig<'_> {
             },
             speed_mm_s: speed as f32,
         }))?;
-        let here = self
-            .arm
-            .states
-            .back()
-            .map(|s| pose(&s.state))
-            .unwrap_or([0.0; 3]);
+        let here = self.arm.here();
         let dist = (to[0] - here[0]).hypot(to[1] - here[1]);
         let budget = Duration::from_secs_f64(dist / speed / self.config.speedup * 1.5 + 3.0);
         let deadline = Instant::now() + budget;

@@ -7,6 +7,9 @@
 //! direction are reported as one crack: the most confident piece's entry, carrying the others'
 //! slides and ids.
 
+use crackbot_planner::geometry::connected_groups;
+use crackbot_sim::surface::distance_to_polyline;
+
 use super::{Candidate, ReportedCrack};
 
 /// Largest gap between two confirmed pieces of one crack by default, mm.
@@ -17,35 +20,15 @@ pub const PIECE_ANGLE_DEG: f64 = 30.0;
 /// at most this much, mm (two cracks running side by side overlap by far more).
 pub const PIECE_OVERLAP_MM: f64 = 2.0;
 
-/// The ends of a candidate's detected segment, mm.
-fn ends(c: &Candidate) -> [[f64; 2]; 2] {
-    let (s, co) = c.axis_deg.to_radians().sin_cos();
-    let h = c.length_mm / 2.0;
-    let [x, y] = c.centre_mm;
-    [[x - h * co, y - h * s], [x + h * co, y + h * s]]
-}
-
-/// Distance from `p` to the segment `[a, b]`, mm.
-fn to_segment(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
-    let v = [b[0] - a[0], b[1] - a[1]];
-    let l2 = v[0] * v[0] + v[1] * v[1];
-    let t = if l2 > 0.0 {
-        (((p[0] - a[0]) * v[0] + (p[1] - a[1]) * v[1]) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p[0] - a[0] - t * v[0]).hypot(p[1] - a[1] - t * v[1])
-}
-
 /// Whether two detected segments are pieces of one crack: an end of one within `gap_mm` of
 /// the other, directions within [`PIECE_ANGLE_DEG`], and end to end rather than side by side
 /// (overlapping by at most [`PIECE_OVERLAP_MM`] along the first one's direction).
 pub(super) fn same_crack(a: &Candidate, b: &Candidate, gap_mm: f64) -> bool {
-    let (ea, eb) = (ends(a), ends(b));
+    let (ea, eb) = (a.ends(), b.ends());
     let gap = ea
         .iter()
-        .map(|&p| to_segment(p, eb))
-        .chain(eb.iter().map(|&p| to_segment(p, ea)))
+        .map(|&p| distance_to_polyline(&eb, p))
+        .chain(eb.iter().map(|&p| distance_to_polyline(&ea, p)))
         .fold(f64::INFINITY, f64::min);
     let turn = (a.axis_deg - b.axis_deg).rem_euclid(180.0);
     let (s, c) = a.axis_deg.to_radians().sin_cos();
@@ -71,30 +54,17 @@ pub(super) fn join_pieces(
         r.candidate
             .and_then(|id| candidates.iter().find(|c| c.id == id))
     };
-    let n = cracks.len();
-    let mut group: Vec<usize> = (0..n).collect();
-    fn root(group: &mut [usize], mut i: usize) -> usize {
-        while group[i] != i {
-            group[i] = group[group[i]];
-            i = group[i];
+    let groups = connected_groups(cracks.len(), |i, j| {
+        match (geometry(&cracks[i]), geometry(&cracks[j])) {
+            (Some(a), Some(b)) => same_crack(a, b, gap_mm),
+            _ => false,
         }
-        i
-    }
-    for i in 0..n {
-        for j in i + 1..n {
-            if let (Some(a), Some(b)) = (geometry(&cracks[i]), geometry(&cracks[j])) {
-                if same_crack(a, b, gap_mm) {
-                    let (ri, rj) = (root(&mut group, i), root(&mut group, j));
-                    group[ri] = rj;
-                }
-            }
-        }
-    }
-    let roots: Vec<usize> = (0..n).map(|i| root(&mut group, i)).collect();
-    let mut members: Vec<Vec<ReportedCrack>> = vec![Vec::new(); n];
-    for (r, c) in roots.into_iter().zip(cracks) {
-        members[r].push(c);
-    }
+    });
+    let mut cracks: Vec<Option<ReportedCrack>> = cracks.into_iter().map(Some).collect();
+    let members: Vec<Vec<ReportedCrack>> = groups
+        .iter()
+        .map(|g| g.iter().filter_map(|&i| cracks[i].take()).collect())
+        .collect();
     members
         .into_iter()
         .filter(|m| !m.is_empty())
