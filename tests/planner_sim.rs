@@ -10,7 +10,8 @@
 //!   crack, not into the printed decoy);
 //! * the whole plan, travel included, run pass by pass on the simulated controller
 //!   (`crackbot_controller::World`) takes the planner's travel + slide estimate to within the
-//!   controller's tick rounding; settling is modelled by neither and is the estimate only.
+//!   controller's tick rounding, with and without the print check's raised pass after every
+//!   slide; settling is modelled by neither and is the estimate only.
 //!
 //! `--nocapture` prints the per-slide comparison.
 
@@ -190,6 +191,21 @@ fn planned_slides_take_the_estimated_time_in_the_simulator_and_cross_their_crack
 /// Settling is not simulated, so the plan is made with `settle_s = 0`.
 #[test]
 fn a_whole_plan_takes_the_estimated_time_on_the_simulated_controller() {
+    whole_plan_on_the_controller(None);
+}
+
+/// The same with the print check's raised pass after every slide
+/// (`crackbot_mission::PRINT_CHECK_OVERRUN_MM`, `PRINT_CHECK_SPEED_MM_S`, flown 2 mm up as the
+/// mission flies it): the estimate counts each one, and the next move starts where it ends.
+#[test]
+fn a_whole_plan_with_raised_passes_takes_the_estimated_time_on_the_simulated_controller() {
+    whole_plan_on_the_controller(Some(crackbot_planner::RaisedPass {
+        overrun_mm: crackbot_mission::PRINT_CHECK_OVERRUN_MM,
+        speed_mm_s: crackbot_mission::PRINT_CHECK_SPEED_MM_S,
+    }));
+}
+
+fn whole_plan_on_the_controller(raised_pass: Option<crackbot_planner::RaisedPass>) {
     use crackbot_controller::World;
 
     let scene = Scene::builtin_default();
@@ -205,6 +221,7 @@ fn a_whole_plan_takes_the_estimated_time_on_the_simulated_controller() {
         travel_speed_mm_s: scene.manipulator.travel_speed_mm_s,
         reach_mm: scene.sensor.finger.tip_radius_mm,
         settle_s: 0.0,
+        raised_pass,
         ..Settings::default()
     };
     let planner = Planner::new(ws, limits, settings).expect("planner");
@@ -248,12 +265,37 @@ fn a_whole_plan_takes_the_estimated_time_on_the_simulated_controller() {
                 );
             }
         }
+        if let Some([from, to]) = crackbot_planner::raised_pass(slide, planner.settings(), &ws) {
+            let speed = raised_pass.map_or(0.0, |r| r.speed_mm_s);
+            for p in [from, to] {
+                world
+                    .move_to(p, crackbot_mission::PRINT_CHECK_HEIGHT_MM, speed)
+                    .expect("the controller accepts the raised pass");
+                strokes += 1;
+                loop {
+                    let t = world.step().expect("step");
+                    ticks += 1;
+                    if t.mode == crackbot_controller::Mode::Idle {
+                        break;
+                    }
+                    assert!(ticks < 1_000_000, "the controller never reached {p:?}");
+                }
+            }
+        }
     }
+    assert_eq!(
+        plan.raised.len(),
+        if raised_pass.is_some() {
+            2 * plan.slides.len()
+        } else {
+            0
+        }
+    );
     let simulated = ticks as f64 / SAMPLE_RATE_HZ;
-    let estimate = plan.time.travel_s + plan.time.slide_s;
+    let estimate = plan.time.travel_s + plan.time.slide_s + plan.time.raised_s;
     println!(
-        "controller: {} strokes, simulated {simulated:.3} s, estimate {estimate:.3} s (travel {:.3} + slides {:.3})",
-        strokes, plan.time.travel_s, plan.time.slide_s
+        "controller: {} strokes and raised moves, simulated {simulated:.3} s, estimate {estimate:.3} s (travel {:.3} + slides {:.3} + raised passes {:.3})",
+        strokes, plan.time.travel_s, plan.time.slide_s, plan.time.raised_s
     );
     // Each move and each stroke rounds up to whole ticks (+1 tick each at most).
     assert!(simulated >= estimate - 1e-9, "{simulated} < {estimate}");

@@ -26,7 +26,7 @@ pub mod sync;
 pub use demo::{run_demo, DemoConfig, DemoReport, DemoSurface};
 pub use inspect::{
     print_check_height, run_inspection, InspectConfig, InspectMode, InspectReport, Progress,
-    PRINT_CHECK_HEIGHT_MM,
+    PRINT_CHECK_HEIGHT_MM, PRINT_CHECK_OVERRUN_MM, PRINT_CHECK_SPEED_MM_S,
 };
 
 /// Errors of a mission.

@@ -84,9 +84,10 @@ pub use error::PlanError;
 pub use geometry::{Limits, Point, Workspace};
 pub use order::Order;
 pub use plan::{
-    slide_time_s, travel_time_s, Move, Plan, PlanKind, Slide, TimeEstimate, Unreachable,
+    raised_pass, slide_time_s, travel_time_s, Move, Plan, PlanKind, Slide, TimeEstimate,
+    Unreachable,
 };
-pub use planner::{OnUnreachable, Overlap, Planner, Settings};
+pub use planner::{OnUnreachable, Overlap, Planner, RaisedPass, Settings};
 pub use scan::{
     paper_mean_length_mm, scan_rows_count, scan_rows_exact, PaperTimeRow, PAPER_TABLE_II,
 };

@@ -83,6 +83,9 @@ pub struct TimeEstimate {
     pub slide_s: f64,
     /// Approach, settling and lift, [`Settings::settle_s`] per slide, s.
     pub settle_s: f64,
+    /// Passes with the finger lifted ([`Settings::raised_pass`]), one per targeted slide: an
+    /// upper bound, since the mission flies one only where the strokes read as a crack, s.
+    pub raised_s: f64,
     /// The sum, s.
     pub total_s: f64,
 }
@@ -141,7 +144,10 @@ pub struct Plan {
     /// The moves: `moves[k]` leads to `slides[k].start_mm`; with
     /// [`Settings::return_to_start`] one more leads back to the start.
     pub moves: Vec<Move>,
-    /// Sum of the moves, mm.
+    /// The raised passes ([`Settings::raised_pass`]): for each targeted slide, the back-off and
+    /// the pass, in the order of the slides; empty without them.
+    pub raised: Vec<Move>,
+    /// Sum of the moves, mm (the raised passes not included).
     pub travel_mm: f64,
     /// Distance slid (stroke × passes, summed), mm.
     pub slide_mm: f64,
@@ -180,6 +186,45 @@ pub fn slide_time_s(stroke_mm: f64, speed_mm_s: f64, passes: u32, reversal_s: f6
     f64::from(passes) * (cruise + ramp / 2.0)
 }
 
+/// Where the raised pass over `slide` ([`Settings::raised_pass`]) begins and ends, mm: from
+/// `overrun_mm` behind the end where the strokes leave the finger to `overrun_mm` beyond the
+/// other end, both clamped to `workspace`. `None` without raised passes or for a scan row.
+pub fn raised_pass(
+    slide: &Slide,
+    settings: &Settings,
+    workspace: &Workspace,
+) -> Option<[Point; 2]> {
+    let r = settings.raised_pass?;
+    if slide.candidates.is_empty() {
+        return None;
+    }
+    let at = slide.exit_mm();
+    let other = if slide.passes.is_multiple_of(2) {
+        slide.end_mm
+    } else {
+        slide.start_mm
+    };
+    let d = dist(at, other);
+    let u = if d > 0.0 {
+        [(other[0] - at[0]) / d, (other[1] - at[1]) / d]
+    } else {
+        [0.0, 0.0]
+    };
+    Some([
+        workspace.clamp([at[0] - r.overrun_mm * u[0], at[1] - r.overrun_mm * u[1]]),
+        workspace.clamp([
+            other[0] + r.overrun_mm * u[0],
+            other[1] + r.overrun_mm * u[1],
+        ]),
+    ])
+}
+
+/// Where the finger is once `slide` is done: the end of its raised pass, if it has one, else
+/// [`Slide::exit_mm`].
+pub(crate) fn leaves_at(slide: &Slide, settings: &Settings, workspace: &Workspace) -> Point {
+    raised_pass(slide, settings, workspace).map_or(slide.exit_mm(), |[_, to]| to)
+}
+
 impl Plan {
     /// Puts slides in order into a plan: the moves between them, totals and times.
     pub(crate) fn assemble(
@@ -192,33 +237,38 @@ impl Plan {
         overlapping: Vec<Vec<CandidateId>>,
     ) -> Plan {
         let mut moves = Vec::with_capacity(slides.len() + 1);
+        let mut raised = Vec::new();
         let mut at = start;
-        let mv = |from: Point, to: Point| {
+        let mv = |from: Point, to: Point, speed: f64| {
             let length = dist(from, to);
             Move {
                 from_mm: from,
                 to_mm: to,
                 length_mm: length,
-                speed_mm_s: settings.travel_speed_mm_s,
-                duration_s: travel_time_s(
-                    length,
-                    settings.travel_speed_mm_s,
-                    settings.travel_accel_mm_s2,
-                ),
+                speed_mm_s: speed,
+                duration_s: travel_time_s(length, speed, settings.travel_accel_mm_s2),
             }
         };
         for s in &slides {
-            moves.push(mv(at, s.start_mm));
+            moves.push(mv(at, s.start_mm, settings.travel_speed_mm_s));
             at = s.exit_mm();
+            if let Some([from, to]) = raised_pass(s, settings, &workspace) {
+                if let Some(r) = settings.raised_pass {
+                    raised.push(mv(at, from, r.speed_mm_s));
+                    raised.push(mv(from, to, r.speed_mm_s));
+                }
+                at = to;
+            }
         }
         if settings.return_to_start && !slides.is_empty() {
-            moves.push(mv(at, start));
+            moves.push(mv(at, start, settings.travel_speed_mm_s));
             at = start;
         }
         let travel_s = moves.iter().map(|m| m.duration_s).sum();
         let slide_s = slides.iter().map(|s| s.duration_s).sum();
         let settle_s = settings.settle_s * slides.len() as f64;
-        let total = travel_s + slide_s + settle_s;
+        let raised_s = raised.iter().fold(0.0, |a, m| a + m.duration_s);
+        let total = travel_s + slide_s + settle_s + raised_s;
         Plan {
             kind,
             workspace,
@@ -231,10 +281,12 @@ impl Plan {
                 .sum(),
             slides,
             moves,
+            raised,
             time: TimeEstimate {
                 travel_s,
                 slide_s,
                 settle_s,
+                raised_s,
                 total_s: total,
             },
             estimated_s: total,

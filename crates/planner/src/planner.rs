@@ -7,7 +7,7 @@ use crate::candidate::{Candidate, CandidateId};
 use crate::error::{non_negative, positive, PlanError};
 use crate::geometry::{add, dist, dot, rectangles_overlap, scale, Limits, Point, Workspace};
 use crate::order::{Ends, Order, Problem};
-use crate::plan::{slide_time_s, Plan, PlanKind, Slide, Unreachable};
+use crate::plan::{leaves_at, slide_time_s, Plan, PlanKind, Slide, Unreachable};
 use crate::scan::scan_rows_count;
 use crate::{MAX_BRUTE_FORCE, MAX_COORD_MM, MAX_SLIDES_PER_CANDIDATE};
 
@@ -89,6 +89,23 @@ pub struct Settings {
     pub start_mm: Option<Point>,
     /// Whether the plan ends back at the start.
     pub return_to_start: bool,
+    /// A pass with the finger lifted over each targeted slide after its strokes (the mission's
+    /// print check); `None`: none. Scan rows get none.
+    pub raised_pass: Option<RaisedPass>,
+}
+
+/// A pass with the finger lifted over a targeted slide, flown after its strokes: the finger
+/// backs off `overrun_mm` beyond the end where the strokes left it, then flies level to
+/// `overrun_mm` beyond the other end (both clamped to the workspace), where the next move
+/// starts. The mission flies it only where the strokes read as a crack, so the plan's time,
+/// which counts one for every targeted slide, is an upper bound.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RaisedPass {
+    /// How far beyond each end of the slide the pass reaches, mm.
+    pub overrun_mm: f64,
+    /// Speed, mm/s (at most the travel speed limit).
+    pub speed_mm_s: f64,
 }
 
 impl Default for Settings {
@@ -112,6 +129,7 @@ impl Default for Settings {
             on_unreachable: OnUnreachable::default(),
             start_mm: None,
             return_to_start: false,
+            raised_pass: None,
         }
     }
 }
@@ -247,6 +265,25 @@ impl Planner {
         if let Some(sp) = s.along_spacing_mm {
             positive("settings.along_spacing_mm", sp)?;
         }
+        if let Some(r) = s.raised_pass {
+            non_negative("settings.raised_pass.overrun_mm", r.overrun_mm)?;
+            if r.overrun_mm > MAX_COORD_MM {
+                return Err(PlanError::InvalidParam {
+                    field: "settings.raised_pass.overrun_mm".into(),
+                    value: r.overrun_mm,
+                    expected: "at most 1e9 mm",
+                });
+            }
+            positive("settings.raised_pass.speed_mm_s", r.speed_mm_s)?;
+            if r.speed_mm_s > limits.max_travel_speed_mm_s {
+                return Err(PlanError::AboveSpeedLimit {
+                    field: "settings.raised_pass.speed_mm_s".into(),
+                    value: r.speed_mm_s,
+                    limit_field: "limits.max_travel_speed_mm_s".into(),
+                    limit: limits.max_travel_speed_mm_s,
+                });
+            }
+        }
         let start = s
             .start_mm
             .unwrap_or([workspace.x_min_mm, workspace.y_min_mm]);
@@ -364,7 +401,7 @@ impl Planner {
             .map(|vars| {
                 vars.iter()
                     .enumerate()
-                    .map(|(v, sl)| ends_of(sl, vars, v))
+                    .map(|(v, sl)| ends_of(sl, vars, v, |x| leaves_at(x, s, &self.workspace)))
                     .collect()
             })
             .collect();
@@ -666,24 +703,31 @@ impl Planner {
 }
 
 /// Entry, exit, internal travel and the reverse of variant `v` among `vars`.
-fn ends_of(slides: &[Slide], vars: &[Vec<Slide>], v: usize) -> Ends {
+fn ends_of(
+    slides: &[Slide],
+    vars: &[Vec<Slide>],
+    v: usize,
+    leaves_at: impl Fn(&Slide) -> Point,
+) -> Ends {
     let entry = slides[0].start_mm;
-    let exit = slides[slides.len() - 1].exit_mm();
+    let last_exit = slides[slides.len() - 1].exit_mm();
     let internal = slides
         .windows(2)
-        .map(|w| dist(w[0].exit_mm(), w[1].start_mm))
+        .map(|w| dist(leaves_at(&w[0]), w[1].start_mm))
         .sum();
-    // The reverse runs the same slides backwards: it enters where this one leaves, and leaves
-    // where this one enters.
+    // The reverse runs the same slides backwards: it enters where this one's strokes leave the
+    // finger, and its strokes leave it where this one enters.
     let rev = vars
         .iter()
         .position(|o| {
-            o[0].start_mm == exit && o[o.len() - 1].exit_mm() == entry && o.len() == slides.len()
+            o[0].start_mm == last_exit
+                && o[o.len() - 1].exit_mm() == entry
+                && o.len() == slides.len()
         })
         .unwrap_or(v);
     Ends {
         entry,
-        exit,
+        exit: leaves_at(&slides[slides.len() - 1]),
         internal,
         rev,
     }

@@ -5,7 +5,7 @@
 
 use crackbot_planner::{
     brute_force_order, targeted, Candidate, Limits, OnUnreachable, Order, Overlap, Plan, PlanError,
-    PlanKind, Planner, Settings, Workspace, MAX_BRUTE_FORCE,
+    PlanKind, Planner, RaisedPass, Settings, Workspace, MAX_BRUTE_FORCE,
 };
 
 fn plate() -> Workspace {
@@ -43,7 +43,7 @@ fn check(plan: &Plan, limits: &Limits) {
         assert!(m.speed_mm_s <= limits.max_travel_speed_mm_s);
     }
     let t = plan.time;
-    assert!((t.travel_s + t.slide_s + t.settle_s - t.total_s).abs() < 1e-9);
+    assert!((t.travel_s + t.slide_s + t.settle_s + t.raised_s - t.total_s).abs() < 1e-9);
     assert_eq!(plan.estimated_s, t.total_s);
 }
 
@@ -422,6 +422,19 @@ fn settings_and_limits_are_checked_once() {
         ..Settings::default()
     })
     .contains("along_spacing"));
+    let raised = |overrun_mm: f64, speed_mm_s: f64| Settings {
+        raised_pass: Some(RaisedPass {
+            overrun_mm,
+            speed_mm_s,
+        }),
+        ..Settings::default()
+    };
+    assert!(err(raised(1.5, 500.0)).contains(
+        "settings.raised_pass.speed_mm_s = 500 mm/s is above the limit limits.max_travel_speed_mm_s"
+    ));
+    assert!(err(raised(1.5, 0.0)).contains("settings.raised_pass.speed_mm_s"));
+    assert!(err(raised(-1.0, 40.0)).contains("settings.raised_pass.overrun_mm"));
+    assert!(err(raised(f64::NAN, 40.0)).contains("settings.raised_pass.overrun_mm"));
     assert!(err(Settings {
         start_mm: Some([-1.0, 0.0]),
         ..Settings::default()
@@ -550,4 +563,73 @@ fn plans_serialise() {
     assert_eq!(old.reach_mm, 2.5);
     let new: Settings = serde_json::from_str(r#"{"reach_mm": 2.5}"#).unwrap();
     assert_eq!(new, old);
+}
+
+/// A raised pass over every targeted slide (the mission's print check): from the overrun behind
+/// the end where the strokes left the finger to the overrun beyond the other end, clamped to the
+/// workspace; its time joins the estimate and the next move starts where it ends. Scan rows get
+/// none.
+#[test]
+fn raised_passes_follow_each_targeted_slide_and_count_in_the_estimate() {
+    let pass = RaisedPass {
+        overrun_mm: 1.5,
+        speed_mm_s: 40.0,
+    };
+    let cracks = [
+        crack(1, 50.0, 50.0, 90.0, 20.0, 2.0),
+        crack(2, 150.0, 40.0, 0.0, 30.0, 1.0),
+        // Across the workspace's left edge: the pass is clamped there.
+        crack(3, 1.0, 80.0, 90.0, 10.0, 1.0),
+    ];
+    let without = planner(Settings::default()).targeted(&cracks).unwrap();
+    let with = planner(Settings {
+        raised_pass: Some(pass),
+        ..Settings::default()
+    })
+    .targeted(&cracks)
+    .unwrap();
+    check(&with, &Limits::default());
+    assert_eq!(without.time.raised_s, 0.0);
+    assert!(without.raised.is_empty());
+    assert_eq!(with.raised.len(), 2 * with.slides.len());
+    let ws = plate();
+    for (sl, m) in with.slides.iter().zip(with.raised.chunks(2)) {
+        // Two passes: the strokes leave the finger at the start; it backs off behind it and
+        // flies past the end.
+        let u = [
+            (sl.end_mm[0] - sl.start_mm[0]) / sl.stroke_mm,
+            (sl.end_mm[1] - sl.start_mm[1]) / sl.stroke_mm,
+        ];
+        let behind = ws.clamp([sl.start_mm[0] - 1.5 * u[0], sl.start_mm[1] - 1.5 * u[1]]);
+        let beyond = ws.clamp([sl.end_mm[0] + 1.5 * u[0], sl.end_mm[1] + 1.5 * u[1]]);
+        assert_eq!(m[0].from_mm, sl.start_mm);
+        for (a, b) in [
+            (m[0].to_mm, behind),
+            (m[1].from_mm, behind),
+            (m[1].to_mm, beyond),
+        ] {
+            assert!(
+                (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
+                "{a:?} {b:?}"
+            );
+        }
+        assert!(m.iter().all(|m| m.speed_mm_s == 40.0));
+        assert!((m[1].duration_s - m[1].length_mm / 40.0).abs() < 1e-12);
+        assert!(m[1].length_mm <= sl.stroke_mm + 3.0 + 1e-9);
+        assert!(m[1].length_mm > sl.stroke_mm);
+    }
+    let sum: f64 = with.raised.iter().map(|m| m.duration_s).sum();
+    assert!((with.time.raised_s - sum).abs() < 1e-12);
+    assert!(with.time.raised_s > 0.0);
+    assert_eq!(with.time.slide_s, without.time.slide_s);
+    // The whole pass is inside the workspace even where the slide touches its edge.
+    assert!(with.raised.iter().all(|m| ws.contains(m.to_mm)));
+    // A scan has no candidates to check.
+    let scan = planner(Settings {
+        raised_pass: Some(pass),
+        ..Settings::default()
+    })
+    .tactile_scan(0.5, 40.0)
+    .unwrap();
+    assert!(scan.raised.is_empty() && scan.time.raised_s == 0.0);
 }

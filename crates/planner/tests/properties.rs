@@ -5,7 +5,8 @@
 #![allow(clippy::unwrap_used)]
 
 use crackbot_planner::{
-    Candidate, Limits, Order, Overlap, Plan, PlanError, PlanKind, Planner, Settings, Workspace,
+    Candidate, Limits, Order, Overlap, Plan, PlanError, PlanKind, Planner, RaisedPass, Settings,
+    Workspace,
 };
 use proptest::prelude::*;
 
@@ -52,6 +53,7 @@ fn settings(ws: Workspace, limits: Limits) -> impl Strategy<Value = Settings> {
             ],
             any::<bool>(),
             (0.0..=1.0f64, 0.0..=1.0f64),
+            prop::option::of((0.0..5.0f64, 0.01..=1.0f64)),
         ),
     )
         .prop_map(
@@ -59,7 +61,7 @@ fn settings(ws: Workspace, limits: Limits) -> impl Strategy<Value = Settings> {
                 (fs, ft, accel),
                 (settle, reversal, passes, scan_passes),
                 (margin, min_frac, tip, min_stroke, assumed),
-                (spacing, overlap, order, ret, (u, v)),
+                (spacing, overlap, order, ret, (u, v), raised),
             )| Settings {
                 slide_speed_mm_s: fs * limits.max_slide_speed_mm_s,
                 travel_speed_mm_s: ft * limits.max_travel_speed_mm_s,
@@ -83,6 +85,10 @@ fn settings(ws: Workspace, limits: Limits) -> impl Strategy<Value = Settings> {
                     ws.y_min_mm + v * ws.height_mm(),
                 ]),
                 return_to_start: ret,
+                raised_pass: raised.map(|(overrun, f)| RaisedPass {
+                    overrun_mm: overrun,
+                    speed_mm_s: f * limits.max_travel_speed_mm_s,
+                }),
             },
         )
 }
@@ -161,21 +167,42 @@ fn assert_safe(plan: &Plan, ws: &Workspace, limits: &Limits, s: &Settings) {
         );
         assert!(m.duration_s.is_finite() && m.duration_s >= 0.0);
     }
-    // The moves chain the slides: start → slide 0 → … (→ start).
+    for m in &plan.raised {
+        assert!(
+            ws.contains(m.from_mm) && ws.contains(m.to_mm),
+            "raised pass outside {ws}: {m:?}"
+        );
+        assert!(
+            m.speed_mm_s > 0.0 && m.speed_mm_s <= limits.max_travel_speed_mm_s,
+            "{m:?}"
+        );
+    }
+    // The moves chain the slides: start → slide 0 (→ its raised pass) → … (→ start).
     assert!(plan.moves.len() == plan.slides.len() || plan.moves.len() == plan.slides.len() + 1);
     let mut at = plan.start_mm;
+    let mut raised = plan.raised.chunks(2);
     for (k, sl) in plan.slides.iter().enumerate() {
         assert_eq!(plan.moves[k].from_mm, at);
         assert_eq!(plan.moves[k].to_mm, sl.start_mm);
         at = sl.exit_mm();
+        if s.raised_pass.is_some() && !sl.candidates.is_empty() {
+            let pass = raised
+                .next()
+                .expect("a raised pass for every targeted slide");
+            assert_eq!(pass[0].from_mm, at);
+            assert_eq!(pass[0].to_mm, pass[1].from_mm);
+            at = pass[1].to_mm;
+        }
     }
+    assert!(raised.next().is_none(), "a raised pass without its slide");
     if plan.moves.len() > plan.slides.len() {
         assert_eq!(plan.moves.last().map(|m| m.to_mm), Some(plan.start_mm));
     }
     let t = plan.time;
     assert!(
         t.total_s.is_finite()
-            && (t.travel_s + t.slide_s + t.settle_s - t.total_s).abs() <= 1e-9 * t.total_s.max(1.0)
+            && (t.travel_s + t.slide_s + t.settle_s + t.raised_s - t.total_s).abs()
+                <= 1e-9 * t.total_s.max(1.0)
     );
 }
 

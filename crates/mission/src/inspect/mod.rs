@@ -226,7 +226,9 @@ pub fn print_check_height(h: f64) -> Result<Option<f64>, MissionError> {
 /// heights"); the authors' flat plate's proximity channel spans 18–22 counts in a slide.
 pub const MIN_DIP_COUNTS: f64 = 40.0;
 
-/// How far the print check's raised pass runs past each end of the candidate's stroke, mm.
+/// How far the print check's raised pass runs past each end of the candidate's stroke, mm (the
+/// default of the planner's [`crackbot_planner::RaisedPass`]; `InspectConfig::planner`'s
+/// `raised_pass` replaces it and the speed below).
 pub const PRINT_CHECK_OVERRUN_MM: f64 = 1.5;
 /// Speed of the print check's raised pass, mm/s (or the manipulator's travel limit, if lower):
 /// 0.1 mm between the sensor's samples, a tenth of the fibre's spot.
@@ -806,7 +808,21 @@ fn mission(
         report.elapsed_s = started.elapsed().as_secs_f64();
         return Ok(report);
     }
-    let planner = Planner::new(workspace, limits, config.planner.clone())?;
+    // The print check's raised passes are the planner's to place and time: the settings' own,
+    // or the default overrun and speed (under the travel limit); none without the check.
+    let settings = crackbot_planner::Settings {
+        raised_pass: config.print_check_mm.map(|_| {
+            config
+                .planner
+                .raised_pass
+                .unwrap_or(crackbot_planner::RaisedPass {
+                    overrun_mm: PRINT_CHECK_OVERRUN_MM,
+                    speed_mm_s: PRINT_CHECK_SPEED_MM_S.min(limits.max_travel_speed_mm_s),
+                })
+        }),
+        ..config.planner.clone()
+    };
+    let planner = Planner::new(workspace, limits, settings)?;
     let plan = match config.mode {
         InspectMode::Tactile => planner.tactile_scan(config.gamma, config.mean_crack_length_mm)?,
         _ => planner.targeted(&report.candidates)?,
@@ -1021,30 +1037,19 @@ fn mission(
         if let (Some(c), Some(h)) = (cand, config.print_check_mm) {
             let confirmed = felt.iter_mut().find(|(k, _)| *k == c).map(|(_, f)| f);
             if let Some(f) = confirmed {
-                if reads_as_crack(f) {
-                    let other_end = if finger_at == slide.start_mm {
-                        slide.end_mm
-                    } else {
-                        slide.start_mm
-                    };
-                    let speed = PRINT_CHECK_SPEED_MM_S.min(limits.max_travel_speed_mm_s);
-                    // The finger rises and backs off PRINT_CHECK_OVERRUN_MM, then passes raised
-                    // to as far past the other end (inside the workspace): both ends of the
-                    // raised pass are sound surface, whatever the state stream's spacing.
-                    let d = passes::unit(finger_at, other_end);
-                    let beyond = |p: [f64; 2], s: f64| {
-                        [
-                            (p[0] + s * PRINT_CHECK_OVERRUN_MM * d[0])
-                                .clamp(workspace.x_min_mm, workspace.x_max_mm),
-                            (p[1] + s * PRINT_CHECK_OVERRUN_MM * d[1])
-                                .clamp(workspace.y_min_mm, workspace.y_max_mm),
-                        ]
-                    };
-                    let (from, to) = (beyond(finger_at, -1.0), beyond(other_end, 1.0));
-                    rig.hover_and_record(finger_at, from, h, speed)?;
-                    let (hs, hx) = rig.hover_and_record(from, to, h, speed)?;
+                let pass = crackbot_planner::raised_pass(slide, planner.settings(), &workspace)
+                    .zip(planner.settings().raised_pass);
+                if let (true, Some(([from, to], raised))) = (reads_as_crack(f), pass) {
+                    // The finger rises and backs off behind where the strokes left it, then
+                    // passes raised to as far past the other end (the planner's raised pass):
+                    // both ends of the raised pass are sound surface, whatever the state
+                    // stream's spacing.
+                    let d = passes::unit(from, to);
+                    let backwards = d[0] * u[0] + d[1] * u[1] < 0.0;
+                    rig.hover_and_record(finger_at, from, h, raised.speed_mm_s)?;
+                    let (hs, hx) = rig.hover_and_record(from, to, h, raised.speed_mm_s)?;
                     let rec_path = config.out_dir.join(format!("raised-{c:03}.csv"));
-                    save_pass(&rec_path, &hs, &hx, u8::from(other_end == slide.start_mm))?;
+                    save_pass(&rec_path, &hs, &hx, u8::from(backwards))?;
                     let dark = config.scene.sensor.optics.proximity_dark_counts;
                     // The raised pass's positions on the slide's axis, as the strokes'.
                     let hp: Vec<f64> = hs.iter().map(|v| v[3]).collect();
