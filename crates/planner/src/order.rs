@@ -267,6 +267,20 @@ impl Problem<'_> {
         route
     }
 
+    /// Replaces `route` with `candidate` if that is shorter by more than [`EPS`]. The passes
+    /// find their moves by local deltas that hold where each node's reverse variant mirrors it
+    /// (enters where it leaves and leaves where it enters); where it does not (a slide followed
+    /// by a raised pass leaves the finger elsewhere, [`crate::RaisedPass`]) the whole route's
+    /// cost decides, so every accepted move shortens the route and the passes end.
+    fn take_if_shorter(&self, route: &mut Route, candidate: Route) -> bool {
+        if self.cost(&candidate) < self.cost(route) - EPS {
+            *route = candidate;
+            true
+        } else {
+            false
+        }
+    }
+
     fn two_opt_pass(&self, route: &mut Route) -> bool {
         let n = route.len();
         let mut improved = false;
@@ -278,11 +292,12 @@ impl Problem<'_> {
                 let old = dist(p, ei.entry) + Self::link(ej.exit, nx);
                 let new = dist(p, ej.exit) + Self::link(ei.entry, nx);
                 if new < old - EPS {
-                    route[i..=j].reverse();
-                    for rv in &mut route[i..=j] {
+                    let mut moved = route.clone();
+                    moved[i..=j].reverse();
+                    for rv in &mut moved[i..=j] {
                         rv.1 = self.nodes[rv.0][rv.1].rev;
                     }
-                    improved = true;
+                    improved |= self.take_if_shorter(route, moved);
                 }
             }
         }
@@ -347,7 +362,8 @@ impl Problem<'_> {
                     }
                 }
                 if let Some((_, g, how)) = best {
-                    let mut moved: Vec<(usize, usize)> = route.drain(i..i + len).collect();
+                    let mut candidate = route.clone();
+                    let mut moved: Vec<(usize, usize)> = candidate.drain(i..i + len).collect();
                     match how {
                         Insert::Forward => {}
                         Insert::Reversed => {
@@ -358,8 +374,8 @@ impl Problem<'_> {
                         }
                         Insert::Variant(v) => moved[0].1 = v,
                     }
-                    route.splice(g..g, moved);
-                    improved = true;
+                    candidate.splice(g..g, moved);
+                    improved |= self.take_if_shorter(route, candidate);
                 }
                 i += 1;
             }
@@ -475,6 +491,58 @@ mod tests {
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
         (*seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Nodes whose reverse does not mirror them (a slide of one pass followed by a raised pass
+    /// back past its start leaves the finger near where it entered, either way round): the local
+    /// search still ends, never loses to nearest neighbour, and brute force never loses to it.
+    #[test]
+    fn local_search_ends_and_holds_where_reverses_do_not_mirror() {
+        let mut seed = 11u64;
+        for case in 0..200 {
+            let n = 1 + case % 8;
+            let nodes: Vec<Vec<Ends>> = (0..n)
+                .map(|_| {
+                    let a = [lcg(&mut seed) * 100.0, lcg(&mut seed) * 100.0];
+                    let b = [a[0] + lcg(&mut seed) * 20.0, a[1] + lcg(&mut seed) * 20.0];
+                    let near = |p: Point, q: Point| {
+                        [p[0] + 0.1 * (p[0] - q[0]), p[1] + 0.1 * (p[1] - q[1])]
+                    };
+                    vec![
+                        Ends {
+                            entry: a,
+                            exit: near(a, b),
+                            internal: dist(a, b),
+                            rev: 1,
+                        },
+                        Ends {
+                            entry: b,
+                            exit: near(b, a),
+                            internal: dist(a, b),
+                            rev: 0,
+                        },
+                    ]
+                })
+                .collect();
+            for ret in [false, true] {
+                let p = Problem {
+                    start: [0.0, 0.0],
+                    ret,
+                    nodes: &nodes,
+                };
+                let nn = p.cost(&p.solve(Order::NearestNeighbour));
+                let started = std::time::Instant::now();
+                let two = p.cost(&p.solve(Order::TwoOpt));
+                assert!(
+                    started.elapsed().as_millis() < 500,
+                    "{case}: {:?}",
+                    started.elapsed()
+                );
+                let bf = p.cost(&p.solve(Order::BruteForce));
+                assert!(two <= nn + 1e-9, "{case}: {two} > {nn}");
+                assert!(bf <= two + 1e-9, "{case}: {bf} > {two}");
+            }
+        }
     }
 
     #[test]
