@@ -8,7 +8,7 @@
 //!
 //! Every figure is a mission run by [`run_inspection`] on a generated scene: the same code path
 //! as the robot's (link, PTY, online classification). Scenes come from a seed
-//! ([`crackbot_sim::random_scene`]); any valid scene file also runs.
+//! ([`crackbot_sim::random_scene()`]); any valid scene file also runs.
 //!
 //! **Scoring.** A reported crack is *correct* when its position lies within
 //! [`MATCH_MM`] of a true crack's centre line and no other report claimed that crack; it is a

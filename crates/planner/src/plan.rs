@@ -252,11 +252,11 @@ impl Plan {
         for s in &slides {
             moves.push(mv(at, s.start_mm, settings.travel_speed_mm_s));
             at = s.exit_mm();
-            if let Some([from, to]) = raised_pass(s, settings, &workspace) {
-                if let Some(r) = settings.raised_pass {
-                    raised.push(mv(at, from, r.speed_mm_s));
-                    raised.push(mv(from, to, r.speed_mm_s));
-                }
+            if let (Some([from, to]), Some(r)) =
+                (raised_pass(s, settings, &workspace), settings.raised_pass)
+            {
+                raised.push(mv(at, from, r.speed_mm_s));
+                raised.push(mv(from, to, r.speed_mm_s));
                 at = to;
             }
         }
