@@ -192,6 +192,17 @@ impl Planner {
         let s = &settings;
         positive("settings.slide_speed_mm_s", s.slide_speed_mm_s)?;
         positive("settings.travel_speed_mm_s", s.travel_speed_mm_s)?;
+        if let Some(r) = s.raised_pass {
+            positive("settings.raised_pass.speed_mm_s", r.speed_mm_s)?;
+        }
+        let raised_speed = s.raised_pass.map(|r| {
+            (
+                "settings.raised_pass.speed_mm_s",
+                r.speed_mm_s,
+                "limits.max_travel_speed_mm_s",
+                limits.max_travel_speed_mm_s,
+            )
+        });
         for (field, v, limit_field, limit) in [
             (
                 "settings.slide_speed_mm_s",
@@ -205,7 +216,10 @@ impl Planner {
                 "limits.max_travel_speed_mm_s",
                 limits.max_travel_speed_mm_s,
             ),
-        ] {
+        ]
+        .into_iter()
+        .chain(raised_speed)
+        {
             if v > limit {
                 return Err(PlanError::AboveSpeedLimit {
                     field: field.into(),
@@ -238,7 +252,12 @@ impl Planner {
             ("settings.reach_mm", s.reach_mm),
             ("settings.min_stroke_mm", s.min_stroke_mm),
             ("settings.assumed_width_mm", s.assumed_width_mm),
-        ] {
+        ]
+        .into_iter()
+        .chain(
+            s.raised_pass
+                .map(|r| ("settings.raised_pass.overrun_mm", r.overrun_mm)),
+        ) {
             non_negative(f, v)?;
             if v > MAX_COORD_MM {
                 return Err(PlanError::InvalidParam {
@@ -264,25 +283,6 @@ impl Planner {
         }
         if let Some(sp) = s.along_spacing_mm {
             positive("settings.along_spacing_mm", sp)?;
-        }
-        if let Some(r) = s.raised_pass {
-            non_negative("settings.raised_pass.overrun_mm", r.overrun_mm)?;
-            if r.overrun_mm > MAX_COORD_MM {
-                return Err(PlanError::InvalidParam {
-                    field: "settings.raised_pass.overrun_mm".into(),
-                    value: r.overrun_mm,
-                    expected: "at most 1e9 mm",
-                });
-            }
-            positive("settings.raised_pass.speed_mm_s", r.speed_mm_s)?;
-            if r.speed_mm_s > limits.max_travel_speed_mm_s {
-                return Err(PlanError::AboveSpeedLimit {
-                    field: "settings.raised_pass.speed_mm_s".into(),
-                    value: r.speed_mm_s,
-                    limit_field: "limits.max_travel_speed_mm_s".into(),
-                    limit: limits.max_travel_speed_mm_s,
-                });
-            }
         }
         let start = s
             .start_mm

@@ -302,30 +302,24 @@ impl<'a> Rig<'a> {
         let mut positions = Vec::new();
         let u = unit(a, b);
         let mapped = mapped_states(self.arm);
-        let taken: Vec<TimedSample> = self.sensor.samples[first_sample..].to_vec();
         // A silence of the sensor inside the stroke (a stall the stroke outlasted): slide again.
         let nominal_us = 2500.0 / config.speedup;
         let mut last_down: Option<f64> = None;
-        for s in taken.iter() {
+        for s in &self.sensor.samples[first_sample..] {
             let host = self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
-            if down_at(&mapped, host, id).is_some() {
-                // (The floor keeps scheduling hiccups of a loaded host from reading as stalls.)
-                if let Some(l) = last_down.filter(|l| host - l > (40.0 * nominal_us).max(200_000.0))
-                {
-                    return Err(MissionError::SensorStalled {
-                        port: self.sensor.path.clone(),
-                        detail: format!("no sample for {:.0} ms of the stroke", (host - l) / 1e3),
-                    });
-                }
-                last_down = Some(host);
+            let Some(p) = down_at(&mapped, host, id) else {
+                continue;
+            };
+            // (The floor keeps scheduling hiccups of a loaded host from reading as stalls.)
+            if let Some(l) = last_down.filter(|l| host - l > (40.0 * nominal_us).max(200_000.0)) {
+                return Err(MissionError::SensorStalled {
+                    port: self.sensor.path.clone(),
+                    detail: format!("no sample for {:.0} ms of the stroke", (host - l) / 1e3),
+                });
             }
-        }
-        for s in taken {
-            let host = self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
-            if let Some(p) = down_at(&mapped, host, id) {
-                samples.push(s.raw.map(f64::from));
-                positions.push(along(a, u, p));
-            }
+            last_down = Some(host);
+            samples.push(s.raw.map(f64::from));
+            positions.push(along(a, u, p));
         }
         // Frames lost to a stall that lasted past the stroke's end: too few samples for the stroke.
         let expected = (b[0] - a[0]).hypot(b[1] - a[1]) / speed * crackbot_sim::run::SAMPLE_RATE_HZ;
