@@ -82,7 +82,7 @@ pub struct RunArgs {
     #[arg(long, default_value_t = crackbot_mission::inspect::MIN_DIP_COUNTS)]
     pub min_dip_counts: f64,
     /// Fused missions: report confirmed candidates whose detections continue each other
-    /// across at most this gap (mm, within 30° of one direction) as one crack; 0 reports each.
+    /// across at most this gap (mm, within 40° of one direction) as one crack; 0 reports each.
     #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_GAP_MM)]
     pub piece_gap_mm: f64,
     /// Deployed recognition model.

@@ -69,7 +69,7 @@ pub struct Common {
     #[arg(long, default_value_t = crackbot_mission::inspect::MIN_DIP_COUNTS)]
     min_dip_counts: f64,
     /// Fused missions: report confirmed candidates whose detections continue each other
-    /// across at most this gap (mm, within 30° of one direction) as one crack; 0 reports each.
+    /// across at most this gap (mm, within 40° of one direction) as one crack; 0 reports each.
     #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_GAP_MM)]
     piece_gap_mm: f64,
     /// Deployed recognition model (default: models/tactile/recognition.ctm).

@@ -14,10 +14,11 @@
 //! Raised by `h`, the fibre sees ink darken it by the same share `1 − R` as in contact, while a
 //! crack's floor, `depth` below the plate, darkens it by less: `f(d₀ + h + depth) / f(d₀ + h)`
 //! is closer to 1 than `f(d₀ + depth) / f(d₀)` where `f` falls off (`1/d²` beyond its peak).
-//! The measure the robot uses is [`profile_ratio`]: the least-squares factor between the raised
+//! The measure the robot uses is [`print_ratio`]: the least-squares factor between the raised
 //! dip and the contact dip (each as a share of its signal above the fibre's dark level), at the
-//! shift where they line up. It is about 1 for ink of any darkness or width and below 1 for a
-//! crack. The share of the spot a narrow mark covers cancels in the ratio of the two heights.
+//! shift where they line up ([`profile_ratio`]), or the ratio of their floors where the contact
+//! dip has reached the fibre's dark level. It is about 1 for ink of any darkness or width and
+//! below 1 for a crack. The share of the spot a narrow mark covers cancels in the ratio of the two heights.
 //! Two simpler measures are kept for comparison: [`height_ratio`] (the dips' floors: biased
 //! towards "print" where the raised dip is only a few counts deep, as the minimum of noisy
 //! samples lies below the true floor) and [`area_ratio`] (the dips' areas: blur-proof, but in
@@ -205,6 +206,12 @@ pub fn area_ratio(contact: &[DipArea], raised: &DipArea) -> Option<f64> {
     ratio_of(contact, raised, |d| d.relative_mm)
 }
 
+/// Fewest grid cells beside the contact dip [`profile_ratio`] needs to estimate its noise.
+const MIN_NOISE_BINS: usize = 6;
+/// A contact dip this deep (a share of the signal above the dark level) has reached the fibre's
+/// dark level: [`print_ratio`] compares its floor, not its profile.
+pub const SATURATED_SHARE: f64 = 0.85;
+
 /// Spacing of the grid the passes' dip profiles are binned onto for [`profile_ratio`], mm.
 const GRID_MM: f64 = 0.05;
 /// Largest shift between the contact and the raised dip [`profile_ratio`] searches, mm (the
@@ -251,8 +258,10 @@ fn profile(p: &[f64], along: &[f64], dip: &DipArea, dark: f64, x0: f64, n: usize
 /// shift (within ±6 mm) where the two profiles correlate best. About 1 for a print, below 1
 /// for a crack, like [`height_ratio`], but from every sample of the dip rather than its
 /// floor: a shallow dip's raised floor, a few counts deep, is mostly noise, and its minimum is
-/// biased deep (the least-squares factor is not). `None` when the contact dip is under 5 % of
-/// its signal or the profiles never overlap over the dip.
+/// biased deep (the least-squares factor is not). The contact profile's own noise (its mean
+/// square beside the dip) is taken out of the fit's denominator: noise in the template would
+/// otherwise pull the factor of a shallow print towards "crack". `None` when the contact dip
+/// is under 5 % of its signal or the profiles never overlap over the dip.
 ///
 /// Errors as [`dip_area`] for either pass.
 pub fn profile_ratio(
@@ -280,6 +289,21 @@ pub fn profile_ratio(
     // The contact dip's window, in grid cells: the part of the profile that must overlap.
     let w0 = (((dc.window_mm[0] - c0) / GRID_MM).floor().max(0.0) as usize).min(nc - 1);
     let w1 = (((dc.window_mm[1] - c0) / GRID_MM).ceil().max(0.0) as usize).min(nc - 1);
+    // The contact profile's noise: its mean square beside the dip, where it should be 0. Noise
+    // in the template inflates `Σ c²` by about `n · noise` and biases the factor low (errors
+    // in variables); it is taken out below, at most halving `Σ c²`.
+    let (mut beside, mut nb) = (0.0, 0usize);
+    for (i, &cv) in c.iter().enumerate() {
+        if (i < w0 || i > w1) && !cv.is_nan() {
+            beside += cv * cv;
+            nb += 1;
+        }
+    }
+    let noise = if nb >= MIN_NOISE_BINS {
+        beside / nb as f64
+    } else {
+        0.0
+    };
     let max_shift = (MAX_SHIFT_MM / GRID_MM).round() as i64;
     let offset = ((c0 - r0) / GRID_MM).round() as i64;
     let mut best: Option<(f64, f64)> = None;
@@ -305,10 +329,35 @@ pub fn profile_ratio(
         }
         let corr = rc / (cc * rr).sqrt();
         if best.is_none_or(|(b, _)| corr > b) {
-            best = Some((corr, rc / cc));
+            best = Some((corr, rc / (cc - n as f64 * noise).max(0.5 * cc)));
         }
     }
     Ok(best.map(|(_, k)| k))
+}
+
+/// The ratio the robot judges a candidate by: [`profile_ratio`], except where the contact dip
+/// has reached the fibre's dark level ([`SATURATED_SHARE`] of its signal or more), where it is
+/// the ratio of the two dips' floors (each smoothed over 0.2 mm, as shares of their signal).
+///
+/// Why: where no light comes back in contact (a crack whose floor is beyond the fibre's range)
+/// the contact dip is clipped flat at the dark level while the raised one is not, so the two
+/// profiles differ in shape and the least-squares factor comes out near 1 whatever the raised
+/// dip's depth (wide simulated cracks read 0.89–1.06, as prints). Both floors are then deep,
+/// well above the noise, so the floor ratio is reliable; a print can only be that dark with
+/// ink close to black, whose raised dip keeps its depth (ratio about 1, still a print).
+///
+/// Errors as [`dip_area`] for either pass.
+pub fn print_ratio(
+    contact: (&[f64], &[f64]),
+    raised: (&[f64], &[f64]),
+    dark: f64,
+) -> Result<Option<f64>, TactileError> {
+    let dc = dip_area(contact.0, contact.1, dark)?;
+    if dc.relative_depth >= SATURATED_SHARE {
+        let dr = dip_area(raised.0, raised.1, dark)?;
+        return Ok(Some(dr.relative_depth / dc.relative_depth));
+    }
+    profile_ratio(contact, raised, dark)
 }
 
 /// Above this [`profile_ratio`] a dip is a print's, not a crack's (chosen on simulated trial
@@ -420,6 +469,40 @@ mod tests {
         let (fp, fx) = noisy(0.0, 0.8, 224.0, 0.0, 0.025, 0.5);
         assert_eq!(profile_ratio((&fp, &fx), (&rp, &rx), 280.0).unwrap(), None);
         assert!(profile_ratio((&cp[..5], &cx[..5]), (&rp, &rx), 280.0).is_err());
+    }
+
+    #[test]
+    fn a_noisy_contact_template_does_not_pull_a_print_towards_a_crack() {
+        // A print of 25 % of the signal, 1 mm wide, with 20 counts of noise in contact (a
+        // template this noisy biased the plain least-squares factor to about 0.8).
+        let (cp, cx) = noisy(0.25, 1.0, 224.0, 0.0, 0.025, 20.0);
+        let (rp, rx) = noisy(0.25, 1.0, 27.0, 2.0, 0.1, 0.3);
+        let k = profile_ratio((&cp, &cx), (&rp, &rx), 280.0)
+            .unwrap()
+            .unwrap();
+        assert!((k - 1.0).abs() < 0.1, "{k}");
+    }
+
+    #[test]
+    fn a_dip_at_the_dark_level_is_judged_by_its_floors() {
+        // A wide crack whose floor is beyond the fibre's range: 92 % of the signal in contact,
+        // 72 % raised. Its floors say crack.
+        let (cp, cx) = noisy(0.92, 4.0, 224.0, 0.0, 0.025, 0.5);
+        let (rp, rx) = noisy(0.72, 4.0, 27.0, 1.0, 0.1, 0.3);
+        let k = print_ratio((&cp, &cx), (&rp, &rx), 280.0).unwrap().unwrap();
+        assert!((k - 0.72 / 0.92).abs() < 0.05, "{k}");
+        assert!(k < PRINT_RATIO);
+        // Ink as dark keeps its floor raised: a print.
+        let (rp, rx) = noisy(0.92, 4.0, 27.0, 1.0, 0.1, 0.3);
+        let k = print_ratio((&cp, &cx), (&rp, &rx), 280.0).unwrap().unwrap();
+        assert!(k > PRINT_RATIO, "{k}");
+        // Below the dark level's share it is the profile fit.
+        let (cp, cx) = noisy(0.5, 1.0, 224.0, 0.0, 0.025, 0.5);
+        let (rp, rx) = noisy(0.5, 1.0, 27.0, 1.0, 0.1, 0.3);
+        let a = print_ratio((&cp, &cx), (&rp, &rx), 280.0).unwrap();
+        let b = profile_ratio((&cp, &cx), (&rp, &rx), 280.0).unwrap();
+        assert_eq!(a, b);
+        assert!(print_ratio((&cp[..5], &cx[..5]), (&rp, &rx), 280.0).is_err());
     }
 
     #[test]

@@ -173,7 +173,7 @@ pub struct InspectConfig {
     /// more faint prints out.
     pub min_dip_counts: f64,
     /// Fused missions: confirmed candidates whose detections continue each other across a gap
-    /// of at most this much (mm, within 30° of one direction) are reported as one crack
+    /// of at most this much (mm, within 40° of one direction) are reported as one crack
     /// ([`PIECE_GAP_MM`]); `None` reports every confirmed candidate.
     pub piece_gap_mm: Option<f64>,
     /// Simulation speed-up (1: real time).
@@ -1062,7 +1062,7 @@ fn mission(
                         .collect();
                     let mut ratios = Vec::new();
                     for (p, x) in &strokes {
-                        match print_check::profile_ratio((p, x), (&hp, &hx), dark) {
+                        match print_check::print_ratio((p, x), (&hp, &hx), dark) {
                             Ok(Some(k)) => ratios.push(k),
                             Ok(None) => {}
                             Err(e) => f.doubts.push(e.to_string()),
