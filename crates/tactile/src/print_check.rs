@@ -18,7 +18,8 @@
 //! dip and the contact dip (each as a share of its signal above the fibre's dark level), at the
 //! shift where they line up ([`profile_ratio`]), or the ratio of their floors where the contact
 //! dip has reached the fibre's dark level. It is about 1 for ink of any darkness or width and
-//! below 1 for a crack. The share of the spot a narrow mark covers cancels in the ratio of the two heights.
+//! below 1 for a crack. The share of the spot a narrow mark covers cancels in the ratio of the
+//! two heights.
 //! Two simpler measures are kept for comparison: [`height_ratio`] (the dips' floors: biased
 //! towards "print" where the raised dip is only a few counts deep, as the minimum of noisy
 //! samples lies below the true floor) and [`area_ratio`] (the dips' areas: blur-proof, but in
@@ -271,8 +272,19 @@ pub fn profile_ratio(
 ) -> Result<Option<f64>, TactileError> {
     let dc = dip_area(contact.0, contact.1, dark)?;
     let dr = dip_area(raised.0, raised.1, dark)?;
+    Ok(fit_profiles(contact, raised, &dc, &dr, dark))
+}
+
+/// [`profile_ratio`] of two passes whose dips are already found.
+fn fit_profiles(
+    contact: (&[f64], &[f64]),
+    raised: (&[f64], &[f64]),
+    dc: &DipArea,
+    dr: &DipArea,
+    dark: f64,
+) -> Option<f64> {
     if dc.relative_depth < 0.05 {
-        return Ok(None);
+        return None;
     }
     let span = |x: &[f64]| {
         x.iter()
@@ -284,8 +296,8 @@ pub fn profile_ratio(
     let (r0, r1) = span(raised.1);
     let nc = ((c1 - c0) / GRID_MM).ceil() as usize + 1;
     let nr = ((r1 - r0) / GRID_MM).ceil() as usize + 1;
-    let c = profile(contact.0, contact.1, &dc, dark, c0, nc);
-    let r = profile(raised.0, raised.1, &dr, dark, r0, nr);
+    let c = profile(contact.0, contact.1, dc, dark, c0, nc);
+    let r = profile(raised.0, raised.1, dr, dark, r0, nr);
     // The contact dip's window, in grid cells: the part of the profile that must overlap.
     let w0 = (((dc.window_mm[0] - c0) / GRID_MM).floor().max(0.0) as usize).min(nc - 1);
     let w1 = (((dc.window_mm[1] - c0) / GRID_MM).ceil().max(0.0) as usize).min(nc - 1);
@@ -332,12 +344,13 @@ pub fn profile_ratio(
             best = Some((corr, rc / (cc - n as f64 * noise).max(0.5 * cc)));
         }
     }
-    Ok(best.map(|(_, k)| k))
+    best.map(|(_, k)| k)
 }
 
 /// The ratio the robot judges a candidate by: [`profile_ratio`], except where the contact dip
 /// has reached the fibre's dark level ([`SATURATED_SHARE`] of its signal or more), where it is
-/// the ratio of the two dips' floors (each smoothed over 0.2 mm, as shares of their signal).
+/// [`height_ratio`], the ratio of the two dips' floors (each smoothed over 0.2 mm, as shares of
+/// their signal). Each pass's dip is found once.
 ///
 /// Why: where no light comes back in contact (a crack whose floor is beyond the fibre's range)
 /// the contact dip is clipped flat at the dark level while the raised one is not, so the two
@@ -353,14 +366,14 @@ pub fn print_ratio(
     dark: f64,
 ) -> Result<Option<f64>, TactileError> {
     let dc = dip_area(contact.0, contact.1, dark)?;
+    let dr = dip_area(raised.0, raised.1, dark)?;
     if dc.relative_depth >= SATURATED_SHARE {
-        let dr = dip_area(raised.0, raised.1, dark)?;
-        return Ok(Some(dr.relative_depth / dc.relative_depth));
+        return Ok(height_ratio(&[dc], &dr));
     }
-    profile_ratio(contact, raised, dark)
+    Ok(fit_profiles(contact, raised, &dc, &dr, dark))
 }
 
-/// Above this [`profile_ratio`] a dip is a print's, not a crack's (chosen on simulated trial
+/// Above this [`print_ratio`] a dip is a print's, not a crack's (chosen on simulated trial
 /// scenes 1000–1029, where cracks came out at 0.56–0.87 but for one at 1.06 and decoys at
 /// 0.90 or more but for one at 0.84; `crates/mission/EXPERIMENTS.md`, "Prints told by two
 /// heights").
