@@ -85,6 +85,11 @@ pub struct RunArgs {
     /// across at most this gap (mm, within 40° of one direction) as one crack; 0 reports each.
     #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_GAP_MM)]
     pub piece_gap_mm: f64,
+    /// Fused missions: also report two confirmed candidates as one crack when the straight line
+    /// between the points where their strokes met it runs along both and over the detector's
+    /// crack map, off it for at most this much (mm); a negative value turns this off.
+    #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_TRACE_GAP_MM, allow_negative_numbers = true)]
+    pub piece_trace_gap_mm: f64,
     /// Deployed recognition model.
     #[arg(long)]
     pub recognition_model: Option<PathBuf>,
@@ -206,6 +211,7 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
         crackbot_mission::print_check_height(args.print_check_mm).context("--print-check-mm")?;
     config.min_dip_counts = args.min_dip_counts;
     config.piece_gap_mm = (args.piece_gap_mm != 0.0).then_some(args.piece_gap_mm);
+    config.piece_trace_gap_mm = (args.piece_trace_gap_mm >= 0.0).then_some(args.piece_trace_gap_mm);
     config.planner.passes = args.passes;
     if let Some(v) = args.stroke_mm {
         config.planner.min_stroke_mm = v;

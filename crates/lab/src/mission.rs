@@ -72,6 +72,11 @@ pub struct Common {
     /// across at most this gap (mm, within 40° of one direction) as one crack; 0 reports each.
     #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_GAP_MM)]
     piece_gap_mm: f64,
+    /// Fused missions: also report two confirmed candidates as one crack when the straight line
+    /// between the points where their strokes met it runs along both and over the detector's
+    /// crack map, off it for at most this much (mm); a negative value turns this off.
+    #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_TRACE_GAP_MM, allow_negative_numbers = true)]
+    piece_trace_gap_mm: f64,
     /// Deployed recognition model (default: models/tactile/recognition.ctm).
     #[arg(long)]
     recognition_model: Option<PathBuf>,
@@ -132,6 +137,8 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
         crackbot_mission::print_check_height(common.print_check_mm).context("--print-check-mm")?;
     template.min_dip_counts = common.min_dip_counts;
     template.piece_gap_mm = (common.piece_gap_mm != 0.0).then_some(common.piece_gap_mm);
+    template.piece_trace_gap_mm =
+        (common.piece_trace_gap_mm >= 0.0).then_some(common.piece_trace_gap_mm);
     if let Some(p) = &common.recognition_model {
         template.recognition_model = p.clone();
     }

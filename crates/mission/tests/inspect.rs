@@ -423,4 +423,10 @@ fn bad_confirmation_settings_are_refused_before_anything_starts() {
     c.piece_gap_mm = Some(-1.0);
     let err = mission(&c).unwrap_err().to_string();
     assert!(err.contains("piece_gap_mm"), "{err}");
+    for bad in [-0.5, f64::INFINITY] {
+        let mut c = config(dir.path());
+        c.piece_trace_gap_mm = Some(bad);
+        let err = mission(&c).unwrap_err().to_string();
+        assert!(err.contains("piece_trace_gap_mm"), "{err}");
+    }
 }

@@ -17,6 +17,9 @@
 //!   the detector's candidates are the report (nothing is touched). `tactile`: boustrophedon
 //!   rows over the whole workspace (the paper's N_s rows for γ), each row classified piece by
 //!   piece; the detector is never loaded.
+//! * **Pieces of one crack.** The detector may split one crack into several candidates; the
+//!   confirmed ones that continue each other ([`PIECE_GAP_MM`]), or whose crossings the crack
+//!   map joins ([`PIECE_TRACE_GAP_MM`], [`CrackTrace`]), are reported as one crack.
 //! * **Synchronisation.** Sensor samples carry the board's clock, the arm's states the
 //!   controller's; both are mapped to the host's clock ([`crate::sync::ClockSync`]) and the arm's
 //!   position is interpolated at every sample.
@@ -60,7 +63,7 @@ use passes::*;
 use perceive::*;
 use sensor::*;
 
-pub use pieces::{PIECE_ANGLE_DEG, PIECE_GAP_MM};
+pub use pieces::{CrackTrace, PIECE_ANGLE_DEG, PIECE_GAP_MM, PIECE_TRACE_GAP_MM, TRACE_REACH_MM};
 
 /// What the mission uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -176,6 +179,11 @@ pub struct InspectConfig {
     /// of at most this much (mm, within 40° of one direction) are reported as one crack
     /// ([`PIECE_GAP_MM`]); `None` reports every confirmed candidate.
     pub piece_gap_mm: Option<f64>,
+    /// Fused missions: two confirmed candidates are also one crack when the straight line
+    /// between the points where their strokes met it runs along both and over the detector's
+    /// crack map, off it for at most this much (mm, [`PIECE_TRACE_GAP_MM`]); `None` joins by the
+    /// detections' geometry alone.
+    pub piece_trace_gap_mm: Option<f64>,
     /// Simulation speed-up (1: real time).
     pub speedup: f64,
     /// Seed of the simulated sensor and camera.
@@ -283,6 +291,7 @@ impl InspectConfig {
             print_check_mm: Some(PRINT_CHECK_HEIGHT_MM),
             min_dip_counts: MIN_DIP_COUNTS,
             piece_gap_mm: Some(PIECE_GAP_MM),
+            piece_trace_gap_mm: Some(PIECE_TRACE_GAP_MM),
             speedup: 1.0,
             seed: 7,
             planner: settings,
@@ -481,7 +490,7 @@ pub struct Evidence {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub height_ratio: Option<f64>,
     /// Other confirmed candidates reported as pieces of this crack (their slides are in
-    /// `slides`; see [`PIECE_GAP_MM`]).
+    /// `slides`; see [`PIECE_GAP_MM`] and [`PIECE_TRACE_GAP_MM`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub pieces: Vec<u64>,
 }
@@ -589,6 +598,14 @@ pub fn run_inspection(
     {
         return Err(MissionError::Invalid(format!(
             "the largest gap between pieces of one crack (piece_gap_mm) must be a number ≥ 0, got {g}"
+        )));
+    }
+    if let Some(d) = config
+        .piece_trace_gap_mm
+        .filter(|d| !(d.is_finite() && *d >= 0.0))
+    {
+        return Err(MissionError::Invalid(format!(
+            "the longest gap off the crack map between two pieces' crossings (piece_trace_gap_mm) must be a number ≥ 0, got {d}"
         )));
     }
     progress(&Progress::Starting);
@@ -738,11 +755,11 @@ fn mission(
     }
 
     let t = Instant::now();
-    let (candidates, frame) = match config.mode {
-        InspectMode::Tactile => (Vec::new(), None),
+    let (candidates, trace, frame) = match config.mode {
+        InspectMode::Tactile => (Vec::new(), None, None),
         _ => {
-            let (c, f) = perceive(config)?;
-            (c, Some(f))
+            let seen = perceive(config)?;
+            (seen.candidates, seen.trace, Some(seen.frame))
         }
     };
     stages.perceive_s = t.elapsed().as_secs_f64();
@@ -1151,9 +1168,13 @@ fn mission(
             });
         }
     }
-    if let Some(gap) = config.piece_gap_mm {
+    if config.piece_gap_mm.is_some() || config.piece_trace_gap_mm.is_some() {
         let cracks = std::mem::take(&mut report.cracks);
-        report.cracks = pieces::join_pieces(cracks, &report.candidates, gap);
+        let rule = pieces::PieceRule {
+            gap_mm: config.piece_gap_mm,
+            trace_gap_mm: config.piece_trace_gap_mm,
+        };
+        report.cracks = pieces::join_pieces(cracks, &report.candidates, trace.as_ref(), rule);
     }
     report.plan = Some(plan);
     report.stages = stages;

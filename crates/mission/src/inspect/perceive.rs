@@ -2,11 +2,17 @@
 
 use super::*;
 
-/// Candidates in the scene's frame: rendered (simulated), detected, mapped to mm; and the frame
-/// itself (saved beside the report).
-pub(super) fn perceive(
-    config: &InspectConfig,
-) -> Result<(Vec<(Candidate, f64)>, FrameInfo), MissionError> {
+/// What the camera gave: candidates in the scene's frame (rendered or grabbed, detected, mapped
+/// to mm) with their detector scores; the detector's crack map seen from the plate, when it
+/// predicts one; and the frame itself (saved beside the report).
+pub(super) struct Perceived {
+    pub candidates: Vec<(Candidate, f64)>,
+    pub trace: Option<CrackTrace>,
+    pub frame: FrameInfo,
+}
+
+/// Looks at the scene ([`Perceived`]).
+pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError> {
     use crackbot_sim::render::{render, CrackAssets, RenderOptions};
     use crackbot_vision::model::{build_detector, DetectorChoice};
     use crackbot_vision::preprocess::PostprocessParams;
@@ -73,7 +79,8 @@ pub(super) fn perceive(
         ..PostprocessParams::default()
     };
     let mut detector = build_detector(&choice, post)?;
-    let detections = detector.detect(&image)?;
+    let (detections, map) = detector.detect_with_map(&image)?;
+    let trace = map.map(|m| CrackTrace::new(&m, h));
     let mut out = Vec::new();
     let mut id = 0u64;
     for d in &detections {
@@ -125,7 +132,11 @@ pub(super) fn perceive(
         };
         out.push((c, score));
     }
-    Ok((out, frame))
+    Ok(Perceived {
+        candidates: out,
+        trace,
+        frame,
+    })
 }
 
 pub(super) fn io_err(path: &Path, e: std::io::Error) -> MissionError {

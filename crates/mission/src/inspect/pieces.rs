@@ -6,11 +6,39 @@
 //! come within [`PIECE_GAP_MM`] of each other and run within [`PIECE_ANGLE_DEG`] of the same
 //! direction are reported as one crack: the most confident piece's entry, carrying the others'
 //! slides and ids.
+//!
+//! The detections' straight segments miss pieces of one crack that the crack map split at a
+//! crossing, where its centre line went on into a printed line or another crack. There the
+//! finger tells where the crack is: [`traced_between`] joins two confirmed pieces when the
+//! straight line between the points where their strokes met the crack runs along both pieces
+//! and over the detector's crack cells ([`CrackTrace`]).
 
+use crackbot_imaging::Homography;
 use crackbot_planner::geometry::connected_groups;
 use crackbot_sim::surface::distance_to_polyline;
+use crackbot_vision::crack_map::{CrackMap, MAP_THRESHOLD};
 
 use super::{Candidate, ReportedCrack};
+
+/// Longest stretch of the line between two crossings that may run off the crack map for the
+/// two pieces to be one crack, mm (see [`traced_between`]): two map cells. On the trial scenes
+/// 4000–4119 (`examples/trace_pairs.rs`) the lines between crossings of one crack ran off the
+/// map by 0–2.0 mm, those between two cracks along both pieces by 3.5 mm and more, but for two
+/// cracks that touch.
+pub const PIECE_TRACE_GAP_MM: f64 = 2.0;
+/// A point of the plate is on the crack map when a crack cell lies within this distance, mm.
+pub const TRACE_REACH_MM: f64 = 1.0;
+/// Step along the line between two crossings, mm.
+const TRACE_STEP_MM: f64 = 0.25;
+
+/// Which rules join confirmed pieces (each `None` is off).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PieceRule {
+    /// [`same_crack`]'s largest gap between the detections, mm.
+    pub gap_mm: Option<f64>,
+    /// [`traced_between`]'s longest gap off the crack map, mm.
+    pub trace_gap_mm: Option<f64>,
+}
 
 /// Largest gap between two confirmed pieces of one crack by default, mm: a narrow crack's
 /// pieces on either side of a wide one it crosses lie 8.9–11.5 mm apart end to end on the
@@ -46,23 +74,120 @@ pub(super) fn same_crack(a: &Candidate, b: &Candidate, gap_mm: f64) -> bool {
     gap <= gap_mm && turn.min(180.0 - turn) <= PIECE_ANGLE_DEG && overlap <= PIECE_OVERLAP_MM
 }
 
-/// Joins the confirmed reports whose candidates are pieces of one crack ([`same_crack`]): each
-/// group becomes its most confident report, with the other pieces' slides added to its
-/// evidence and their candidate ids in `evidence.pieces`. Reports without a candidate stay.
+/// The detector's crack map seen from the plate: which points of the plate lie on its crack
+/// cells (probability at least [`MAP_THRESHOLD`]).
+#[derive(Debug, Clone)]
+pub struct CrackTrace {
+    crack: Vec<bool>,
+    width: usize,
+    height: usize,
+    homography: Homography,
+}
+
+impl CrackTrace {
+    /// The map of one frame, with the frame's pixel ↔ plate homography.
+    pub fn new(map: &CrackMap, homography: Homography) -> Self {
+        let lb = map.letterbox();
+        CrackTrace {
+            crack: map.to_image().iter().map(|&p| p >= MAP_THRESHOLD).collect(),
+            width: lb.image_width as usize,
+            height: lb.image_height as usize,
+            homography,
+        }
+    }
+
+    /// Whether a crack cell lies within `reach_mm` of the plate point `p` (mm); `false` where
+    /// `p` falls outside the frame.
+    pub fn near_crack(&self, p: [f64; 2], reach_mm: f64) -> bool {
+        let px = |q: [f64; 2]| self.homography.surface_to_pixel(q).ok();
+        let (Some(c), Some(ex), Some(ey)) = (
+            px(p),
+            px([p[0] + reach_mm, p[1]]),
+            px([p[0], p[1] + reach_mm]),
+        ) else {
+            return false;
+        };
+        let r = (ex[0] - c[0])
+            .hypot(ex[1] - c[1])
+            .max((ey[0] - c[0]).hypot(ey[1] - c[1]));
+        let span = |v: f64, n: usize| {
+            let lo = ((v - r - 0.5).floor().max(0.0) as usize).min(n);
+            let hi = ((v + r + 0.5).ceil().max(0.0) as usize).min(n);
+            lo..hi
+        };
+        span(c[1], self.height).any(|y| {
+            span(c[0], self.width).any(|x| {
+                let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
+                dx * dx + dy * dy <= r * r && self.crack[y * self.width + x]
+            })
+        })
+    }
+
+    /// The longest stretch of the straight line from `a` to `b` (plate mm) with no crack cell
+    /// within `reach_mm`, mm (sampled every 0.25 mm; the whole line where it leaves the frame).
+    pub fn longest_gap_mm(&self, a: [f64; 2], b: [f64; 2], reach_mm: f64) -> f64 {
+        let length = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let steps = (length / TRACE_STEP_MM).ceil().max(1.0) as usize;
+        let (mut gap, mut longest) = (0usize, 0usize);
+        for k in 0..=steps {
+            let t = k as f64 / steps as f64;
+            let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            if self.near_crack(p, reach_mm) {
+                gap = 0;
+            } else {
+                gap += 1;
+                longest = longest.max(gap);
+            }
+        }
+        longest as f64 * length / steps as f64
+    }
+}
+
+/// Whether the strokes across two confirmed pieces met one crack that the camera traced: the
+/// straight line between the points where they met it (the reports' positions) runs within
+/// [`PIECE_ANGLE_DEG`] of both pieces' directions and over the crack map, leaving it (by more
+/// than [`TRACE_REACH_MM`]) for at most `gap_mm`. Two cracks side by side, or crossing, put the
+/// line across sound surface or across the pieces.
+pub(super) fn traced_between(
+    a: (&ReportedCrack, &Candidate),
+    b: (&ReportedCrack, &Candidate),
+    trace: &CrackTrace,
+    gap_mm: f64,
+) -> bool {
+    let (p, q) = (a.0.position_mm, b.0.position_mm);
+    let line_deg = (q[1] - p[1]).atan2(q[0] - p[0]).to_degrees();
+    let along = |c: &Candidate| {
+        let turn = (line_deg - c.axis_deg).rem_euclid(180.0);
+        turn.min(180.0 - turn) <= PIECE_ANGLE_DEG
+    };
+    along(a.1) && along(b.1) && trace.longest_gap_mm(p, q, TRACE_REACH_MM) <= gap_mm
+}
+
+/// Joins the confirmed reports whose candidates are pieces of one crack ([`same_crack`] or,
+/// with a crack map, [`traced_between`], as `rule` enables them): each group becomes its most confident report,
+/// with the other pieces' slides added to its evidence and their candidate ids in
+/// `evidence.pieces`. Reports without a candidate stay.
 pub(super) fn join_pieces(
     cracks: Vec<ReportedCrack>,
     candidates: &[Candidate],
-    gap_mm: f64,
+    trace: Option<&CrackTrace>,
+    rule: PieceRule,
 ) -> Vec<ReportedCrack> {
     let geometry = |r: &ReportedCrack| {
         r.candidate
             .and_then(|id| candidates.iter().find(|c| c.id == id))
     };
     let groups = connected_groups(cracks.len(), |i, j| {
-        match (geometry(&cracks[i]), geometry(&cracks[j])) {
-            (Some(a), Some(b)) => same_crack(a, b, gap_mm),
+        let (a, b) = (&cracks[i], &cracks[j]);
+        let by_gap = match (rule.gap_mm, geometry(a), geometry(b)) {
+            (Some(gap), Some(ga), Some(gb)) => same_crack(ga, gb, gap),
             _ => false,
-        }
+        };
+        let by_trace = match (rule.trace_gap_mm, trace, geometry(a), geometry(b)) {
+            (Some(gap), Some(t), Some(ga), Some(gb)) => traced_between((a, ga), (b, gb), t, gap),
+            _ => false,
+        };
+        by_gap || by_trace
     });
     let mut cracks: Vec<Option<ReportedCrack>> = cracks.into_iter().map(Some).collect();
     let members: Vec<Vec<ReportedCrack>> = groups
@@ -97,6 +222,13 @@ mod tests {
             length_mm: len,
             width_mm: None,
             score: 0.9,
+        }
+    }
+
+    fn gap_only(gap_mm: f64) -> PieceRule {
+        PieceRule {
+            gap_mm: Some(gap_mm),
+            trace_gap_mm: None,
         }
     }
 
@@ -162,7 +294,8 @@ mod tests {
                 report(4, 0.5),
             ],
             &c,
-            PIECE_GAP_MM,
+            None,
+            gap_only(PIECE_GAP_MM),
         );
         assert_eq!(joined.len(), 3);
         let one = joined.iter().find(|r| r.candidate == Some(2)).unwrap();
@@ -170,7 +303,106 @@ mod tests {
         assert_eq!(one.evidence.slides, vec![2, 1]);
         // A gap of 0 joins only touching pieces.
         assert_eq!(
-            join_pieces(vec![report(1, 0.6), report(2, 0.8)], &c, 0.0).len(),
+            join_pieces(
+                vec![report(1, 0.6), report(2, 0.8)],
+                &c,
+                None,
+                gap_only(0.0)
+            )
+            .len(),
+            2
+        );
+    }
+
+    /// A 100 × 100 mm plate seen as a 200 × 200 px frame (0.5 mm a pixel, one map cell a mm),
+    /// with crack cells at `(row, column)`: row `r` is the plate's `y = r` mm.
+    fn trace_of(cells: &[(usize, usize)]) -> CrackTrace {
+        use crackbot_vision::preprocess::Letterbox;
+        let mut prob = vec![0.0f32; 100 * 100];
+        for &(r, c) in cells {
+            prob[r * 100 + c] = 0.9;
+        }
+        let map = CrackMap::new(prob, Letterbox::new(200, 200, 200).unwrap()).unwrap();
+        let h = Homography::from_matrix([[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]]);
+        CrackTrace::new(&map, h.unwrap())
+    }
+
+    #[test]
+    fn crossings_joined_by_the_crack_map_are_one_crack_and_side_by_side_ones_are_not() {
+        let row = |r: usize, cols: &mut dyn Iterator<Item = usize>| -> Vec<(usize, usize)> {
+            cols.map(|c| (r, c)).collect()
+        };
+        let mut cells = Vec::new();
+        // y = 25: a crack faded for 2 mm at x = 40; y = 30: a second crack 5 mm beside it;
+        // y = 70: a crack faded for 6 mm; x = 60: a crack across the first, y 40-90.
+        cells.extend(row(25, &mut (10..40).chain(42..90)));
+        cells.extend(row(30, &mut (10..90)));
+        cells.extend(row(70, &mut (10..40).chain(46..90)));
+        cells.extend((40..90).map(|r| (r, 60)));
+        let trace = trace_of(&cells);
+        assert!(trace.near_crack([20.0, 25.5], TRACE_REACH_MM));
+        assert!(!trace.near_crack([20.0, 27.8], TRACE_REACH_MM));
+        assert!(
+            !trace.near_crack([-50.0, 25.0], TRACE_REACH_MM),
+            "outside the frame"
+        );
+        assert!(trace.longest_gap_mm([20.0, 25.4], [70.0, 25.3], TRACE_REACH_MM) <= 0.5);
+        let gap = trace.longest_gap_mm([20.0, 70.4], [70.0, 70.4], TRACE_REACH_MM);
+        assert!((3.0..=5.0).contains(&gap), "{gap}");
+
+        let along_x = |id: u64, x: f64| cand(id, [x, 0.0], 0.0, 20.0);
+        let felt = |id: u64, p: [f64; 2]| {
+            let mut r = report(id, 0.5);
+            r.position_mm = p;
+            r
+        };
+        let (ca, cb) = (along_x(1, 20.0), along_x(2, 70.0));
+        let joined = |p: [f64; 2], q: [f64; 2], cb: &Candidate| {
+            traced_between(
+                (&felt(1, p), &ca),
+                (&felt(2, q), cb),
+                &trace,
+                PIECE_TRACE_GAP_MM,
+            )
+        };
+        // One crack, across its faded 2 mm.
+        assert!(joined([20.0, 25.4], [70.0, 25.3], &cb));
+        // Its neighbour 5 mm away: the line between the crossings leaves both.
+        assert!(!joined([20.0, 25.4], [70.0, 30.4], &cb));
+        // Faded for 6 mm: more than the gap allowed.
+        assert!(!joined([20.0, 70.4], [70.0, 70.4], &cb));
+        // The crack across at x = 60, felt by a piece along y: the line runs across that piece.
+        assert!(!joined(
+            [60.4, 25.4],
+            [60.4, 60.0],
+            &cand(2, [60.0, 60.0], 90.0, 20.0)
+        ));
+        // Both along it, the line runs along the crack map (the cells at x = 60 reach y = 40).
+        let up = cand(1, [60.0, 50.0], 90.0, 20.0);
+        assert!(traced_between(
+            (&felt(1, [60.4, 45.0]), &up),
+            (&felt(2, [60.4, 80.0]), &cand(2, [60.0, 80.0], 90.0, 20.0)),
+            &trace,
+            PIECE_TRACE_GAP_MM
+        ));
+
+        // In the join: without a trace, or with the rule off, the pieces stay two.
+        let both = PieceRule {
+            gap_mm: Some(PIECE_GAP_MM),
+            trace_gap_mm: Some(PIECE_TRACE_GAP_MM),
+        };
+        let reports = || vec![felt(1, [20.0, 25.4]), felt(2, [70.0, 25.3])];
+        let c = [ca, cb];
+        assert!(
+            !same_crack(&c[0], &c[1], PIECE_GAP_MM),
+            "30 mm apart end to end"
+        );
+        let one = join_pieces(reports(), &c, Some(&trace), both);
+        assert_eq!(one.len(), 1);
+        assert_eq!(one[0].evidence.pieces.len(), 1);
+        assert_eq!(join_pieces(reports(), &c, None, both).len(), 2);
+        assert_eq!(
+            join_pieces(reports(), &c, Some(&trace), gap_only(PIECE_GAP_MM)).len(),
             2
         );
     }
