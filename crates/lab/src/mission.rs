@@ -74,7 +74,8 @@ pub struct Common {
     piece_gap_mm: f64,
     /// Fused missions: also report two confirmed candidates as one crack when the straight line
     /// between the points where their strokes met it runs along both and over the detector's
-    /// crack map, off it for at most this much (mm); a negative value turns this off.
+    /// crack map, off it for at most this much (mm); pieces joined by --piece-gap-mm must then
+    /// also have that line on the map but for their gap plus this much. Negative: off.
     #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_TRACE_GAP_MM, allow_negative_numbers = true)]
     piece_trace_gap_mm: f64,
     /// Deployed recognition model (default: models/tactile/recognition.ctm).

@@ -181,8 +181,9 @@ pub struct InspectConfig {
     pub piece_gap_mm: Option<f64>,
     /// Fused missions: two confirmed candidates are also one crack when the straight line
     /// between the points where their strokes met it runs along both and over the detector's
-    /// crack map, off it for at most this much (mm, [`PIECE_TRACE_GAP_MM`]); `None` joins by the
-    /// detections' geometry alone.
+    /// crack map, off it for at most this much (mm, [`PIECE_TRACE_GAP_MM`]); candidates joined
+    /// by `piece_gap_mm` must then also have that line on the map but for their gap plus this
+    /// much. `None` joins by the detections' geometry alone.
     pub piece_trace_gap_mm: Option<f64>,
     /// Simulation speed-up (1: real time).
     pub speedup: f64,

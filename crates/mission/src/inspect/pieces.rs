@@ -8,10 +8,13 @@
 //! slides and ids.
 //!
 //! The detections' straight segments miss pieces of one crack that the crack map split at a
-//! crossing, where its centre line went on into a printed line or another crack. There the
-//! finger tells where the crack is: [`traced_between`] joins two confirmed pieces when the
-//! straight line between the points where their strokes met the crack runs along both pieces
-//! and over the detector's crack cells ([`CrackTrace`]).
+//! crossing, where its centre line went on into a printed line or another crack; and they join
+//! two cracks that happen to lie end to end. There the finger tells where the crack is: the
+//! points where the strokes met it. With the detector's crack map ([`CrackTrace`]),
+//! [`traced_between`] joins two confirmed pieces when the straight line between those points
+//! runs along both pieces and over the map, and pieces that continue each other are joined only
+//! where that line leaves the map for no longer than the gap between them (plus the same
+//! tolerance).
 
 use crackbot_imaging::Homography;
 use crackbot_planner::geometry::connected_groups;
@@ -34,7 +37,7 @@ const TRACE_STEP_MM: f64 = 0.25;
 /// Which rules join confirmed pieces (each `None` is off).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct PieceRule {
-    /// [`same_crack`]'s largest gap between the detections, mm.
+    /// [`continuation_gap`]'s largest gap between the detections, mm.
     pub gap_mm: Option<f64>,
     /// [`traced_between`]'s longest gap off the crack map, mm.
     pub trace_gap_mm: Option<f64>,
@@ -52,10 +55,11 @@ pub const PIECE_ANGLE_DEG: f64 = 40.0;
 /// at most this much, mm (two cracks running side by side overlap by far more).
 pub const PIECE_OVERLAP_MM: f64 = 2.0;
 
-/// Whether two detected segments are pieces of one crack: an end of one within `gap_mm` of
-/// the other, directions within [`PIECE_ANGLE_DEG`], and end to end rather than side by side
-/// (overlapping by at most [`PIECE_OVERLAP_MM`] along the first one's direction).
-pub(super) fn same_crack(a: &Candidate, b: &Candidate, gap_mm: f64) -> bool {
+/// The gap between two detected segments that continue each other (directions within
+/// [`PIECE_ANGLE_DEG`], end to end rather than side by side: overlapping by at most
+/// [`PIECE_OVERLAP_MM`] along the first one's direction), mm: how far an end of one lies from
+/// the other. `None` when they do not continue each other.
+pub(super) fn continuation_gap(a: &Candidate, b: &Candidate) -> Option<f64> {
     let (ea, eb) = (a.ends(), b.ends());
     let gap = ea
         .iter()
@@ -71,7 +75,7 @@ pub(super) fn same_crack(a: &Candidate, b: &Candidate, gap_mm: f64) -> bool {
     };
     let ((a0, a1), (b0, b1)) = (span(ea), span(eb));
     let overlap = a1.min(b1) - a0.max(b0);
-    gap <= gap_mm && turn.min(180.0 - turn) <= PIECE_ANGLE_DEG && overlap <= PIECE_OVERLAP_MM
+    (turn.min(180.0 - turn) <= PIECE_ANGLE_DEG && overlap <= PIECE_OVERLAP_MM).then_some(gap)
 }
 
 /// The detector's crack map seen from the plate: which points of the plate lie on its crack
@@ -163,10 +167,12 @@ pub(super) fn traced_between(
     along(a.1) && along(b.1) && trace.longest_gap_mm(p, q, TRACE_REACH_MM) <= gap_mm
 }
 
-/// Joins the confirmed reports whose candidates are pieces of one crack ([`same_crack`] or,
-/// with a crack map, [`traced_between`], as `rule` enables them): each group becomes its most confident report,
-/// with the other pieces' slides added to its evidence and their candidate ids in
-/// `evidence.pieces`. Reports without a candidate stay.
+/// Joins the confirmed reports whose candidates are pieces of one crack ([`continuation_gap`] or,
+/// with a crack map, [`traced_between`], as `rule` enables them; with the map and the trace
+/// rule on, [`continuation_gap`]'s pairs must also have the line between their crossings on the map
+/// but for the gap between the detections plus `trace_gap_mm`): each group becomes its most
+/// confident report, with the other pieces' slides added to its evidence and their candidate
+/// ids in `evidence.pieces`. Reports without a candidate stay.
 pub(super) fn join_pieces(
     cracks: Vec<ReportedCrack>,
     candidates: &[Candidate],
@@ -179,8 +185,20 @@ pub(super) fn join_pieces(
     };
     let groups = connected_groups(cracks.len(), |i, j| {
         let (a, b) = (&cracks[i], &cracks[j]);
+        // With the crack map, pieces that continue each other must also have their crossings
+        // joined by it, but for a stretch as long as the gap between them (where the crack
+        // faded) and the trace's own tolerance: two cracks end to end put theirs far apart.
         let by_gap = match (rule.gap_mm, geometry(a), geometry(b)) {
-            (Some(gap), Some(ga), Some(gb)) => same_crack(ga, gb, gap),
+            (Some(max), Some(ga), Some(gb)) => continuation_gap(ga, gb).is_some_and(|g| {
+                g <= max
+                    && match (rule.trace_gap_mm, trace) {
+                        (Some(tolerance), Some(t)) => {
+                            t.longest_gap_mm(a.position_mm, b.position_mm, TRACE_REACH_MM)
+                                <= g + tolerance
+                        }
+                        _ => true,
+                    }
+            }),
             _ => false,
         };
         let by_trace = match (rule.trace_gap_mm, trace, geometry(a), geometry(b)) {
@@ -213,6 +231,12 @@ pub(super) fn join_pieces(
 mod tests {
     use super::super::Evidence;
     use super::*;
+
+    /// Whether two detected segments are pieces of one crack by their geometry alone: they
+    /// continue each other across at most `gap_mm`.
+    fn same_crack(a: &Candidate, b: &Candidate, gap_mm: f64) -> bool {
+        continuation_gap(a, b).is_some_and(|g| g <= gap_mm)
+    }
 
     fn cand(id: u64, centre: [f64; 2], axis: f64, len: f64) -> Candidate {
         Candidate {
@@ -401,6 +425,38 @@ mod tests {
         assert_eq!(one.len(), 1);
         assert_eq!(one[0].evidence.pieces.len(), 1);
         assert_eq!(join_pieces(reports(), &c, None, both).len(), 2);
+
+        // Pieces end to end (the gap rule's pairs), with the map on: joined where the map runs
+        // between their crossings but for the faded stretch (y = 70: detections 9 mm apart,
+        // the crack faded for 6 mm); not where the crossings lie on two cracks (y = 25 and 30).
+        let (left, right) = (
+            cand(1, [25.0, 70.0], 0.0, 28.0),
+            cand(2, [68.0, 70.0], 0.0, 40.0),
+        );
+        assert!(same_crack(&left, &right, PIECE_GAP_MM));
+        let pair = || vec![felt(1, [20.0, 70.4]), felt(2, [70.0, 70.4])];
+        let faded = [left, right];
+        assert!(!traced_between(
+            (&pair()[0], &faded[0]),
+            (&pair()[1], &faded[1]),
+            &trace,
+            PIECE_TRACE_GAP_MM
+        ));
+        assert_eq!(join_pieces(pair(), &faded, Some(&trace), both).len(), 1);
+        let (lower, upper) = (
+            cand(1, [25.0, 25.0], 0.0, 28.0),
+            cand(2, [55.0, 30.0], 0.0, 20.0),
+        );
+        assert!(same_crack(&lower, &upper, PIECE_GAP_MM));
+        let two = || vec![felt(1, [20.0, 25.4]), felt(2, [55.0, 30.4])];
+        let apart = [lower, upper];
+        assert_eq!(join_pieces(two(), &apart, Some(&trace), both).len(), 2);
+        // Without the map, or with the trace rule off, the geometry alone joins them.
+        assert_eq!(join_pieces(two(), &apart, None, both).len(), 1);
+        assert_eq!(
+            join_pieces(two(), &apart, Some(&trace), gap_only(PIECE_GAP_MM)).len(),
+            1
+        );
         assert_eq!(
             join_pieces(reports(), &c, Some(&trace), gap_only(PIECE_GAP_MM)).len(),
             2
