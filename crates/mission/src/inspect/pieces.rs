@@ -25,14 +25,18 @@ use super::{Candidate, ReportedCrack};
 
 /// Longest stretch of the line between two crossings that may run off the crack map for the
 /// two pieces to be one crack, mm (see [`traced_between`]): two map cells. On the trial scenes
-/// 4000–4119 (`examples/trace_pairs.rs`) the lines between crossings of one crack ran off the
-/// map by 0–2.0 mm, those between two cracks along both pieces by 3.5 mm and more, but for two
-/// cracks that touch.
+/// 4000–5119 (`examples/trace_pairs.rs`) the lines between crossings of one crack ran off the
+/// map by 0–2.0 mm, those between two cracks along both pieces by 3.5 mm and more, but for
+/// cracks that touch or cross (`crates/mission/EXPERIMENTS.md`, "Pieces joined where the crack
+/// map runs between their crossings").
 pub const PIECE_TRACE_GAP_MM: f64 = 2.0;
 /// A point of the plate is on the crack map when a crack cell lies within this distance, mm.
 pub const TRACE_REACH_MM: f64 = 1.0;
 /// Step along the line between two crossings, mm.
 const TRACE_STEP_MM: f64 = 0.25;
+/// Most samples along one line (25 m at [`TRACE_STEP_MM`]): a line longer than any plate is
+/// sampled more coarsely rather than for ever.
+const MAX_TRACE_STEPS: f64 = 100_000.0;
 
 /// Which rules join confirmed pieces (each `None` is off).
 #[derive(Debug, Clone, Copy)]
@@ -129,9 +133,13 @@ impl CrackTrace {
 
     /// The longest stretch of the straight line from `a` to `b` (plate mm) with no crack cell
     /// within `reach_mm`, mm (sampled every 0.25 mm; the whole line where it leaves the frame).
+    /// Not a number where an end is not finite, so nothing compares as joined.
     pub fn longest_gap_mm(&self, a: [f64; 2], b: [f64; 2], reach_mm: f64) -> f64 {
         let length = (b[0] - a[0]).hypot(b[1] - a[1]);
-        let steps = (length / TRACE_STEP_MM).ceil().max(1.0) as usize;
+        if !length.is_finite() {
+            return f64::NAN;
+        }
+        let steps = (length / TRACE_STEP_MM).ceil().clamp(1.0, MAX_TRACE_STEPS) as usize;
         let (mut gap, mut longest) = (0usize, 0usize);
         for k in 0..=steps {
             let t = k as f64 / steps as f64;
@@ -167,12 +175,12 @@ pub(super) fn traced_between(
     along(a.1) && along(b.1) && trace.longest_gap_mm(p, q, TRACE_REACH_MM) <= gap_mm
 }
 
-/// Joins the confirmed reports whose candidates are pieces of one crack ([`continuation_gap`] or,
-/// with a crack map, [`traced_between`], as `rule` enables them; with the map and the trace
-/// rule on, [`continuation_gap`]'s pairs must also have the line between their crossings on the map
-/// but for the gap between the detections plus `trace_gap_mm`): each group becomes its most
-/// confident report, with the other pieces' slides added to its evidence and their candidate
-/// ids in `evidence.pieces`. Reports without a candidate stay.
+/// Joins the confirmed reports whose candidates are pieces of one crack: they continue each
+/// other ([`continuation_gap`]) or, with a crack map, [`traced_between`] joins them, as `rule`
+/// enables each. With the map and the trace rule on, pieces that continue each other must also
+/// have the line between their crossings on the map but for their gap plus `trace_gap_mm`.
+/// Each group becomes its most confident report, with the other pieces' slides added to its
+/// evidence and their candidate ids in `evidence.pieces`. Reports without a candidate stay.
 pub(super) fn join_pieces(
     cracks: Vec<ReportedCrack>,
     candidates: &[Candidate],
@@ -373,6 +381,16 @@ mod tests {
         assert!(trace.longest_gap_mm([20.0, 25.4], [70.0, 25.3], TRACE_REACH_MM) <= 0.5);
         let gap = trace.longest_gap_mm([20.0, 70.4], [70.0, 70.4], TRACE_REACH_MM);
         assert!((3.0..=5.0).contains(&gap), "{gap}");
+        // Ends off the plate, huge or not numbers: an answer, at once, that joins nothing.
+        let far = trace.longest_gap_mm([20.0, 25.4], [1e300, 25.4], TRACE_REACH_MM);
+        assert!(far > 1e290, "{far}");
+        assert!(trace
+            .longest_gap_mm([f64::NAN, 25.4], [70.0, 25.3], 1.0)
+            .is_nan());
+        assert!(trace
+            .longest_gap_mm([20.0, 25.4], [f64::INFINITY, 0.0], 1.0)
+            .is_nan());
+        assert_eq!(trace.longest_gap_mm([20.0, 25.4], [20.0, 25.4], 1.0), 0.0);
 
         let along_x = |id: u64, x: f64| cand(id, [x, 0.0], 0.0, 20.0);
         let felt = |id: u64, p: [f64; 2]| {
