@@ -5,7 +5,7 @@
 //! for each reach, mm). For tuning `crackbot_mission::inspect::PIECE_TRACE_GAP_MM`:
 //! `cargo run --release -p crackbot-mission --example trace_pairs -- TRIALS_DIR...`.
 
-use crackbot_mission::inspect::CrackTrace;
+use crackbot_mission::inspect::{turn_deg, CrackTrace};
 use crackbot_vision::model::{build_detector, DetectorChoice};
 use crackbot_vision::preprocess::PostprocessParams;
 use serde_json::Value;
@@ -56,10 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let p: [f64; 2] = serde_json::from_value(a["position_mm"].clone())?;
                     let q: [f64; 2] = serde_json::from_value(b["position_mm"].clone())?;
                     let line = (q[1] - p[1]).atan2(q[0] - p[0]).to_degrees();
-                    let turn = |ax: f64| {
-                        let t = (line - ax).rem_euclid(180.0);
-                        t.min(180.0 - t)
-                    };
+                    let turn = |ax: f64| turn_deg(line, ax);
                     let gaps: Vec<String> = [0.5, 1.0, 1.5]
                         .iter()
                         .map(|&r| format!("{:.2}", trace.longest_gap_mm(p, q, r)))

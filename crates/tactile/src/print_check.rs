@@ -462,21 +462,22 @@ mod tests {
         out
     }
 
+    /// [`profile_ratio`] of two passes that both have a dip, over a dark level of 280.
+    fn fitted(contact: (&[f64], &[f64]), raised: (&[f64], &[f64])) -> f64 {
+        profile_ratio(contact, raised, 280.0).unwrap().unwrap()
+    }
+
     #[test]
     fn the_profile_fit_finds_the_shifted_raised_dip_and_its_share_through_noise() {
         // A shallow print: 20 % of the signal, 0.8 mm wide. In contact (224 counts, slow) and
         // raised (27 counts, 0.1 mm a sample, 0.5 counts of noise, seen 3.6 mm later).
         let (cp, cx) = noisy(0.2, 0.8, 224.0, 0.0, 0.025, 0.5);
         let (rp, rx) = noisy(0.2, 0.8, 27.0, 3.6, 0.1, 0.5);
-        let k = profile_ratio((&cp, &cx), (&rp, &rx), 280.0)
-            .unwrap()
-            .unwrap();
+        let k = fitted((&cp, &cx), (&rp, &rx));
         assert!((k - 1.0).abs() < 0.08, "{k}");
         // The same dip raised at 70 % of its share: a crack.
         let (rp, rx) = noisy(0.14, 0.8, 27.0, -3.6, 0.1, 0.5);
-        let k = profile_ratio((&cp, &cx), (&rp, &rx), 280.0)
-            .unwrap()
-            .unwrap();
+        let k = fitted((&cp, &cx), (&rp, &rx));
         assert!((k - 0.7).abs() < 0.08, "{k}");
         // No dip in contact: nothing to compare.
         let (fp, fx) = noisy(0.0, 0.8, 224.0, 0.0, 0.025, 0.5);
@@ -490,9 +491,7 @@ mod tests {
         // template this noisy biased the plain least-squares factor to about 0.8).
         let (cp, cx) = noisy(0.25, 1.0, 224.0, 0.0, 0.025, 20.0);
         let (rp, rx) = noisy(0.25, 1.0, 27.0, 2.0, 0.1, 0.3);
-        let k = profile_ratio((&cp, &cx), (&rp, &rx), 280.0)
-            .unwrap()
-            .unwrap();
+        let k = fitted((&cp, &cx), (&rp, &rx));
         assert!((k - 1.0).abs() < 0.1, "{k}");
     }
 

@@ -63,7 +63,9 @@ use passes::*;
 use perceive::*;
 use sensor::*;
 
-pub use pieces::{CrackTrace, PIECE_ANGLE_DEG, PIECE_GAP_MM, PIECE_TRACE_GAP_MM, TRACE_REACH_MM};
+pub use pieces::{
+    turn_deg, CrackTrace, PIECE_ANGLE_DEG, PIECE_GAP_MM, PIECE_TRACE_GAP_MM, TRACE_REACH_MM,
+};
 
 /// What the mission uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

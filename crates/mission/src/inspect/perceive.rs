@@ -80,7 +80,10 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError
     };
     let mut detector = build_detector(&choice, post)?;
     let (detections, map) = detector.detect_with_map(&image)?;
-    let trace = map.map(|m| CrackTrace::new(&m, h));
+    // Only a fused mission joins what the finger confirmed; a vision report needs no map.
+    let trace = map
+        .filter(|_| config.mode == InspectMode::Fused)
+        .map(|m| CrackTrace::new(&m, h));
     let mut out = Vec::new();
     let mut id = 0u64;
     for d in &detections {

@@ -59,6 +59,12 @@ pub const PIECE_ANGLE_DEG: f64 = 40.0;
 /// at most this much, mm (two cracks running side by side overlap by far more).
 pub const PIECE_OVERLAP_MM: f64 = 2.0;
 
+/// The angle between two undirected lines at `a` and `b` degrees from +x, in [0, 90].
+pub fn turn_deg(a: f64, b: f64) -> f64 {
+    let turn = (a - b).rem_euclid(180.0);
+    turn.min(180.0 - turn)
+}
+
 /// The gap between two detected segments that continue each other (directions within
 /// [`PIECE_ANGLE_DEG`], end to end rather than side by side: overlapping by at most
 /// [`PIECE_OVERLAP_MM`] along the first one's direction), mm: how far an end of one lies from
@@ -70,7 +76,6 @@ pub(super) fn continuation_gap(a: &Candidate, b: &Candidate) -> Option<f64> {
         .map(|&p| distance_to_polyline(&eb, p))
         .chain(eb.iter().map(|&p| distance_to_polyline(&ea, p)))
         .fold(f64::INFINITY, f64::min);
-    let turn = (a.axis_deg - b.axis_deg).rem_euclid(180.0);
     let (s, c) = a.axis_deg.to_radians().sin_cos();
     let along = |p: [f64; 2]| p[0] * c + p[1] * s;
     let span = |e: [[f64; 2]; 2]| {
@@ -79,7 +84,8 @@ pub(super) fn continuation_gap(a: &Candidate, b: &Candidate) -> Option<f64> {
     };
     let ((a0, a1), (b0, b1)) = (span(ea), span(eb));
     let overlap = a1.min(b1) - a0.max(b0);
-    (turn.min(180.0 - turn) <= PIECE_ANGLE_DEG && overlap <= PIECE_OVERLAP_MM).then_some(gap)
+    (turn_deg(a.axis_deg, b.axis_deg) <= PIECE_ANGLE_DEG && overlap <= PIECE_OVERLAP_MM)
+        .then_some(gap)
 }
 
 /// The detector's crack map seen from the plate: which points of the plate lie on its crack
@@ -168,10 +174,7 @@ pub(super) fn traced_between(
 ) -> bool {
     let (p, q) = (a.0.position_mm, b.0.position_mm);
     let line_deg = (q[1] - p[1]).atan2(q[0] - p[0]).to_degrees();
-    let along = |c: &Candidate| {
-        let turn = (line_deg - c.axis_deg).rem_euclid(180.0);
-        turn.min(180.0 - turn) <= PIECE_ANGLE_DEG
-    };
+    let along = |c: &Candidate| turn_deg(line_deg, c.axis_deg) <= PIECE_ANGLE_DEG;
     along(a.1) && along(b.1) && trace.longest_gap_mm(p, q, TRACE_REACH_MM) <= gap_mm
 }
 
