@@ -372,6 +372,8 @@ pub struct TrialsReport {
     pub fused_exploration_s: Option<Spread>,
     /// Fused missions that explored within [`EXPLORATION_GOAL_S`].
     pub fused_within_goal: usize,
+    /// Missions that failed once and were run again (their failed folders end in `-failed`).
+    pub retried: Vec<RetriedMission>,
 }
 
 impl TrialsReport {
@@ -434,6 +436,15 @@ impl TrialsReport {
             f.untouched_cracks,
             cracks
         );
+        if !self.retried.is_empty() {
+            out += &format!(
+                "\nMissions that failed once and were run again from the start ({}):\n\n",
+                self.retried.len()
+            );
+            for r in &self.retried {
+                out += &format!("- trial {}, {}: {}\n", r.seed, mode_name(r.mode), r.error);
+            }
+        }
         out
     }
 }
@@ -475,23 +486,14 @@ pub fn detection_trials(
 ) -> Result<TrialsReport, MissionError> {
     let params = trial_params();
     let mut trials = Vec::new();
+    let mut retried = Vec::new();
     for seed in first_seed..first_seed + n {
         let mut scene = random_scene(&params, seed)?;
         if base.printed_cracks {
             scene = as_printed(&scene);
         }
-        let vision = run(
-            base,
-            &scene,
-            InspectMode::Vision,
-            &format!("trial-{seed}-vision"),
-        )?;
-        let fused = run(
-            base,
-            &scene,
-            InspectMode::Fused,
-            &format!("trial-{seed}-fused"),
-        )?;
+        let vision = run_retried(base, &scene, InspectMode::Vision, seed, &mut retried)?;
+        let fused = run_retried(base, &scene, InspectMode::Fused, seed, &mut retried)?;
         let decoys = scene
             .features
             .iter()
@@ -540,8 +542,96 @@ pub fn detection_trials(
         fused_width_mae_mm: (!width_errors.is_empty())
             .then(|| width_errors.iter().sum::<f64>() / width_errors.len() as f64),
         trials,
+        retried,
         paper: [46.66, 92.85],
     })
+}
+
+/// A trial's mission that failed once and was run again from the start (its folder holds the
+/// second run).
+#[derive(Debug, Clone, Serialize)]
+pub struct RetriedMission {
+    /// The trial's seed.
+    pub seed: u64,
+    /// Which of its missions.
+    pub mode: InspectMode,
+    /// Why the first run failed.
+    pub error: String,
+}
+
+/// The folder suffix of a trial's mission.
+fn mode_name(mode: InspectMode) -> &'static str {
+    match mode {
+        InspectMode::Tactile => "tactile",
+        InspectMode::Vision => "vision",
+        InspectMode::Fused => "fused",
+    }
+}
+
+/// [`run`] for one trial's mission, run once more from the start when the run itself failed
+/// (a sensor stream that stalls twice in one slide on a loaded machine, say): the first
+/// failure is kept in `retried` and its folder renamed `…-failed`. A second failure, or a
+/// setting that cannot work, ends the trials with its error.
+fn run_retried(
+    base: &ExperimentConfig,
+    scene: &Scene,
+    mode: InspectMode,
+    seed: u64,
+    retried: &mut Vec<RetriedMission>,
+) -> Result<InspectReport, MissionError> {
+    let name = format!("trial-{seed}-{}", mode_name(mode));
+    retry_once(seed, mode, retried, |again| {
+        let dir = base.out_dir.join(&name);
+        if again && dir.exists() {
+            let failed = base.out_dir.join(format!("{name}-failed"));
+            let _ = std::fs::remove_dir_all(&failed);
+            std::fs::rename(&dir, &failed)
+                .map_err(|e| MissionError::Invalid(format!("{}: {e}", dir.display())))?;
+        }
+        run(base, scene, mode, &name)
+    })
+}
+
+/// Whether a mission that failed this way may go right the next time: the link, the sensor
+/// stream or the controller failed, not a setting, a model or the scene.
+fn worth_retrying(e: &MissionError) -> bool {
+    matches!(
+        e,
+        MissionError::SensorStalled { .. }
+            | MissionError::NoSamples { .. }
+            | MissionError::SensorLost { .. }
+            | MissionError::ControllerUnreachable { .. }
+            | MissionError::ControllerRestarted
+            | MissionError::Timeout { .. }
+            | MissionError::Link(_)
+            | MissionError::Acquisition(_)
+            | MissionError::Emulator(_)
+    )
+}
+
+/// `attempt(false)`, then `attempt(true)` once if the first failed in a way
+/// [`worth_retrying`], recording that failure in `retried`.
+fn retry_once<T>(
+    seed: u64,
+    mode: InspectMode,
+    retried: &mut Vec<RetriedMission>,
+    mut attempt: impl FnMut(bool) -> Result<T, MissionError>,
+) -> Result<T, MissionError> {
+    match attempt(false) {
+        Err(e) if worth_retrying(&e) => {
+            tracing::warn!(
+                "trial {seed}, {} mission: {e}; running it again",
+                mode_name(mode)
+            );
+            retried.push(RetriedMission {
+                seed,
+                mode,
+                error: e.to_string(),
+            });
+            attempt(true)
+        }
+        other => other,
+    }
 }
 
 /// One row of the exploration-time table.
@@ -655,6 +745,65 @@ mod tests {
     use crate::inspect::{Evidence, PassRecord, ReportedCrack};
 
     #[test]
+    fn a_mission_that_failed_in_its_link_runs_once_more_and_a_bad_setting_does_not() {
+        let stalled = || MissionError::SensorStalled {
+            port: "/dev/pts/9".into(),
+            detail: "610 samples of the stroke, 832 expected".into(),
+        };
+        let mut retried = Vec::new();
+        let mut calls = Vec::new();
+        let ok = retry_once(7, InspectMode::Fused, &mut retried, |again| {
+            calls.push(again);
+            if again {
+                Ok(3)
+            } else {
+                Err(stalled())
+            }
+        });
+        assert_eq!(ok.unwrap(), 3);
+        assert_eq!(calls, vec![false, true]);
+        assert_eq!(retried.len(), 1);
+        assert_eq!((retried[0].seed, retried[0].mode), (7, InspectMode::Fused));
+        assert!(
+            retried[0].error.contains("stalled mid-slide"),
+            "{retried:?}"
+        );
+        // Failing twice ends with the second error; a bad setting is not tried again.
+        let twice = retry_once(8, InspectMode::Vision, &mut retried, |_| -> Result<(), _> {
+            Err(stalled())
+        });
+        assert!(matches!(twice, Err(MissionError::SensorStalled { .. })));
+        assert_eq!(retried.len(), 2);
+        let mut n = 0;
+        let bad = retry_once(9, InspectMode::Fused, &mut retried, |_| -> Result<(), _> {
+            n += 1;
+            Err(MissionError::Invalid("speedup must be > 0".into()))
+        });
+        assert!(matches!(bad, Err(MissionError::Invalid(_))));
+        assert_eq!((n, retried.len()), (1, 2));
+        // The table lists what was run again.
+        let mut t = TrialsReport {
+            trials: Vec::new(),
+            vision_correct: 0.0,
+            fused_correct: 0.0,
+            fused_localisation_mm: None,
+            fused_width_mae_mm: None,
+            paper: [46.66, 92.85],
+            finger: FingerBudget::default(),
+            vision_totals: Totals::default(),
+            fused_totals: Totals::default(),
+            fused_exploration_s: None,
+            fused_within_goal: 0,
+            retried: Vec::new(),
+        };
+        assert!(!t.markdown().contains("run again"));
+        t.retried = retried;
+        let md = t.markdown();
+        assert!(md.contains("run again from the start (2)"), "{md}");
+        assert!(md.contains("- trial 7, fused: the sensor stream"), "{md}");
+    }
+
+    #[test]
     fn a_table_without_confirmed_cracks_says_so_instead_of_nan() {
         let mut t = TrialsReport {
             trials: Vec::new(),
@@ -668,6 +817,7 @@ mod tests {
             fused_totals: Totals::default(),
             fused_exploration_s: None,
             fused_within_goal: 0,
+            retried: Vec::new(),
         };
         let md = t.markdown();
         assert!(
@@ -863,6 +1013,7 @@ mod tests {
             fused_totals: Totals::default(),
             fused_exploration_s: None,
             fused_within_goal: 0,
+            retried: Vec::new(),
         };
         t.finger.add(&b);
         assert_eq!(t.finger.crack, [2, 0]);

@@ -12,7 +12,7 @@
 //! 3. 8-connected components of the dilated map, numbered in raster order of their first cell;
 //! 4. each component's box is the tight box of its *undilated* crack cells, in image pixels
 //!    (`x0 = 2·c_min / s`, `x1 = 2·(c_max + 1) / s`, clipped to the image); boxes under 0.1% of
-//!    the image are dropped;
+//!    the image are dropped (`PostprocessParams::min_area_fraction`);
 //! 5. the score is the highest probability of the component's crack cells (on the training split
 //!    it ranks components better than their mean: `models/detector/analysis/scoring.py`);
 //!    detections are sorted by score (ties keep component order) and at most `max_detections`
@@ -25,7 +25,8 @@
 //! cracks that run close together or cross, and a component's main axis then passes between
 //! them. For the finger, each component is split into the cracks it holds: its crack cells are
 //! thinned to a centre line ([`crackbot_imaging::thinning`]), the line is cut at its junctions
-//! into branches, spurs shorter than [`SPUR_CELLS`] are dropped, and branches are joined again
+//! into branches and at its sharp corners (two cracks meeting in a V, [`CORNER_DEG`]), spurs
+//! shorter than [`SPUR_CELLS`] are dropped, and branches are joined again
 //! where a crack plainly goes on: through a junction the pair of branches that continue each
 //! other best (within [`CONTINUATION_DEG`] of straight), and across a gap no longer than the
 //! dilation joins when both ends point at each other. Each joined run is a [`CrackPiece`]: a
@@ -85,6 +86,10 @@ pub const MIN_PIECE_CELLS: usize = 4;
 /// Two branches continue each other through a junction (or across a gap) when their directions
 /// are within this many degrees of a straight line.
 pub const CONTINUATION_DEG: f64 = 40.0;
+/// A centre line that turns by more than this many degrees (over [`DIRECTION_CELLS`] cells
+/// either side) is two cracks meeting at a corner: one crack of the simulated trial scenes
+/// bends by at most 34° at a vertex, and two pieces of one crack met at 33–38°.
+pub const CORNER_DEG: f64 = 60.0;
 /// Cells along a branch over which its direction at an end is taken.
 const DIRECTION_CELLS: usize = 4;
 /// Touch points keep at least this many cells from a junction when the piece allows.
@@ -205,7 +210,7 @@ pub fn map_detections(map: &CrackMap, params: &PostprocessParams) -> Vec<Detecti
             comps[k].add(r, c, map.prob[r * n + c]);
         }
     }
-    let min_area = MIN_AREA_FRACTION * w * h;
+    let min_area = params.min_area_fraction * w * h;
     let mut dets: Vec<Detection> = comps
         .iter()
         .filter(|c| !c.cells.is_empty())
@@ -429,6 +434,64 @@ fn angle_deg(a: [f64; 2], b: [f64; 2]) -> f64 {
         .to_degrees()
 }
 
+/// A branch cut into runs at its corners: cells where the centre line turns by more than
+/// [`CORNER_DEG`] between the [`DIRECTION_CELLS`] cells before and after (the sharpest cell of
+/// each such stretch), leaving at least twice as many cells either side. The cut ends are free, so the gap rule below sees them as ends that do
+/// not point at each other.
+fn split_at_corners(branch: Branch) -> Vec<Branch> {
+    let cells = &branch.cells;
+    let k = DIRECTION_CELLS;
+    // Both runs at least twice the direction's reach: the centre line of a wide crack hooks
+    // at its ends (a 10 mm crack's by about 6 mm), and a hook is no crack of its own.
+    let arm = 2 * k;
+    if cells.len() < 2 * arm + 2 {
+        return vec![branch];
+    }
+    let unit = |a: (isize, isize), b: (isize, isize)| {
+        let d = [(b.1 - a.1) as f64, (b.0 - a.0) as f64];
+        let l = d[0].hypot(d[1]);
+        [d[0] / l, d[1] / l]
+    };
+    let turn = |i: usize| angle_deg(unit(cells[i - k], cells[i]), unit(cells[i], cells[i + k]));
+    let mut cuts = Vec::new();
+    let mut i = arm;
+    while i + arm < cells.len() {
+        if turn(i) > CORNER_DEG {
+            // The sharpest cell of this stretch of turning.
+            let mut best = i;
+            while i + arm < cells.len() && turn(i) > CORNER_DEG {
+                if turn(i) > turn(best) {
+                    best = i;
+                }
+                i += 1;
+            }
+            cuts.push(best);
+        }
+        i += 1;
+    }
+    if cuts.is_empty() {
+        return vec![branch];
+    }
+    let mut out = Vec::with_capacity(cuts.len() + 1);
+    let mut from = 0;
+    for (n, &cut) in cuts.iter().chain(std::iter::once(&cells.len())).enumerate() {
+        let to = if n < cuts.len() { cut + 1 } else { cut };
+        out.push(Branch {
+            cells: cells[from..to].to_vec(),
+            junction: [
+                if from == 0 { branch.junction[0] } else { None },
+                if to == cells.len() {
+                    branch.junction[1]
+                } else {
+                    None
+                },
+            ],
+        });
+        from = to;
+    }
+    out
+}
+
 /// The cracks of one component (cells `(row, column)`), where the finger should touch each (see
 /// the [module docs](self)); `max_gap` cells is the longest gap the dilation joined; `to_img`
 /// image pixels per cell.
@@ -553,6 +616,8 @@ fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPie
             });
         }
     }
+    // Two cracks that meet at a corner (a V) thin to one branch: split it where it turns.
+    let mut branches: Vec<Branch> = branches.into_iter().flat_map(split_at_corners).collect();
     // Spurs: a free end, a junction at the other, short.
     branches.retain(|b| {
         let free = b.junction.iter().filter(|j| j.is_none()).count();
@@ -859,6 +924,28 @@ mod tests {
         assert_eq!((joined.bbox.x0, joined.bbox.x1), (40.0, 220.0));
     }
 
+    #[test]
+    fn a_thin_crack_along_a_pixel_row_is_dropped_by_the_dataset_rule_and_kept_without_it() {
+        // 640 × 480 at 320 (one cell = 4 image px): a crack 8 cells (32 px) long and one cell
+        // thick has a 32 × 4 px box, 128 px² against the rule's 307 px².
+        let cells: Vec<_> = (40..48).map(|c| (30, c, 0.9)).collect();
+        let map = map_with(320, 640, 480, &cells);
+        assert!(map_detections(&map, &params()).is_empty());
+        let keep_all = PostprocessParams {
+            min_area_fraction: 0.0,
+            ..params()
+        };
+        let dets = map_detections(&map, &keep_all);
+        assert_eq!(dets.len(), 1);
+        let shape = dets[0].shape.as_ref().unwrap();
+        assert_eq!(shape.pieces.len(), 1, "{shape:?}");
+        // A speck of two cells has no centre line long enough to touch.
+        let speck = map_with(320, 640, 480, &[(30, 40, 0.9), (30, 41, 0.9)]);
+        let dets = map_detections(&speck, &keep_all);
+        assert_eq!(dets.len(), 1);
+        assert!(dets[0].shape.as_ref().unwrap().pieces.is_empty());
+    }
+
     /// Cells of a line from `a` to `b` (row, column), `thick` cells thick across it.
     fn line_cells(a: (f64, f64), b: (f64, f64), thick: usize) -> Vec<(usize, usize)> {
         let n = ((b.0 - a.0).abs().max((b.1 - a.1).abs()) * 2.0) as usize + 1;
@@ -905,6 +992,31 @@ mod tests {
         let wide = pieces(&line_cells((20.0, 10.0), (20.0, 60.0), 6), 7, 4.0);
         assert_eq!(wide.len(), 1, "{wide:?}");
         assert!((wide[0].width_px - 24.0).abs() <= 4.0, "{wide:?}");
+    }
+
+    #[test]
+    fn two_cracks_meeting_in_a_v_are_two_pieces_and_a_bent_crack_stays_one() {
+        // A V: down-right for 20 cells, then up-right for 20 (a 90° corner at (40, 30)).
+        let mut cells = line_cells((20.0, 10.0), (40.0, 30.0), 1);
+        cells.extend(line_cells((40.0, 30.0), (20.0, 50.0), 1));
+        cells.dedup();
+        let p = pieces(&cells, 7, 1.0);
+        assert_eq!(p.len(), 2, "{p:?}");
+        let mut dirs: Vec<f64> = p.iter().map(axis_deg).collect();
+        dirs.sort_by(f64::total_cmp);
+        assert!(
+            (dirs[0] - 45.0).abs() < 10.0 && (dirs[1] - 135.0).abs() < 10.0,
+            "{dirs:?}"
+        );
+        // Each touched on its own arm: left of the corner and right of it.
+        let mut xs: Vec<f32> = p.iter().map(|q| q.touch[0]).collect();
+        xs.sort_by(f32::total_cmp);
+        assert!(xs[0] < 28.0 && xs[1] > 32.0, "{xs:?}");
+        // Bent by 30° (as one crack of the trial scenes bends at most): one piece.
+        let mut bent = line_cells((20.0, 10.0), (20.0, 40.0), 1);
+        bent.extend(line_cells((20.0, 40.0), (35.0, 66.0), 1));
+        bent.dedup();
+        assert_eq!(pieces(&bent, 7, 1.0).len(), 1);
     }
 
     #[test]

@@ -104,6 +104,11 @@ pub struct PostprocessParams {
     pub iou_threshold: f32,
     /// Most detections kept.
     pub max_detections: usize,
+    /// Crack-map detections whose box covers less of the image than this fraction are dropped:
+    /// the crack datasets' rule ([`crate::crack_map::MIN_AREA_FRACTION`]). A thin crack
+    /// running along a pixel axis has a small box however long it is; the robot, which touches
+    /// each crack's centre line, sets 0 and keeps every crack with one.
+    pub min_area_fraction: f32,
 }
 
 impl Default for PostprocessParams {
@@ -112,6 +117,7 @@ impl Default for PostprocessParams {
             score_threshold: 0.25,
             iou_threshold: 0.5,
             max_detections: 100,
+            min_area_fraction: crate::crack_map::MIN_AREA_FRACTION,
         }
     }
 }
