@@ -7,6 +7,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crackbot_link::Key;
+use zenoh::qos::{CongestionControl, Priority};
 use zenoh::Wait;
 
 use crate::command::{unix_ms, Command, CommandGuard, CommandReply};
@@ -227,8 +228,17 @@ impl Shared {
                 }
             }
         }
+        // The state a station shows (mission, frame, candidates, plan, verdicts) is sent once:
+        // it waits for a full queue rather than being dropped, and goes ahead of the 400 Hz
+        // samples and heartbeats, which the next ones replace.
+        let (congestion, priority) = match topic {
+            Topic::Tactile | Topic::Health => (CongestionControl::Drop, Priority::DataLow),
+            _ => (CongestionControl::Block, Priority::Data),
+        };
         self.session
             .put(keys::topic_key(&self.robot, topic), bytes)
+            .congestion_control(congestion)
+            .priority(priority)
             .wait()
             .map_err(|e| TelemetryError::Publish {
                 key: keys::topic_key(&self.robot, topic),
