@@ -460,6 +460,9 @@ pub struct ExperimentConfig {
     pub template: InspectConfig,
     /// Give the trial scenes' cracks the authors' printed cross-section ([`as_printed`]).
     pub printed_cracks: bool,
+    /// Trials run at once ([`detection_trials`]). Each mission is a simulated robot in real
+    /// time over the speed-up: leave it a core and a half, or its sensor stream looks stalled.
+    pub jobs: usize,
 }
 
 fn run(
@@ -477,40 +480,69 @@ fn run(
     run_inspection(&c, &stop, |_| {})
 }
 
-/// Runs `n` detection trials on the random scenes of seeds `first_seed..first_seed + n`.
+/// Runs `n` detection trials on the random scenes of seeds `first_seed..first_seed + n`,
+/// `base.jobs` at a time (each trial's two missions one after the other), calling `progress`
+/// as each trial ends. The table lists the trials by seed whatever order they ended in.
 pub fn detection_trials(
     base: &ExperimentConfig,
     first_seed: u64,
     n: u64,
     mut progress: impl FnMut(u64, &Trial),
 ) -> Result<TrialsReport, MissionError> {
-    let params = trial_params();
-    let mut trials = Vec::new();
-    let mut retried = Vec::new();
-    for seed in first_seed..first_seed + n {
-        let mut scene = random_scene(&params, seed)?;
-        if base.printed_cracks {
-            scene = as_printed(&scene);
-        }
-        let vision = run_retried(base, &scene, InspectMode::Vision, seed, &mut retried)?;
-        let fused = run_retried(base, &scene, InspectMode::Fused, seed, &mut retried)?;
-        let decoys = scene
-            .features
-            .iter()
-            .filter(|f| matches!(f, Feature::Decoy { .. }))
-            .count();
-        let t = Trial {
-            seed,
-            cracks: score(&scene, &vision).cracks,
-            decoys,
-            vision: score(&scene, &vision),
-            fused: score(&scene, &fused),
-            fused_exploration_s: fused.exploration_s,
-            finger: finger_budget(&scene, &fused),
-        };
-        progress(seed, &t);
-        trials.push(t);
+    if base.jobs == 0 {
+        return Err(MissionError::Invalid(
+            "trials run at once (jobs) must be at least 1, got 0".into(),
+        ));
     }
+    let params = trial_params();
+    let mut trials: Vec<Trial> = Vec::new();
+    let mut retried: Vec<RetriedMission> = Vec::new();
+    let next = std::sync::atomic::AtomicU64::new(first_seed);
+    let failed = AtomicBool::new(false);
+    let end = first_seed.saturating_add(n);
+    let workers = (base.jobs as u64).min(n.max(1)) as usize;
+    let mut first_error = None;
+    std::thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        for _ in 0..workers {
+            let tx = tx.clone();
+            let (next, failed, params) = (&next, &failed, &params);
+            scope.spawn(move || {
+                while !failed.load(std::sync::atomic::Ordering::Relaxed) {
+                    let seed = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    if seed >= end {
+                        break;
+                    }
+                    let mut again = Vec::new();
+                    let result = one_trial(base, params, seed, &mut again);
+                    if result.is_err() {
+                        failed.store(true, std::sync::atomic::Ordering::Relaxed);
+                    }
+                    if tx.send((seed, result, again)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        for (seed, result, again) in rx {
+            retried.extend(again);
+            match result {
+                Ok(t) => {
+                    progress(seed, &t);
+                    trials.push(t);
+                }
+                Err(e) => {
+                    first_error.get_or_insert((seed, e));
+                }
+            }
+        }
+    });
+    if let Some((_, e)) = first_error {
+        return Err(e);
+    }
+    trials.sort_by_key(|t| t.seed);
+    retried.sort_by_key(|r| r.seed);
     let mean =
         |f: &dyn Fn(&Trial) -> f64| trials.iter().map(f).sum::<f64>() / trials.len().max(1) as f64;
     let locs: Vec<f64> = trials
@@ -544,6 +576,35 @@ pub fn detection_trials(
         trials,
         retried,
         paper: [46.66, 92.85],
+    })
+}
+
+/// One trial: the scene of `seed`, its vision-only and its fused mission, scored.
+fn one_trial(
+    base: &ExperimentConfig,
+    params: &RandomSceneParams,
+    seed: u64,
+    retried: &mut Vec<RetriedMission>,
+) -> Result<Trial, MissionError> {
+    let mut scene = random_scene(params, seed)?;
+    if base.printed_cracks {
+        scene = as_printed(&scene);
+    }
+    let vision = run_retried(base, &scene, InspectMode::Vision, seed, retried)?;
+    let fused = run_retried(base, &scene, InspectMode::Fused, seed, retried)?;
+    let decoys = scene
+        .features
+        .iter()
+        .filter(|f| matches!(f, Feature::Decoy { .. }))
+        .count();
+    Ok(Trial {
+        seed,
+        cracks: score(&scene, &vision).cracks,
+        decoys,
+        vision: score(&scene, &vision),
+        fused: score(&scene, &fused),
+        fused_exploration_s: fused.exploration_s,
+        finger: finger_budget(&scene, &fused),
     })
 }
 
