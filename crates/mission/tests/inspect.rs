@@ -406,6 +406,16 @@ fn printed_decoys_are_rejected_by_the_raised_pass_and_cracks_kept() {
     for p in prints {
         assert!(p.height_ratio.is_some_and(|h| h > PRINT_RATIO), "{p:?}");
     }
+    // Every rejected candidate carries the recognition votes it was judged by: a print reads
+    // as a crack to the finger, which is why it needed the raised pass.
+    for x in &r.rejected {
+        assert_eq!(x.votes.len(), r.cracks[0].evidence.votes.len(), "{x:?}");
+        assert!(x.votes.iter().all(|v| v.is_finite() && *v >= 0.0), "{x:?}");
+        if x.felt.starts_with("a print") {
+            let top = x.votes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            assert!(top > 0.0, "{x:?}");
+        }
+    }
 }
 
 #[test]

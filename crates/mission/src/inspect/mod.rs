@@ -514,6 +514,9 @@ pub struct RejectedCandidate {
     /// The print check's ratio, when the candidate was passed over raised.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub height_ratio: Option<f64>,
+    /// Recognition votes per class (summed over the slides), as a confirmed crack's evidence
+    /// has them: how close the finger came to calling it a crack.
+    pub votes: Vec<f64>,
 }
 
 /// Wall time per stage, s.
@@ -1168,6 +1171,7 @@ fn mission(
                 detector_score: *score,
                 slides: f.slides,
                 height_ratio: f.height_ratio,
+                votes: f.votes,
             });
         }
     }
