@@ -805,6 +805,24 @@ mod tests {
     use super::*;
     use crate::inspect::{Evidence, PassRecord, ReportedCrack};
 
+    /// A table of no trials with these means and finger budget.
+    fn empty_report(vision_correct: f64, fused_correct: f64, finger: FingerBudget) -> TrialsReport {
+        TrialsReport {
+            trials: Vec::new(),
+            vision_correct,
+            fused_correct,
+            fused_localisation_mm: None,
+            fused_width_mae_mm: None,
+            paper: [46.66, 92.85],
+            finger,
+            vision_totals: Totals::default(),
+            fused_totals: Totals::default(),
+            fused_exploration_s: None,
+            fused_within_goal: 0,
+            retried: Vec::new(),
+        }
+    }
+
     #[test]
     fn a_mission_that_failed_in_its_link_runs_once_more_and_a_bad_setting_does_not() {
         let stalled = || MissionError::SensorStalled {
@@ -843,20 +861,7 @@ mod tests {
         assert!(matches!(bad, Err(MissionError::Invalid(_))));
         assert_eq!((n, retried.len()), (1, 2));
         // The table lists what was run again.
-        let mut t = TrialsReport {
-            trials: Vec::new(),
-            vision_correct: 0.0,
-            fused_correct: 0.0,
-            fused_localisation_mm: None,
-            fused_width_mae_mm: None,
-            paper: [46.66, 92.85],
-            finger: FingerBudget::default(),
-            vision_totals: Totals::default(),
-            fused_totals: Totals::default(),
-            fused_exploration_s: None,
-            fused_within_goal: 0,
-            retried: Vec::new(),
-        };
+        let mut t = empty_report(0.0, 0.0, FingerBudget::default());
         assert!(!t.markdown().contains("run again"));
         t.retried = retried;
         let md = t.markdown();
@@ -866,20 +871,7 @@ mod tests {
 
     #[test]
     fn a_table_without_confirmed_cracks_says_so_instead_of_nan() {
-        let mut t = TrialsReport {
-            trials: Vec::new(),
-            vision_correct: 0.5,
-            fused_correct: 0.0,
-            fused_localisation_mm: None,
-            fused_width_mae_mm: None,
-            paper: [46.66, 92.85],
-            finger: FingerBudget::default(),
-            vision_totals: Totals::default(),
-            fused_totals: Totals::default(),
-            fused_exploration_s: None,
-            fused_within_goal: 0,
-            retried: Vec::new(),
-        };
+        let mut t = empty_report(0.5, 0.0, FingerBudget::default());
         let md = t.markdown();
         assert!(
             md.contains("– (no crack confirmed)") && !md.contains("NaN"),
@@ -1062,20 +1054,7 @@ mod tests {
         let crack5 = &scene.features[2];
         assert!(!stroke_meets([100.0, 50.0], [100.0, 61.5], crack5));
         assert!(stroke_meets([100.0, 50.0], [100.0, 63.0], crack5));
-        let mut t = TrialsReport {
-            trials: Vec::new(),
-            vision_correct: 0.5,
-            fused_correct: 0.5,
-            fused_localisation_mm: None,
-            fused_width_mae_mm: None,
-            paper: [46.66, 92.85],
-            finger: b,
-            vision_totals: Totals::default(),
-            fused_totals: Totals::default(),
-            fused_exploration_s: None,
-            fused_within_goal: 0,
-            retried: Vec::new(),
-        };
+        let mut t = empty_report(0.5, 0.5, b);
         t.finger.add(&b);
         assert_eq!(t.finger.crack, [2, 0]);
         assert!(

@@ -88,9 +88,17 @@ fn a_fused_mission_finds_the_crack_with_synchronised_positions_and_saves_everyth
     assert!(dir.path().join("frame.png").is_file());
     // The controller's clock fit: 150 ppm fast → the host runs −150 ppm against it.
     let fit = r.controller_clock.unwrap();
-    // (A few seconds of 100 Hz states with millisecond jitter bound the rate to a few hundred
-    // ppm; crate::sync's tests check the estimator over longer runs.)
-    assert!((fit.rate_ppm + 150.0).abs() < 400.0, "{fit:?}");
+    // (A few seconds of 100 Hz states bound the rate only as well as the fastest messages at
+    // the window's two ends: on a loaded 2-core CI machine 1 ms of queueing at each end of
+    // 2.6 s is 770 ppm, and a run saw the fit 437 ppm off. So the bound is 2 ms over the
+    // window's span, and never under 400 ppm; crate::sync's tests check the estimator over
+    // longer runs.)
+    let span_s = fit.points as f64 / 100.0;
+    let bound_ppm = (2e-3 / span_s * 1e6).max(400.0);
+    assert!(
+        (fit.rate_ppm + 150.0).abs() < bound_ppm,
+        "{fit:?}, bound {bound_ppm:.0} ppm"
+    );
     // The fitted line lies below every (sent, received) point, so its offset is only as tight as
     // the fastest message in the window. On a loaded 2-core CI machine every state of a stretch
     // can wait tens of ms for the robot's thread (a run saw the fit 76 ms off); 0.2 s is 0.9 mm at
