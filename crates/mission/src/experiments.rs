@@ -25,7 +25,7 @@
 //! proposed.
 
 use std::path::PathBuf;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crackbot_sim::surface::distance_to_polyline;
 use crackbot_sim::{random_scene, Feature, RandomSceneParams, Scene};
@@ -442,7 +442,7 @@ impl TrialsReport {
                 self.retried.len()
             );
             for r in &self.retried {
-                out += &format!("- trial {}, {}: {}\n", r.seed, mode_name(r.mode), r.error);
+                out += &format!("- trial {}, {}: {}\n", r.seed, r.mode.as_str(), r.error);
             }
         }
         out
@@ -497,7 +497,7 @@ pub fn detection_trials(
     let params = trial_params();
     let mut trials: Vec<Trial> = Vec::new();
     let mut retried: Vec<RetriedMission> = Vec::new();
-    let next = std::sync::atomic::AtomicU64::new(first_seed);
+    let next = AtomicU64::new(first_seed);
     let failed = AtomicBool::new(false);
     let end = first_seed.saturating_add(n);
     let workers = (base.jobs as u64).min(n.max(1)) as usize;
@@ -508,15 +508,15 @@ pub fn detection_trials(
             let tx = tx.clone();
             let (next, failed, params) = (&next, &failed, &params);
             scope.spawn(move || {
-                while !failed.load(std::sync::atomic::Ordering::Relaxed) {
-                    let seed = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                while !failed.load(Ordering::Relaxed) {
+                    let seed = next.fetch_add(1, Ordering::Relaxed);
                     if seed >= end {
                         break;
                     }
                     let mut again = Vec::new();
                     let result = one_trial(base, params, seed, &mut again);
                     if result.is_err() {
-                        failed.store(true, std::sync::atomic::Ordering::Relaxed);
+                        failed.store(true, Ordering::Relaxed);
                     }
                     if tx.send((seed, result, again)).is_err() {
                         break;
@@ -533,12 +533,12 @@ pub fn detection_trials(
                     trials.push(t);
                 }
                 Err(e) => {
-                    first_error.get_or_insert((seed, e));
+                    first_error.get_or_insert(e);
                 }
             }
         }
     });
-    if let Some((_, e)) = first_error {
+    if let Some(e) = first_error {
         return Err(e);
     }
     trials.sort_by_key(|t| t.seed);
@@ -620,15 +620,6 @@ pub struct RetriedMission {
     pub error: String,
 }
 
-/// The folder suffix of a trial's mission.
-fn mode_name(mode: InspectMode) -> &'static str {
-    match mode {
-        InspectMode::Tactile => "tactile",
-        InspectMode::Vision => "vision",
-        InspectMode::Fused => "fused",
-    }
-}
-
 /// [`run`] for one trial's mission, run once more from the start when the run itself failed
 /// (a sensor stream that stalls twice in one slide on a loaded machine, say): the first
 /// failure is kept in `retried` and its folder renamed `…-failed`. A second failure, or a
@@ -640,14 +631,13 @@ fn run_retried(
     seed: u64,
     retried: &mut Vec<RetriedMission>,
 ) -> Result<InspectReport, MissionError> {
-    let name = format!("trial-{seed}-{}", mode_name(mode));
+    let name = format!("trial-{seed}-{}", mode.as_str());
     retry_once(seed, mode, retried, |again| {
         let dir = base.out_dir.join(&name);
         if again && dir.exists() {
             let failed = base.out_dir.join(format!("{name}-failed"));
             let _ = std::fs::remove_dir_all(&failed);
-            std::fs::rename(&dir, &failed)
-                .map_err(|e| MissionError::Invalid(format!("{}: {e}", dir.display())))?;
+            std::fs::rename(&dir, &failed).map_err(|e| crate::inspect::io_err(&dir, e))?;
         }
         run(base, scene, mode, &name)
     })
@@ -682,7 +672,7 @@ fn retry_once<T>(
         Err(e) if worth_retrying(&e) => {
             tracing::warn!(
                 "trial {seed}, {} mission: {e}; running it again",
-                mode_name(mode)
+                mode.as_str()
             );
             retried.push(RetriedMission {
                 seed,

@@ -354,12 +354,7 @@ pub struct MissionStatus {
 
 /// The mode's name as the command line spells it.
 pub fn mode_name(mode: InspectMode) -> String {
-    match mode {
-        InspectMode::Tactile => "tactile",
-        InspectMode::Vision => "vision",
-        InspectMode::Fused => "fused",
-    }
-    .to_string()
+    mode.as_str().to_string()
 }
 
 /// What a mission's progress event becomes on the wire (`None`: nothing to publish; stage

@@ -436,8 +436,8 @@ fn angle_deg(a: [f64; 2], b: [f64; 2]) -> f64 {
 
 /// A branch cut into runs at its corners: cells where the centre line turns by more than
 /// [`CORNER_DEG`] between the [`DIRECTION_CELLS`] cells before and after (the sharpest cell of
-/// each such stretch), leaving at least twice as many cells either side. The cut ends are free, so the gap rule below sees them as ends that do
-/// not point at each other.
+/// each such stretch), leaving at least twice as many cells either side. The cut ends are free,
+/// so the gap rule below sees them as ends that do not point at each other.
 fn split_at_corners(branch: Branch) -> Vec<Branch> {
     let cells = &branch.cells;
     let k = DIRECTION_CELLS;
@@ -452,23 +452,21 @@ fn split_at_corners(branch: Branch) -> Vec<Branch> {
         let l = d[0].hypot(d[1]);
         [d[0] / l, d[1] / l]
     };
-    let turn = |i: usize| angle_deg(unit(cells[i - k], cells[i]), unit(cells[i], cells[i + k]));
+    // The turn at each cell that may be cut, `arm..len - arm`.
+    let turns: Vec<f64> = (arm..cells.len() - arm)
+        .map(|i| angle_deg(unit(cells[i - k], cells[i]), unit(cells[i], cells[i + k])))
+        .collect();
+    // The sharpest cell of each stretch turning by more than the corner angle.
     let mut cuts = Vec::new();
-    let mut i = arm;
-    while i + arm < cells.len() {
-        if turn(i) > CORNER_DEG {
-            // The sharpest cell of this stretch of turning.
-            let mut best = i;
-            while i + arm < cells.len() && turn(i) > CORNER_DEG {
-                if turn(i) > turn(best) {
-                    best = i;
-                }
-                i += 1;
-            }
-            cuts.push(best);
+    let mut stretch: Option<usize> = None;
+    for (j, &t) in turns.iter().enumerate() {
+        if t > CORNER_DEG {
+            stretch = Some(stretch.filter(|&b| turns[b] >= t).unwrap_or(j));
+        } else if let Some(b) = stretch.take() {
+            cuts.push(arm + b);
         }
-        i += 1;
     }
+    cuts.extend(stretch.map(|b| arm + b));
     if cuts.is_empty() {
         return vec![branch];
     }

@@ -60,6 +60,7 @@ use arm::*;
 use feel::Feel;
 pub use feel::Feeling;
 use passes::*;
+pub(crate) use perceive::io_err;
 use perceive::*;
 use sensor::*;
 
@@ -77,6 +78,17 @@ pub enum InspectMode {
     Vision,
     /// Look, then touch every candidate (the papers' method).
     Fused,
+}
+
+impl InspectMode {
+    /// The mode's name as the command line spells it (what [`std::str::FromStr`] reads).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            InspectMode::Tactile => "tactile",
+            InspectMode::Vision => "vision",
+            InspectMode::Fused => "fused",
+        }
+    }
 }
 
 impl std::str::FromStr for InspectMode {
