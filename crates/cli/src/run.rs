@@ -81,6 +81,12 @@ pub struct RunArgs {
     /// print check).
     #[arg(long, default_value_t = crackbot_mission::inspect::MIN_DIP_COUNTS)]
     pub min_dip_counts: f64,
+    /// Fused missions with the print check: a pass the recognition model read as "no crack"
+    /// while doubting it (a surface unlike training, or a weak vote) still stands for a crack
+    /// when its proximity dip is at least this confident (0–1), and the print check decides;
+    /// 0: the model's verdict always stands.
+    #[arg(long, default_value_t = crackbot_mission::inspect::DOUBTED_DIP_CONFIDENCE)]
+    pub doubted_dip_confidence: f64,
     /// Fused missions: report confirmed candidates whose detections continue each other
     /// across at most this gap (mm, within 40° of one direction) as one crack; 0 reports each.
     #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_GAP_MM)]
@@ -211,6 +217,8 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
     config.print_check_mm =
         crackbot_mission::print_check_height(args.print_check_mm).context("--print-check-mm")?;
     config.min_dip_counts = args.min_dip_counts;
+    config.doubted_dip_confidence =
+        (args.doubted_dip_confidence != 0.0).then_some(args.doubted_dip_confidence);
     config.piece_gap_mm = (args.piece_gap_mm != 0.0).then_some(args.piece_gap_mm);
     config.piece_trace_gap_mm = (args.piece_trace_gap_mm >= 0.0).then_some(args.piece_trace_gap_mm);
     config.planner.passes = args.passes;

@@ -68,6 +68,12 @@ pub struct Common {
     /// print check).
     #[arg(long, default_value_t = crackbot_mission::inspect::MIN_DIP_COUNTS)]
     min_dip_counts: f64,
+    /// Fused missions with the print check: a pass the recognition model read as "no crack"
+    /// while doubting it (a surface unlike training, or a weak vote) still stands for a crack
+    /// when its proximity dip is at least this confident (0–1), and the print check decides;
+    /// 0: the model's verdict always stands.
+    #[arg(long, default_value_t = crackbot_mission::inspect::DOUBTED_DIP_CONFIDENCE)]
+    doubted_dip_confidence: f64,
     /// Fused missions: report confirmed candidates whose detections continue each other
     /// across at most this gap (mm, within 40° of one direction) as one crack; 0 reports each.
     #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_GAP_MM)]
@@ -142,6 +148,8 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
     template.print_check_mm =
         crackbot_mission::print_check_height(common.print_check_mm).context("--print-check-mm")?;
     template.min_dip_counts = common.min_dip_counts;
+    template.doubted_dip_confidence =
+        (common.doubted_dip_confidence != 0.0).then_some(common.doubted_dip_confidence);
     template.piece_gap_mm = (common.piece_gap_mm != 0.0).then_some(common.piece_gap_mm);
     template.piece_trace_gap_mm =
         (common.piece_trace_gap_mm >= 0.0).then_some(common.piece_trace_gap_mm);

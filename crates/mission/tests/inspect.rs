@@ -437,6 +437,12 @@ fn bad_confirmation_settings_are_refused_before_anything_starts() {
     c.print_check_mm = Some(0.1);
     let err = mission(&c).unwrap_err().to_string();
     assert!(err.contains("print check"), "{err}");
+    for bad in [0.0, 1.5, f64::NAN] {
+        let mut c = config(dir.path());
+        c.doubted_dip_confidence = Some(bad);
+        let err = mission(&c).unwrap_err().to_string();
+        assert!(err.contains("doubted_dip_confidence"), "{err}");
+    }
     let mut c = config(dir.path());
     c.piece_gap_mm = Some(-1.0);
     let err = mission(&c).unwrap_err().to_string();
