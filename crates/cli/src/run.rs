@@ -15,7 +15,8 @@ use crackbot_sim::Scene;
 /// Flags of the mission.
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Scene file (default: the built-in default scene).
+    /// Scene file, TOML (or JSON when named `.json`, as `trial_scenes` writes them; default: the
+    /// built-in default scene).
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// tactile (scan rows, no camera), vision (camera only) or fused (camera proposes, finger

@@ -38,7 +38,7 @@ pub enum SimCommand {
 /// `crackbot sim render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Scene file (TOML); the built-in default scene when left out.
+    /// Scene file (TOML, or JSON when named `.json`); the built-in default scene when left out.
     #[arg(long)]
     scene: Option<PathBuf>,
     /// Output folder: images/frame_NNNN.{png,json} and coco.json.
@@ -89,7 +89,7 @@ pub struct DetectorSetArgs {
 /// `crackbot sim scene`.
 #[derive(Debug, Args)]
 pub struct SceneArgs {
-    /// Scene file (TOML); the built-in default scene when left out.
+    /// Scene file (TOML, or JSON when named `.json`); the built-in default scene when left out.
     scene: Option<PathBuf>,
 }
 

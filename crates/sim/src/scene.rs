@@ -204,10 +204,34 @@ impl Scene {
         Ok(scene)
     }
 
-    /// Reads, parses and validates the scene file at `path`.
+    /// Parses a scene from JSON text (the same fields as the TOML form, as
+    /// `serde_json::to_string(&scene)` writes it) and validates it; `source` names the text in
+    /// errors.
+    pub fn from_json_str(text: &str, source: &str) -> Result<Scene, SimError> {
+        let scene: Scene = serde_json::from_str(text).map_err(|e| SimError::Parse {
+            path: source.to_string(),
+            message: e.to_string(),
+        })?;
+        scene.validate().map_err(|e| match e {
+            SimError::Invalid(m) => SimError::Invalid(format!("{source}: {m}")),
+            other => other,
+        })?;
+        Ok(scene)
+    }
+
+    /// Reads, parses and validates the scene file at `path`: JSON when its name ends in
+    /// `.json` (as the trial scenes are written), TOML otherwise.
     pub fn load(path: &Path) -> Result<Scene, SimError> {
         let text = std::fs::read_to_string(path).map_err(SimError::io(path))?;
-        Scene::from_toml_str(&text, &path.display().to_string())
+        let source = path.display().to_string();
+        let json = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        if json {
+            Scene::from_json_str(&text, &source)
+        } else {
+            Scene::from_toml_str(&text, &source)
+        }
     }
 
     /// The built-in default scene (`crates/sim/scenes/default.toml`, compiled in): a 200 × 100 mm
@@ -541,5 +565,28 @@ mod tests {
         assert!(scene.camera.is_some());
         assert!(scene.features.len() >= 6);
         assert!(scene.validate().is_ok());
+    }
+
+    #[test]
+    fn a_scene_loads_from_json_as_from_toml_and_errors_name_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = Scene::builtin_default();
+        let json = dir.path().join("scene.JSON");
+        std::fs::write(&json, serde_json::to_string_pretty(&scene).unwrap()).unwrap();
+        assert_eq!(Scene::load(&json).unwrap(), scene);
+        // JSON in a file named .toml is read as TOML, and the error names the file.
+        let toml = dir.path().join("scene.toml");
+        std::fs::copy(&json, &toml).unwrap();
+        let e = Scene::load(&toml).unwrap_err().to_string();
+        assert!(e.contains("scene.toml"), "{e}");
+        // A malformed or invalid JSON scene: errors naming the file, no panic.
+        std::fs::write(&json, "{\"name\": ").unwrap();
+        let e = Scene::load(&json).unwrap_err().to_string();
+        assert!(e.contains("scene.JSON"), "{e}");
+        let mut bad = serde_json::to_value(&scene).unwrap();
+        bad["plate"]["size_mm"] = serde_json::json!([-5.0, 100.0]);
+        std::fs::write(&json, bad.to_string()).unwrap();
+        let e = Scene::load(&json).unwrap_err().to_string();
+        assert!(e.contains("scene.JSON"), "{e}");
     }
 }
