@@ -193,9 +193,14 @@ impl Scene {
     /// Parses a scene from TOML text and validates it; `source` names the text in errors (a
     /// path, or e.g. `"<builtin>"`).
     pub fn from_toml_str(text: &str, source: &str) -> Result<Scene, SimError> {
-        let scene: Scene = toml::from_str(text).map_err(|e| SimError::Parse {
+        Scene::checked(toml::from_str(text).map_err(|e| e.to_string()), source)
+    }
+
+    /// A parsed scene, validated; errors name `source`.
+    fn checked(parsed: Result<Scene, String>, source: &str) -> Result<Scene, SimError> {
+        let scene = parsed.map_err(|message| SimError::Parse {
             path: source.to_string(),
-            message: e.to_string(),
+            message,
         })?;
         scene.validate().map_err(|e| match e {
             SimError::Invalid(m) => SimError::Invalid(format!("{source}: {m}")),
@@ -208,15 +213,10 @@ impl Scene {
     /// `serde_json::to_string(&scene)` writes it) and validates it; `source` names the text in
     /// errors.
     pub fn from_json_str(text: &str, source: &str) -> Result<Scene, SimError> {
-        let scene: Scene = serde_json::from_str(text).map_err(|e| SimError::Parse {
-            path: source.to_string(),
-            message: e.to_string(),
-        })?;
-        scene.validate().map_err(|e| match e {
-            SimError::Invalid(m) => SimError::Invalid(format!("{source}: {m}")),
-            other => other,
-        })?;
-        Ok(scene)
+        Scene::checked(
+            serde_json::from_str(text).map_err(|e| e.to_string()),
+            source,
+        )
     }
 
     /// Reads, parses and validates the scene file at `path`: JSON when its name ends in
