@@ -263,7 +263,8 @@ pub const MIN_DIP_COUNTS: f64 = 40.0;
 /// (`models/tactile/MODEL_CARD.md`). The dips told them apart: over cracks their confidence was
 /// 0.64–0.82 (13 of 14 passes at speed-up 8, seeds 8000–8359; 11 of 11 at real time,
 /// 8360–8431), over prints mostly below 0.6 (26 of 33 and 15 of 16), and what passes goes on to
-/// the print check (`crates/mission/EXPERIMENTS.md`, "Doubted verdicts and deep dips").
+/// the print check (`crates/mission/EXPERIMENTS.md`, 'A doubted "no crack" over a deep dip goes
+/// to the print check').
 pub const DOUBTED_DIP_CONFIDENCE: f64 = 0.6;
 
 /// Whether a pass whose recognition verdict `v` is not "crack" still stands for a crack's
