@@ -219,7 +219,8 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
         crackbot_mission::print_check_height(args.print_check_mm).context("--print-check-mm")?;
     config.min_dip_counts = args.min_dip_counts;
     config.doubted_dip_confidence =
-        (args.doubted_dip_confidence != 0.0).then_some(args.doubted_dip_confidence);
+        crackbot_mission::inspect::doubted_dip_confidence(args.doubted_dip_confidence)
+            .context("--doubted-dip-confidence")?;
     config.piece_gap_mm = (args.piece_gap_mm != 0.0).then_some(args.piece_gap_mm);
     config.piece_trace_gap_mm = (args.piece_trace_gap_mm >= 0.0).then_some(args.piece_trace_gap_mm);
     config.planner.passes = args.passes;

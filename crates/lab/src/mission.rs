@@ -149,7 +149,8 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
         crackbot_mission::print_check_height(common.print_check_mm).context("--print-check-mm")?;
     template.min_dip_counts = common.min_dip_counts;
     template.doubted_dip_confidence =
-        (common.doubted_dip_confidence != 0.0).then_some(common.doubted_dip_confidence);
+        crackbot_mission::inspect::doubted_dip_confidence(common.doubted_dip_confidence)
+            .context("--doubted-dip-confidence")?;
     template.piece_gap_mm = (common.piece_gap_mm != 0.0).then_some(common.piece_gap_mm);
     template.piece_trace_gap_mm =
         (common.piece_trace_gap_mm >= 0.0).then_some(common.piece_trace_gap_mm);

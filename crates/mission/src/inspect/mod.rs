@@ -267,6 +267,27 @@ pub const MIN_DIP_COUNTS: f64 = 40.0;
 /// to the print check').
 pub const DOUBTED_DIP_CONFIDENCE: f64 = 0.6;
 
+/// [`InspectConfig::doubted_dip_confidence`] from a user's value: 0 turns the rule off;
+/// otherwise it must lie in (0, 1].
+pub fn doubted_dip_confidence(c: f64) -> Result<Option<f64>, MissionError> {
+    if c == 0.0 {
+        Ok(None)
+    } else {
+        dip_confidence_in_range(c).map(Some)
+    }
+}
+
+/// `c` when it lies in (0, 1], else an error naming the setting.
+fn dip_confidence_in_range(c: f64) -> Result<f64, MissionError> {
+    if c.is_finite() && c > 0.0 && c <= 1.0 {
+        Ok(c)
+    } else {
+        Err(MissionError::Invalid(format!(
+            "the least dip confidence that outweighs a doubted \"no crack\" (doubted_dip_confidence) must lie in (0, 1], got {c}"
+        )))
+    }
+}
+
 /// Whether a pass whose recognition verdict `v` is not "crack" still stands for a crack's
 /// crossing: the verdict is "no crack" (class `no_crack`), doubted as novel or weak, and the
 /// pass's proximity dip (its confidence `dip`, `None`: no dip) is at least `min_confidence`.
@@ -649,13 +670,8 @@ pub fn run_inspection(
     if let Some(h) = config.print_check_mm {
         print_check_height(h)?;
     }
-    if let Some(c) = config
-        .doubted_dip_confidence
-        .filter(|c| !(c.is_finite() && *c > 0.0 && *c <= 1.0))
-    {
-        return Err(MissionError::Invalid(format!(
-            "the least dip confidence that outweighs a doubted \"no crack\" (doubted_dip_confidence) must lie in (0, 1], got {c}"
-        )));
+    if let Some(c) = config.doubted_dip_confidence {
+        dip_confidence_in_range(c)?;
     }
     if let Some(g) = config
         .piece_gap_mm
@@ -1193,7 +1209,8 @@ fn mission(
 
     for (key, f) in felt {
         let total: f64 = f.votes.iter().sum();
-        let class = if reads_as_crack(&f) {
+        let reads = reads_as_crack(&f);
+        let class = if reads {
             crack_class
         } else {
             top_class(&f.votes)
@@ -1213,7 +1230,7 @@ fn mission(
         // Dead or saturated channels on every pass: the finger could not judge.
         let judged = f.unknown < f.passes;
         let print = f.height_ratio.is_some_and(|r| r > print_check::PRINT_RATIO);
-        if reads_as_crack(&f) && !print {
+        if reads && !print {
             let n = f.crossings.len() as f64;
             let pos = [
                 f.crossings.iter().map(|c| c.0[0]).sum::<f64>() / n,
