@@ -427,6 +427,68 @@ fn printed_decoys_are_rejected_by_the_raised_pass_and_cracks_kept() {
 }
 
 #[test]
+fn a_raised_pass_stops_over_a_screw_head_and_the_candidate_on_it_is_rejected() {
+    use crackbot_mission::experiments::{as_printed, trial_params};
+    use crackbot_sim::Feature;
+    // Trial scene 9073: the detector proposes the rim of a 2.2 mm screw head next to a bump,
+    // the finger reads it as a crack, and the raised pass (2 mm up) runs into the head.
+    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9073).unwrap());
+    let screws: Vec<([f64; 2], f64)> = scene
+        .features
+        .iter()
+        .filter_map(|f| match f {
+            Feature::Screw {
+                centre,
+                head_diameter_mm,
+                ..
+            } => Some((*centre, head_diameter_mm / 2.0)),
+            _ => None,
+        })
+        .collect();
+    assert!(!screws.is_empty());
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = InspectConfig::new(scene.clone(), dir.path());
+    c.speedup = 8.0;
+    let r = mission(&c).expect("mission");
+    let stood: Vec<_> = r
+        .rejected
+        .iter()
+        .filter(|x| x.felt.starts_with("something standing"))
+        .collect();
+    assert_eq!(stood.len(), 1, "{:?}", r.rejected);
+    // It was a screw's: its centre lies within a head's radius (plus the finger's reach) of
+    // one, and no reported crack does.
+    let near_screw = |p: [f64; 2]| {
+        screws
+            .iter()
+            .any(|(s, rad)| (p[0] - s[0]).hypot(p[1] - s[1]) < rad + 4.0)
+    };
+    assert!(near_screw(stood[0].position_mm), "{:?}", stood[0]);
+    assert!(!r.cracks.is_empty());
+    for k in &r.cracks {
+        assert!(!near_screw(k.position_mm), "{k:?}");
+        assert!(k
+            .evidence
+            .doubts
+            .iter()
+            .all(|d| !d.contains("raised pass was stopped")));
+    }
+    // The pass was stopped near its start (it would have run at least 9 mm: a 6 mm stroke and
+    // 1.5 mm past either end).
+    let raised = std::fs::read_to_string(
+        dir.path()
+            .join(format!("raised-{:03}.csv", stood[0].candidate)),
+    )
+    .unwrap();
+    let reached = raised
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(5).unwrap().parse::<f64>().unwrap())
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(reached < 6.0, "{reached}");
+}
+
+#[test]
 fn bad_confirmation_settings_are_refused_before_anything_starts() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = config(dir.path());

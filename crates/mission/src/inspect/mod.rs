@@ -308,6 +308,24 @@ fn doubted_no_crack_with_dip(
     Some(v.class as usize) == no_crack && doubted && deep
 }
 
+/// The print check's raised pass is stopped (the arm lifts to its travel height) when the
+/// proximity channel rises this far above the level it read at the pass's start, counts:
+/// something under the line is closer to the fibre than the plate. On the simulated trial
+/// scenes 9000–9119 at real time, raised passes over sound surface, cracks, prints and bumps up
+/// to 1.2 mm rose at most 12 counts above their level, passes over screw heads 258–466 counts
+/// (heads 2.2–3.6 mm tall, which the finger 2 mm up would strike; the simulator does not model
+/// that collision). For the fitted fibre, 40 counts is something about 1.1 mm tall under it
+/// (`crates/mission/EXPERIMENTS.md`, "Raised passes stop over what stands under them"). The
+/// level is the pass's own first 20 samples: a head already in view at the pass's start raises
+/// it, and the pass is then stopped later than it should be.
+pub const RAISED_PASS_GUARD_COUNTS: f64 = 40.0;
+/// A raised pass stopped by [`RAISED_PASS_GUARD_COUNTS`] judges its candidate only if it had
+/// gone this far past where the strokes crossed the crack (along the pass), mm: the fibre's
+/// look-ahead (1.8 mm) and spot have then seen the whole crossing. Stopped sooner, what stands
+/// under the line is at the candidate, which is rejected as "something standing above the
+/// plate" (a crack does not stand up; a screw's rim can look and feel like one).
+pub const RAISED_PASS_CLEAR_MM: f64 = 2.5;
+
 /// How far the print check's raised pass runs past each end of the candidate's stroke, mm (the
 /// default of the planner's [`crackbot_planner::RaisedPass`]; `InspectConfig::planner`'s
 /// `raised_pass` replaces it and the speed below).
@@ -949,6 +967,9 @@ fn mission(
         passes: usize,
         /// The print check's ratio.
         height_ratio: Option<f64>,
+        /// The print check's raised pass was stopped before it had passed the crossing:
+        /// something stands there, at the candidate.
+        stands: bool,
     }
     let k = recognition.header.classes.len();
     let crack_class = recognition
@@ -1113,6 +1134,7 @@ fn mission(
                                 unknown: 0,
                                 passes: 0,
                                 height_ratio: None,
+                                stands: false,
                             },
                         ));
                         &mut felt.last_mut().expect("just pushed").1
@@ -1176,8 +1198,36 @@ fn mission(
                     // stream's spacing.
                     let d = passes::unit(from, to);
                     let backwards = d[0] * u[0] + d[1] * u[1] < 0.0;
-                    rig.hover_and_record(finger_at, from, h, raised.speed_mm_s)?;
-                    let (hs, hx) = rig.hover_and_record(from, to, h, raised.speed_mm_s)?;
+                    rig.hover_and_record(finger_at, from, h, raised.speed_mm_s, None)?;
+                    let ((hs, hx), obstruction) = rig.hover_and_record(
+                        from,
+                        to,
+                        h,
+                        raised.speed_mm_s,
+                        Some(RAISED_PASS_GUARD_COUNTS),
+                    )?;
+                    if let Some(o) = obstruction {
+                        // Where it stopped and where the strokes crossed the crack, mm along
+                        // the slide's axis; `forward`: the pass runs along the axis.
+                        let stop = [from[0] + o.at_mm * d[0], from[1] + o.at_mm * d[1]];
+                        let on_axis = |p: [f64; 2]| {
+                            (p[0] - slide.start_mm[0]) * u[0] + (p[1] - slide.start_mm[1]) * u[1]
+                        };
+                        let sign = if backwards { -1.0 } else { 1.0 };
+                        let passed = f
+                            .crossings
+                            .iter()
+                            .all(|c| sign * (on_axis(stop) - on_axis(c.0)) > RAISED_PASS_CLEAR_MM);
+                        f.stands = !passed;
+                        f.doubts.push(format!(
+                            "the raised pass was stopped {:.1} mm along its {:.1} mm: the \
+                             proximity fibre read {:.0} counts above the sound surface, \
+                             something stands under the line",
+                            o.at_mm,
+                            (to[0] - from[0]).hypot(to[1] - from[1]),
+                            o.rise_counts
+                        ));
+                    }
                     let rec_path = config.out_dir.join(format!("raised-{c:03}.csv"));
                     save_pass(&rec_path, &hs, &hx, u8::from(backwards))?;
                     let dark = config.scene.sensor.optics.proximity_dark_counts;
@@ -1230,7 +1280,7 @@ fn mission(
         // Dead or saturated channels on every pass: the finger could not judge.
         let judged = f.unknown < f.passes;
         let print = f.height_ratio.is_some_and(|r| r > print_check::PRINT_RATIO);
-        if reads && !print {
+        if reads && !print && !f.stands {
             let n = f.crossings.len() as f64;
             let pos = [
                 f.crossings.iter().map(|c| c.0[0]).sum::<f64>() / n,
@@ -1267,6 +1317,10 @@ fn mission(
                 position_mm: c.centre_mm,
                 felt: if !judged {
                     "unknown".into()
+                } else if reads && f.stands {
+                    "something standing above the plate: the raised pass was stopped before it \
+                     had passed over the crossing"
+                        .into()
                 } else if print {
                     format!(
                         "a print: its proximity dip keeps {:.0} % of its share with the finger \

@@ -336,20 +336,52 @@ impl<'a> Rig<'a> {
     }
 }
 
+/// Something standing under a raised pass: where the pass was stopped and how far the proximity
+/// channel had risen above the sound surface's level.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Obstruction {
+    /// Mean P of the latest [`GUARD_MEAN_SAMPLES`] samples above the pass's first
+    /// [`GUARD_REFERENCE_SAMPLES`] (their median), counts.
+    pub(super) rise_counts: f64,
+    /// Where the arm was along the pass's line when the guard stopped it, mm from `line_start`.
+    pub(super) at_mm: f64,
+}
+
+/// Samples at the start of a guarded pass whose median is the sound surface's level.
+pub(super) const GUARD_REFERENCE_SAMPLES: usize = 20;
+/// Samples averaged for the guard's reading.
+pub(super) const GUARD_MEAN_SAMPLES: usize = 4;
+
+/// The median of `v` (not empty).
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s[s.len() / 2]
+}
+
 impl Rig<'_> {
     /// Moves the finger, held `z` mm above the plate, from where it is to `to` at `speed` and
     /// records the pass: the samples taken after the command while the arm was at that height
     /// (moving, or at rest at either end), with their
     /// position along the line from `line_start` towards `to` (mm). The print check's raised
     /// pass ([`crackbot_tactile::print_check`]).
+    ///
+    /// With `guard` (counts; for a pass that starts at height `z`), the pass is stopped (the arm
+    /// lifts to its travel height) as soon as the proximity channel rises that far above the
+    /// level it read at the start: something stands under the line, closer to the fibre than
+    /// the plate (a screw head taller than `z` would be struck). The samples from where the rise
+    /// began are dropped, and the obstruction is returned.
     pub(super) fn hover_and_record(
         &mut self,
         line_start: [f64; 2],
         to: [f64; 2],
         z: f64,
         speed: f64,
-    ) -> Result<Recorded, MissionError> {
+        guard: Option<f64>,
+    ) -> Result<(Recorded, Option<Obstruction>), MissionError> {
         let first_sample = self.sensor.samples.len();
+        let mut reference: Option<f64> = None;
+        let mut obstruction: Option<Obstruction> = None;
         self.arm.errors.clear();
         let seq = self.arm.command(&Message::MoveTo(crackbot_link::MoveTo {
             pose: crackbot_link::Pose {
@@ -370,6 +402,30 @@ impl Rig<'_> {
                 return Err(MissionError::Interrupted);
             }
             self.pump(Duration::from_millis(2))?;
+            if let Some(g) = guard {
+                let p = &self.sensor.samples[first_sample..];
+                if reference.is_none() && p.len() >= GUARD_REFERENCE_SAMPLES {
+                    let first: Vec<f64> = p[..GUARD_REFERENCE_SAMPLES]
+                        .iter()
+                        .map(|s| f64::from(s.raw[3]))
+                        .collect();
+                    reference = Some(median(&first));
+                }
+                if let Some(r) = reference {
+                    let latest = &p[p.len() - GUARD_MEAN_SAMPLES..];
+                    let mean = latest.iter().map(|s| f64::from(s.raw[3])).sum::<f64>()
+                        / GUARD_MEAN_SAMPLES as f64;
+                    if mean - r > g {
+                        self.arm.stop();
+                        let here = self.arm.here();
+                        obstruction = Some(Obstruction {
+                            rise_counts: mean - r,
+                            at_mm: along(line_start, unit(line_start, to), here),
+                        });
+                        break;
+                    }
+                }
+            }
             if let Some(e) = self.arm.errors.iter().find(|e| e.seq == seq) {
                 return Err(MissionError::Refused {
                     what: "the print check's raised pass".into(),
@@ -387,7 +443,7 @@ impl Rig<'_> {
             self.check_progress(deadline, budget, || "the print check's raised pass".into())?;
         }
         // The sensor's samples lag the arm's states: wait (100 ms at most) until one taken
-        // after the arm arrived has come in.
+        // after the arm arrived (or was stopped) has come in.
         let arrived_us = mapped_states(self.arm).last().map(|(h, _)| *h);
         let wait_until = Instant::now() + Duration::from_millis(100);
         while let Some(t) = arrived_us {
@@ -420,7 +476,15 @@ impl Rig<'_> {
                 positions.push(along(line_start, u, p));
             }
         }
-        Ok((samples, positions))
+        // A stopped pass keeps what it read before the rise began (a quarter of the guard).
+        if let (Some(g), Some(r), Some(_)) = (guard, reference, obstruction) {
+            let rise = samples.iter().position(|s| s[3] - r > g / 4.0);
+            if let Some(i) = rise {
+                samples.truncate(i);
+                positions.truncate(i);
+            }
+        }
+        Ok(((samples, positions), obstruction))
     }
 }
 
