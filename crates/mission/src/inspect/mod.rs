@@ -321,9 +321,10 @@ fn doubted_no_crack_with_dip(
 pub const RAISED_PASS_GUARD_COUNTS: f64 = 40.0;
 /// A raised pass stopped by [`RAISED_PASS_GUARD_COUNTS`] judges its candidate only if it had
 /// gone this far past where the strokes crossed the crack (along the pass), mm: the fibre's
-/// look-ahead (1.8 mm) and spot have then seen the whole crossing. Stopped sooner, what stands
-/// under the line is at the candidate, which is rejected as "something standing above the
-/// plate" (a crack does not stand up; a screw's rim can look and feel like one).
+/// look-ahead (1.8 mm) and spot have then seen the whole crossing, and what it read gives a
+/// ratio. Stopped sooner, or without a ratio, what stands under the line may be the candidate,
+/// which is rejected as "something standing above the plate" (a crack does not stand up; a
+/// screw's rim can look and feel like one).
 pub const RAISED_PASS_CLEAR_MM: f64 = 2.5;
 
 /// How far the print check's raised pass runs past each end of the candidate's stroke, mm (the
@@ -967,8 +968,8 @@ fn mission(
         passes: usize,
         /// The print check's ratio.
         height_ratio: Option<f64>,
-        /// The print check's raised pass was stopped before it had passed the crossing:
-        /// something stands there, at the candidate.
+        /// The print check's raised pass was stopped before it could judge the crossing (before
+        /// it had passed it, or with no ratio from what it read): something stands there.
         stands: bool,
     }
     let k = recognition.header.classes.len();
@@ -1250,6 +1251,10 @@ fn mission(
                     }
                     if !ratios.is_empty() {
                         f.height_ratio = Some(ratios.iter().sum::<f64>() / ratios.len() as f64);
+                    } else if obstruction.is_some() {
+                        // Stopped past the crossing, but what it read there gives no ratio:
+                        // nothing rules out what stands there.
+                        f.stands = true;
                     }
                 }
             }
@@ -1319,7 +1324,7 @@ fn mission(
                     "unknown".into()
                 } else if reads && f.stands {
                     "something standing above the plate: the raised pass was stopped before it \
-                     had passed over the crossing"
+                     could judge the crossing"
                         .into()
                 } else if print {
                     format!(
