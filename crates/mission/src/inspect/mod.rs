@@ -1209,7 +1209,7 @@ fn mission(
                     )?;
                     if let Some(o) = obstruction {
                         // Where it stopped and where the strokes crossed the crack, mm along
-                        // the slide's axis; `forward`: the pass runs along the axis.
+                        // the slide's axis; `sign`: +1 where the pass runs along the axis.
                         let stop = [from[0] + o.at_mm * d[0], from[1] + o.at_mm * d[1]];
                         let on_axis = |p: [f64; 2]| {
                             (p[0] - slide.start_mm[0]) * u[0] + (p[1] - slide.start_mm[1]) * u[1]
