@@ -1,0 +1,191 @@
+#!/usr/bin/env python3
+"""Where the detection trials' errors come from: every candidate a fused mission touched, scored
+against its scene's truth (standard library only).
+
+    cargo run --release -p crackbot-mission --example trial_scenes -- 9000 120 SCENES --printed-cracks
+    cargo run --release -p crackbot-lab -- mission trials --trials 120 --seed 9000 \\
+        --printed-cracks --speedup 1 --jobs 2 --out RUN
+    python3 scripts/trial_errors.py SCENES RUN [RUN ...]
+
+For each touched candidate: what its first stroke crossed (cracks and printed decoys, mm along
+the stroke, with their widths), screws and bumps within 4.5 mm of the stroke (distance from
+their edge, and height), the print check's ratio and what the mission decided. The reports are
+matched to cracks as `crackbot_mission::experiments::score` does (within 5 mm plus half the
+crack's width, once per crack). Prints a count per (truth, outcome, one or several lines
+crossed, something standing near) and one line per error; cracks that no stroke crossed are
+listed with the nearest candidates (a long candidate near a missed crack is often two cracks
+merged into one piece). Used for `crates/mission/EXPERIMENTS.md`, seventh session.
+"""
+import collections
+import glob
+import json
+import math
+import os
+import sys
+
+MATCH_MM = 5.0
+NEAR_MM = 4.5
+PRINT_RATIO = 0.88
+
+
+def seg_inter(p, q, a, b):
+    """Where segment p→q crosses segment a→b, as a fraction of p→q, or None."""
+    r = (q[0] - p[0], q[1] - p[1])
+    s = (b[0] - a[0], b[1] - a[1])
+    den = r[0] * s[1] - r[1] * s[0]
+    if abs(den) < 1e-12:
+        return None
+    t = ((a[0] - p[0]) * s[1] - (a[1] - p[1]) * s[0]) / den
+    u = ((a[0] - p[0]) * r[1] - (a[1] - p[1]) * r[0]) / den
+    return t if 0.0 <= t <= 1.0 and 0.0 <= u <= 1.0 else None
+
+
+def dist_seg(pt, a, b):
+    d = (b[0] - a[0], b[1] - a[1])
+    l2 = d[0] ** 2 + d[1] ** 2
+    t = 0 if l2 == 0 else max(0, min(1, ((pt[0] - a[0]) * d[0] + (pt[1] - a[1]) * d[1]) / l2))
+    return math.hypot(pt[0] - a[0] - t * d[0], pt[1] - a[1] - t * d[1])
+
+
+def dist_poly(pt, path):
+    return min(dist_seg(pt, path[i], path[i + 1]) for i in range(len(path) - 1))
+
+
+def crossings(p, q, feats):
+    """Cracks and decoys the segment p→q crosses: (mm along it, feature index, kind, width)."""
+    length = math.hypot(q[0] - p[0], q[1] - p[1])
+    out = []
+    for fi, f in enumerate(feats):
+        if f["kind"] not in ("crack", "decoy"):
+            continue
+        path = f["path"]
+        for i in range(len(path) - 1):
+            t = seg_inter(p, q, path[i], path[i + 1])
+            if t is not None:
+                out.append((t * length, fi, f["kind"], f["width_mm"]))
+    return sorted(out), length
+
+
+def standing_near(p, q, feats):
+    out = []
+    for f in feats:
+        if f["kind"] == "screw":
+            d = dist_seg(f["centre"], p, q) - f["head_diameter_mm"] / 2
+        elif f["kind"] == "bump":
+            d = dist_seg(f["centre"], p, q) - f["radius_mm"]
+        else:
+            continue
+        if d < NEAR_MM:
+            out.append((f["kind"], round(d, 1), round(f["height_mm"], 1)))
+    return out
+
+
+def claimed_cracks(report, feats):
+    """Crack index → index of the report matched to it (as the trials score)."""
+    cracks = [i for i, f in enumerate(feats) if f["kind"] == "crack"]
+    claimed = {}
+    for ri, r in enumerate(report["cracks"]):
+        best = None
+        for ci in cracks:
+            if ci in claimed:
+                continue
+            d = dist_poly(r["position_mm"], feats[ci]["path"])
+            if best is None or d < best[1]:
+                best = (ci, d)
+        if best and best[1] <= MATCH_MM + feats[best[0]]["width_mm"] / 2:
+            claimed[best[0]] = ri
+    return claimed
+
+
+def trial(scenes, folder, stats, errors, untouched):
+    seed = int(folder.rstrip("/").split("-")[-2])
+    with open(os.path.join(folder, "report.json")) as f:
+        report = json.load(f)
+    scene = os.path.join(scenes, f"scene-{seed}.json")
+    if not os.path.exists(scene):
+        sys.exit(f"{scene}: no such scene (write the trials' scenes with the trial_scenes example)")
+    with open(scene) as f:
+        feats = json.load(f)["features"]
+    claimed = claimed_cracks(report, feats)
+    by_report = {ri: ci for ci, ri in claimed.items()}
+    passes = collections.defaultdict(list)
+    for p in report["passes"]:
+        if p["candidate"] is not None:
+            passes[p["candidate"]].append(p)
+    confirmed = {
+        (ri, r["candidate"]) for ri, r in enumerate(report["cracks"]) if r.get("candidate")
+    }
+    rejected = {r["candidate"]: r for r in report["rejected"]}
+    crossed = set()
+    for cand, ps in passes.items():
+        xs, length = crossings(ps[0]["start_mm"], ps[0]["end_mm"], feats)
+        crossed.update(c[1] for c in xs)
+        near = min(xs, key=lambda c: abs(c[0] - length / 2)) if xs else None
+        truth = near[2] if near else "nothing"
+        standing = standing_near(ps[0]["start_mm"], ps[0]["end_mm"], feats)
+        hit = [ri for ri, c in confirmed if c == cand]
+        if hit:
+            r = report["cracks"][hit[0]]
+            decided, ratio = "confirmed", r["evidence"].get("height_ratio")
+            matched = by_report.get(hit[0])
+            if truth == "crack":
+                result = (
+                    "ok"
+                    if matched == near[1]
+                    else "duplicate or off the crack" if matched is None else "matched to another crack"
+                )
+            else:
+                result = f"{truth} confirmed" + (" (matched to a crack)" if matched is not None else "")
+        elif cand in rejected:
+            r = rejected[cand]
+            decided, ratio = "rejected: " + r["felt"], r.get("height_ratio")
+            result = "crack rejected" if truth == "crack" else "ok"
+        else:
+            continue
+        key = (truth, result, "several lines" if len(xs) > 1 else "one line", "standing near" if standing else "")
+        stats[key] += 1
+        if result != "ok":
+            dips = [p["dip"] and round(p["dip"]["centre_mm"], 1) for p in ps]
+            errors.append(
+                f"{seed} candidate {cand}: {truth}, {result}; {decided[:60]}; ratio "
+                f"{ratio if ratio is None else round(ratio, 2)}; stroke {length:.1f} mm crosses "
+                f"{[(round(c[0], 1), c[2], round(c[3], 2)) for c in xs]}; standing {standing}; "
+                f"dip centres {dips}"
+            )
+    for ci, f in enumerate(feats):
+        if f["kind"] != "crack" or ci in claimed or ci in crossed:
+            continue
+        nearest = sorted(
+            (round(dist_poly(c["centre_mm"], f["path"]), 1), c["id"], round(c["length_mm"], 1))
+            for c in report["candidates"]
+        )[:3]
+        untouched.append(
+            f"{seed} crack {ci} ({f['width_mm']:.2f} mm wide): no stroke crossed it; nearest "
+            f"candidates (distance, id, length mm) {nearest}"
+        )
+
+
+def main():
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    scenes = sys.argv[1]
+    stats, errors, untouched = collections.Counter(), [], []
+    folders = [d for run in sys.argv[2:] for d in sorted(glob.glob(os.path.join(run, "trial-*-fused")))]
+    if not folders:
+        sys.exit(f"no trial-*-fused folder in {sys.argv[2:]}")
+    for d in folders:
+        if os.path.exists(os.path.join(d, "report.json")):
+            trial(scenes, d, stats, errors, untouched)
+    print("touched candidates by (truth, outcome, lines the stroke crossed, standing near):")
+    for k, v in sorted(stats.items()):
+        print(f"  {v:4d}  {', '.join(x for x in k if x)}")
+    print("\nerrors:")
+    for e in errors:
+        print("  " + e)
+    print("\ncracks no stroke crossed:")
+    for u in untouched:
+        print("  " + u)
+
+
+if __name__ == "__main__":
+    main()
