@@ -1207,19 +1207,23 @@ fn mission(
                         raised.speed_mm_s,
                         Some(RAISED_PASS_GUARD_COUNTS),
                     )?;
-                    if let Some(o) = obstruction {
-                        // Where it stopped and where the strokes crossed the crack, mm along
-                        // the slide's axis; `sign`: +1 where the pass runs along the axis.
-                        let stop = [from[0] + o.at_mm * d[0], from[1] + o.at_mm * d[1]];
-                        let on_axis = |p: [f64; 2]| {
-                            (p[0] - slide.start_mm[0]) * u[0] + (p[1] - slide.start_mm[1]) * u[1]
-                        };
+                    // A point of the raised pass's line (mm from `from`) on the slide's axis,
+                    // as the strokes' positions.
+                    let on_axis = |v: f64| {
+                        let p = [from[0] + v * d[0], from[1] + v * d[1]];
+                        (p[0] - slide.start_mm[0]) * u[0] + (p[1] - slide.start_mm[1]) * u[1]
+                    };
+                    // Stopped by something standing: had it gone far enough past every crossing
+                    // (`sign`: +1 where the pass runs along the axis)?
+                    let passed = obstruction.map(|o| {
                         let sign = if backwards { -1.0 } else { 1.0 };
-                        let passed = f
-                            .crossings
-                            .iter()
-                            .all(|c| sign * (on_axis(stop) - on_axis(c.0)) > RAISED_PASS_CLEAR_MM);
-                        f.stands = !passed;
+                        f.crossings.iter().all(|c| {
+                            let crossing = (c.0[0] - slide.start_mm[0]) * u[0]
+                                + (c.0[1] - slide.start_mm[1]) * u[1];
+                            sign * (on_axis(o.at_mm) - crossing) > RAISED_PASS_CLEAR_MM
+                        })
+                    });
+                    if let Some(o) = obstruction {
                         f.doubts.push(format!(
                             "the raised pass was stopped {:.1} mm along its {:.1} mm: the \
                              proximity fibre read {:.0} counts above the sound surface, \
@@ -1232,15 +1236,8 @@ fn mission(
                     let rec_path = config.out_dir.join(format!("raised-{c:03}.csv"));
                     save_pass(&rec_path, &hs, &hx, u8::from(backwards))?;
                     let dark = config.scene.sensor.optics.proximity_dark_counts;
-                    // The raised pass's positions on the slide's axis, as the strokes'.
                     let hp: Vec<f64> = hs.iter().map(|v| v[3]).collect();
-                    let hx: Vec<f64> = hx
-                        .iter()
-                        .map(|&v| {
-                            let p = [from[0] + v * d[0], from[1] + v * d[1]];
-                            (p[0] - slide.start_mm[0]) * u[0] + (p[1] - slide.start_mm[1]) * u[1]
-                        })
-                        .collect();
+                    let hx: Vec<f64> = hx.iter().map(|&v| on_axis(v)).collect();
                     let mut ratios = Vec::new();
                     for (p, x) in &strokes {
                         match print_check::print_ratio((p, x), (&hp, &hx), dark) {
@@ -1251,11 +1248,10 @@ fn mission(
                     }
                     if !ratios.is_empty() {
                         f.height_ratio = Some(ratios.iter().sum::<f64>() / ratios.len() as f64);
-                    } else if obstruction.is_some() {
-                        // Stopped past the crossing, but what it read there gives no ratio:
-                        // nothing rules out what stands there.
-                        f.stands = true;
                     }
+                    // Stopped before the crossing, or past it with no ratio from what it read:
+                    // nothing rules out what stands there.
+                    f.stands = passed.is_some_and(|p| !p || ratios.is_empty());
                 }
             }
         }

@@ -352,13 +352,6 @@ pub(super) const GUARD_REFERENCE_SAMPLES: usize = 20;
 /// Samples averaged for the guard's reading.
 pub(super) const GUARD_MEAN_SAMPLES: usize = 4;
 
-/// The median of `v` (not empty).
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    s[s.len() / 2]
-}
-
 impl Rig<'_> {
     /// Moves the finger, held `z` mm above the plate, from where it is to `to` at `speed` and
     /// records the pass: the samples taken after the command while the arm was at that height
@@ -405,11 +398,12 @@ impl Rig<'_> {
             if let Some(g) = guard {
                 let p = &self.sensor.samples[first_sample..];
                 if reference.is_none() && p.len() >= GUARD_REFERENCE_SAMPLES {
-                    let first: Vec<f64> = p[..GUARD_REFERENCE_SAMPLES]
+                    let mut first: Vec<f64> = p[..GUARD_REFERENCE_SAMPLES]
                         .iter()
                         .map(|s| f64::from(s.raw[3]))
                         .collect();
-                    reference = Some(median(&first));
+                    first.sort_by(f64::total_cmp);
+                    reference = Some(first[GUARD_REFERENCE_SAMPLES / 2]);
                 }
                 if let Some(r) = reference {
                     let latest = &p[p.len() - GUARD_MEAN_SAMPLES..];
