@@ -327,6 +327,18 @@ pub const RAISED_PASS_GUARD_COUNTS: f64 = 40.0;
 /// screw's rim can look and feel like one).
 pub const RAISED_PASS_CLEAR_MM: f64 = 2.5;
 
+/// A candidate's stroke is made once more beside it when its two ends read this unlike each
+/// other: the darker end's signal above the fibre's dark level is less than this share of the
+/// brighter end's (`passes::ends_agree`). A stroke is planned to start and end on sound surface;
+/// on the simulated trial scenes 9000–9119 and 9180–9299, 30 of 839 candidate strokes did not
+/// (another crack or a print beside the candidate, a bump's flank, a screw head, a crack wider
+/// than its stroke), and half of those candidates ended as errors.
+pub const UNEVEN_ENDS_SHARE: f64 = 0.6;
+/// How far along the candidate the stroke is made again, mm: past a screw head's radius.
+pub const RESTROKE_ALONG_MM: f64 = 5.0;
+/// Least of the candidate left beyond the moved stroke, mm: it still crosses the candidate.
+pub const RESTROKE_KEEP_MM: f64 = 1.0;
+
 /// How far the print check's raised pass runs past each end of the candidate's stroke, mm (the
 /// default of the planner's [`crackbot_planner::RaisedPass`]; `InspectConfig::planner`'s
 /// `raised_pass` replaces it and the speed below).
@@ -1003,257 +1015,311 @@ fn mission(
     let mut online = OnlineClassifier::new(recognition)?;
     let mut online_width = OnlineClassifier::new(width)?;
     let mut feel = Feel::new(recognition, width)?;
-    for (si, slide) in plan.slides.iter().enumerate() {
-        if rig.stop.load(Ordering::Relaxed) {
-            return Err(MissionError::Interrupted);
-        }
-        // Tactile rows have no candidate: each row is judged in stroke-long pieces below.
-        let cand = slide.candidates.first().copied();
-        let axis = [
-            slide.end_mm[0] - slide.start_mm[0],
-            slide.end_mm[1] - slide.start_mm[1],
-        ];
-        let len = axis[0].hypot(axis[1]).max(1e-9);
-        let u = [axis[0] / len, axis[1] / len];
-        let at = |s: f64| [slide.start_mm[0] + s * u[0], slide.start_mm[1] + s * u[1]];
-        let n_passes = slide.passes.max(1);
-        let mut p = 0;
-        // Each stroke's proximity channel and positions (for the print check), and where the
-        // finger ended.
-        let mut strokes: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
-        let mut finger_at = slide.start_mm;
-        while p < n_passes {
-            // One classification unit: a stroke forth and back, as the authors' slides are
-            // (direction 0 then 1); a single stroke when the plan has no way back.
-            let unit = if cand.is_some() && p + 1 < n_passes {
-                2
-            } else {
-                1
-            };
-            let (mut samples, mut along, mut dirs) = (Vec::new(), Vec::new(), Vec::new());
-            let mut records = Vec::new();
-            for q in p..p + unit {
-                let forth = q % 2 == 0;
-                let (a, b) = if forth {
-                    (slide.start_mm, slide.end_mm)
+    for (si, planned) in plan.slides.iter().enumerate() {
+        // A candidate's stroke whose ends read unlike each other is made once more beside it
+        // (`RESTROKE_ALONG_MM` along the candidate): `again` is that slide.
+        let mut again: Option<crackbot_planner::Slide> = None;
+        'line: loop {
+            let slide = again.as_ref().unwrap_or(planned);
+            if rig.stop.load(Ordering::Relaxed) {
+                return Err(MissionError::Interrupted);
+            }
+            // Tactile rows have no candidate: each row is judged in stroke-long pieces below.
+            let cand = slide.candidates.first().copied();
+            let axis = [
+                slide.end_mm[0] - slide.start_mm[0],
+                slide.end_mm[1] - slide.start_mm[1],
+            ];
+            let len = axis[0].hypot(axis[1]).max(1e-9);
+            let u = [axis[0] / len, axis[1] / len];
+            let at = |s: f64| [slide.start_mm[0] + s * u[0], slide.start_mm[1] + s * u[1]];
+            let n_passes = slide.passes.max(1);
+            let mut p = 0;
+            // Each stroke's proximity channel and positions (for the print check), and where the
+            // finger ended.
+            let mut strokes: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+            let mut finger_at = slide.start_mm;
+            while p < n_passes {
+                // One classification unit: a stroke forth and back, as the authors' slides are
+                // (direction 0 then 1); a single stroke when the plan has no way back.
+                let unit = if cand.is_some() && p + 1 < n_passes {
+                    2
                 } else {
-                    (slide.end_mm, slide.start_mm)
+                    1
                 };
-                let id = next_id;
-                next_id += 1;
-                let dir = u8::from(!forth);
-                let ((s, x), attempts) =
-                    rig.slide_and_record(id, (a, b), slide.speed_mm_s, dir, &mut feel)?;
-                let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
-                save_pass(&rec_path, &s, &x, dir)?;
-                strokes.push((
-                    s.iter().map(|v| v[3]).collect(),
-                    x.iter().map(|&v| if forth { v } else { len - v }).collect(),
-                ));
-                finger_at = b;
-                records.push((id, a, b, s.len(), rec_path, attempts));
-                // Positions along the slide's axis, from its start.
-                along.extend(x.iter().map(|&v| if forth { v } else { len - v }));
-                dirs.extend(std::iter::repeat_n(dir, s.len()));
-                samples.extend(s);
-            }
-            let fresh_unit = p == 0;
-            p += unit;
-            let pieces: Vec<(usize, usize)> = if cand.is_none() {
-                split_by_travel(&along, config.scene.manipulator.stroke_mm)
-            } else {
-                vec![(0, samples.len())]
-            };
-            for (p0, p1) in pieces {
-                // The context reaches back over the candidate's earlier strokes (as over the
-                // authors' back-and-forth strokes); a new candidate or row starts afresh.
-                let (verdict, wv) = classify(
-                    &mut online,
-                    &mut online_width,
-                    &samples[p0..p1],
-                    &along[p0..p1],
-                    &dirs[p0..p1],
-                    fresh_unit && p0 == 0,
-                )?;
-                let extent = crackbot_tactile::localise::localise(
-                    &samples[p0..p1],
-                    &along[p0..p1],
-                    &crackbot_tactile::localise::LocaliseConfig {
-                        min_depth_counts: config.min_dip_counts,
-                        ..Default::default()
-                    },
-                )
-                .ok()
-                .flatten();
-                let mid = along.get((p0 + p1) / 2).copied().unwrap_or(len / 2.0);
-                let crossing = extent.as_ref().map_or((at(mid), None), |e| {
-                    (at(e.centre_mm), Some([at(e.start_mm), at(e.end_mm)]))
-                });
-                let key = cand.unwrap_or(u64::from(records[0].0) << 32 | p0 as u64);
-                for (id, a, b, n, rec_path, attempts) in &records {
-                    let rec = PassRecord {
-                        id: *id,
-                        candidate: cand,
-                        start_mm: *a,
-                        end_mm: *b,
-                        samples: if cand.is_some() { *n } else { p1 - p0 },
-                        class: verdict.as_ref().map(|v| v.name.clone()),
-                        confidence: verdict.as_ref().map_or(0.0, |v| v.confidence),
-                        width_mm: wv.as_ref().map(|w| w.label),
-                        doubt: verdict
-                            .as_ref()
-                            .and_then(|v| v.doubt.as_ref())
-                            .map(|d| format!("{d:?}")),
-                        dip: extent.as_ref().map(|e| Dip {
-                            centre_mm: e.centre_mm,
-                            width_mm: e.width_mm,
-                            confidence: e.confidence,
-                        }),
-                        recording: rec_path.display().to_string(),
-                        attempts: *attempts,
-                    };
-                    (rig.progress)(&Progress::Slid {
-                        done: si + 1,
-                        of: n_slides,
-                        class: rec.class.clone().unwrap_or_else(|| "–".into()),
-                        pass: Box::new(rec.clone()),
-                    });
-                    report.passes.push(rec);
-                }
-                let entry = match felt.iter_mut().position(|(c, _)| *c == key) {
-                    Some(i) => &mut felt[i].1,
-                    None => {
-                        felt.push((
-                            key,
-                            Felt {
-                                votes: vec![0.0; k],
-                                slides: Vec::new(),
-                                widths: Vec::new(),
-                                doubts: Vec::new(),
-                                crossings: Vec::new(),
-                                vetoes: 0,
-                                unknown: 0,
-                                passes: 0,
-                                height_ratio: None,
-                                stands: false,
-                            },
-                        ));
-                        &mut felt.last_mut().expect("just pushed").1
-                    }
-                };
-                entry.slides.extend(records.iter().map(|r| r.0));
-                entry.passes += 1;
-                if let Some(v) = &verdict {
-                    for (acc, x) in entry.votes.iter_mut().zip(&v.votes) {
-                        *acc += x;
-                    }
-                    // A dead or saturated channel makes the slide unusable; a novel surface is
-                    // reported as a doubt (the simulated finger is still unlike the real one,
-                    // see models/tactile/MODEL_CARD.md) but its vote counts.
-                    if matches!(
-                        v.doubt,
-                        Some(Doubt::DeadChannel { .. } | Doubt::OutOfRange { .. })
-                    ) {
-                        entry.unknown += 1;
-                    }
-                    if let Some(d) = &v.doubt {
-                        entry.doubts.push(format!("{d:?}"));
-                    }
-                    let doubted_dip = cand.is_some()
-                        && doubted_no_crack_with_dip(
-                            v,
-                            no_crack_class,
-                            extent.as_ref().map(|e| e.confidence),
-                            dip_outweighs_doubt,
-                        );
-                    if v.class as usize == crack_class || doubted_dip {
-                        entry.crossings.push(crossing);
+                let (mut samples, mut along, mut dirs) = (Vec::new(), Vec::new(), Vec::new());
+                let mut records = Vec::new();
+                for q in p..p + unit {
+                    let forth = q % 2 == 0;
+                    let (a, b) = if forth {
+                        (slide.start_mm, slide.end_mm)
                     } else {
-                        entry.vetoes += 1;
-                    }
-                    if doubted_dip {
-                        entry.doubts.push(format!(
-                            "slide {}: read as no crack ({:.2}), doubted; its proximity dip \
-                             ({:.2}) stands for a crack",
-                            records[0].0,
-                            v.confidence,
-                            extent.as_ref().map_or(0.0, |e| e.confidence)
-                        ));
-                    }
-                }
-                if let Some(w) = &wv {
-                    let std = w.width.as_ref().map_or(0.0, |e| e.std_mm);
-                    entry.widths.push((w.label, std));
-                }
-            }
-        }
-        if let (Some(c), Some(h)) = (cand, config.print_check_mm) {
-            let confirmed = felt.iter_mut().find(|(k, _)| *k == c).map(|(_, f)| f);
-            if let Some(f) = confirmed {
-                let pass = crackbot_planner::raised_pass(slide, planner.settings(), &workspace)
-                    .zip(planner.settings().raised_pass);
-                if let (true, Some(([from, to], raised))) = (reads_as_crack(f), pass) {
-                    // The finger rises and backs off behind where the strokes left it, then
-                    // passes raised to as far past the other end (the planner's raised pass):
-                    // both ends of the raised pass are sound surface, whatever the state
-                    // stream's spacing.
-                    let d = passes::unit(from, to);
-                    let backwards = d[0] * u[0] + d[1] * u[1] < 0.0;
-                    rig.hover_and_record(finger_at, from, h, raised.speed_mm_s, None)?;
-                    let ((hs, hx), obstruction) = rig.hover_and_record(
-                        from,
-                        to,
-                        h,
-                        raised.speed_mm_s,
-                        Some(RAISED_PASS_GUARD_COUNTS),
-                    )?;
-                    // A point of the raised pass's line (mm from `from`) on the slide's axis,
-                    // as the strokes' positions.
-                    let on_axis = |v: f64| {
-                        let p = [from[0] + v * d[0], from[1] + v * d[1]];
-                        (p[0] - slide.start_mm[0]) * u[0] + (p[1] - slide.start_mm[1]) * u[1]
+                        (slide.end_mm, slide.start_mm)
                     };
-                    // Stopped by something standing: had it gone far enough past every crossing
-                    // (`sign`: +1 where the pass runs along the axis)?
-                    let passed = obstruction.map(|o| {
-                        let sign = if backwards { -1.0 } else { 1.0 };
-                        f.crossings.iter().all(|c| {
-                            let crossing = (c.0[0] - slide.start_mm[0]) * u[0]
-                                + (c.0[1] - slide.start_mm[1]) * u[1];
-                            sign * (on_axis(o.at_mm) - crossing) > RAISED_PASS_CLEAR_MM
-                        })
-                    });
-                    if let Some(o) = obstruction {
-                        f.doubts.push(format!(
-                            "the raised pass was stopped {:.1} mm along its {:.1} mm: the \
-                             proximity fibre read {:.0} counts above the sound surface, \
-                             something stands under the line",
-                            o.at_mm,
-                            (to[0] - from[0]).hypot(to[1] - from[1]),
-                            o.rise_counts
-                        ));
-                    }
-                    let rec_path = config.out_dir.join(format!("raised-{c:03}.csv"));
-                    save_pass(&rec_path, &hs, &hx, u8::from(backwards))?;
+                    let id = next_id;
+                    next_id += 1;
+                    let dir = u8::from(!forth);
+                    let ((s, x), attempts) =
+                        rig.slide_and_record(id, (a, b), slide.speed_mm_s, dir, &mut feel)?;
+                    let rec_path = config.out_dir.join(format!("slide-{id:03}.csv"));
+                    save_pass(&rec_path, &s, &x, dir)?;
+                    strokes.push((
+                        s.iter().map(|v| v[3]).collect(),
+                        x.iter().map(|&v| if forth { v } else { len - v }).collect(),
+                    ));
+                    finger_at = b;
+                    records.push((id, a, b, s.len(), rec_path, attempts));
+                    // Positions along the slide's axis, from its start.
+                    along.extend(x.iter().map(|&v| if forth { v } else { len - v }));
+                    dirs.extend(std::iter::repeat_n(dir, s.len()));
+                    samples.extend(s);
+                }
+                // A candidate's first stroke that began or ended off the sound surface is made once
+                // more beside it, where the candidate reaches that far; its recordings stay, and
+                // its passes say why they were not judged.
+                if let (Some(id), None, 0) = (cand, &again, p) {
                     let dark = config.scene.sensor.optics.proximity_dark_counts;
-                    let hp: Vec<f64> = hs.iter().map(|v| v[3]).collect();
-                    let hx: Vec<f64> = hx.iter().map(|&v| on_axis(v)).collect();
-                    let mut ratios = Vec::new();
-                    for (p, x) in &strokes {
-                        match print_check::print_ratio((p, x), (&hp, &hx), dark) {
-                            Ok(Some(k)) => ratios.push(k),
-                            Ok(None) => {}
-                            Err(e) => f.doubts.push(e.to_string()),
+                    let uneven = strokes.iter().find_map(|(p, _)| {
+                        (!passes::ends_agree(p, dark, UNEVEN_ENDS_SHARE)).then_some(p)
+                    });
+                    let beside = candidates
+                        .iter()
+                        .find(|(c, _)| c.id == id)
+                        .and_then(|(c, _)| {
+                            passes::slide_along(
+                                slide,
+                                c,
+                                &workspace,
+                                RESTROKE_ALONG_MM,
+                                RESTROKE_KEEP_MM,
+                            )
+                        });
+                    if let (Some(p_uneven), Some(beside)) = (uneven, beside) {
+                        let [e0, e1] = passes::end_levels(p_uneven).unwrap_or_default();
+                        for (pass_id, a, b, n, rec_path, attempts) in &records {
+                            report.passes.push(PassRecord {
+                                id: *pass_id,
+                                candidate: cand,
+                                start_mm: *a,
+                                end_mm: *b,
+                                samples: *n,
+                                class: None,
+                                confidence: 0.0,
+                                width_mm: None,
+                                doubt: Some(format!(
+                                "not judged: the stroke's ends read {e0:.0} and {e1:.0} counts, \
+                                 not both the sound surface; stroked again {:.1} mm along the \
+                                 candidate",
+                                beside.moved_along_mm - slide.moved_along_mm
+                            )),
+                                dip: None,
+                                recording: rec_path.display().to_string(),
+                                attempts: *attempts,
+                            });
+                        }
+                        again = Some(beside);
+                        continue 'line;
+                    }
+                }
+                let fresh_unit = p == 0;
+                p += unit;
+                let pieces: Vec<(usize, usize)> = if cand.is_none() {
+                    split_by_travel(&along, config.scene.manipulator.stroke_mm)
+                } else {
+                    vec![(0, samples.len())]
+                };
+                for (p0, p1) in pieces {
+                    // The context reaches back over the candidate's earlier strokes (as over the
+                    // authors' back-and-forth strokes); a new candidate or row starts afresh.
+                    let (verdict, wv) = classify(
+                        &mut online,
+                        &mut online_width,
+                        &samples[p0..p1],
+                        &along[p0..p1],
+                        &dirs[p0..p1],
+                        fresh_unit && p0 == 0,
+                    )?;
+                    let extent = crackbot_tactile::localise::localise(
+                        &samples[p0..p1],
+                        &along[p0..p1],
+                        &crackbot_tactile::localise::LocaliseConfig {
+                            min_depth_counts: config.min_dip_counts,
+                            ..Default::default()
+                        },
+                    )
+                    .ok()
+                    .flatten();
+                    let mid = along.get((p0 + p1) / 2).copied().unwrap_or(len / 2.0);
+                    let crossing = extent.as_ref().map_or((at(mid), None), |e| {
+                        (at(e.centre_mm), Some([at(e.start_mm), at(e.end_mm)]))
+                    });
+                    let key = cand.unwrap_or(u64::from(records[0].0) << 32 | p0 as u64);
+                    for (id, a, b, n, rec_path, attempts) in &records {
+                        let rec = PassRecord {
+                            id: *id,
+                            candidate: cand,
+                            start_mm: *a,
+                            end_mm: *b,
+                            samples: if cand.is_some() { *n } else { p1 - p0 },
+                            class: verdict.as_ref().map(|v| v.name.clone()),
+                            confidence: verdict.as_ref().map_or(0.0, |v| v.confidence),
+                            width_mm: wv.as_ref().map(|w| w.label),
+                            doubt: verdict
+                                .as_ref()
+                                .and_then(|v| v.doubt.as_ref())
+                                .map(|d| format!("{d:?}")),
+                            dip: extent.as_ref().map(|e| Dip {
+                                centre_mm: e.centre_mm,
+                                width_mm: e.width_mm,
+                                confidence: e.confidence,
+                            }),
+                            recording: rec_path.display().to_string(),
+                            attempts: *attempts,
+                        };
+                        (rig.progress)(&Progress::Slid {
+                            done: si + 1,
+                            of: n_slides,
+                            class: rec.class.clone().unwrap_or_else(|| "–".into()),
+                            pass: Box::new(rec.clone()),
+                        });
+                        report.passes.push(rec);
+                    }
+                    let entry = match felt.iter_mut().position(|(c, _)| *c == key) {
+                        Some(i) => &mut felt[i].1,
+                        None => {
+                            felt.push((
+                                key,
+                                Felt {
+                                    votes: vec![0.0; k],
+                                    slides: Vec::new(),
+                                    widths: Vec::new(),
+                                    doubts: Vec::new(),
+                                    crossings: Vec::new(),
+                                    vetoes: 0,
+                                    unknown: 0,
+                                    passes: 0,
+                                    height_ratio: None,
+                                    stands: false,
+                                },
+                            ));
+                            &mut felt.last_mut().expect("just pushed").1
+                        }
+                    };
+                    entry.slides.extend(records.iter().map(|r| r.0));
+                    entry.passes += 1;
+                    if let Some(v) = &verdict {
+                        for (acc, x) in entry.votes.iter_mut().zip(&v.votes) {
+                            *acc += x;
+                        }
+                        // A dead or saturated channel makes the slide unusable; a novel surface is
+                        // reported as a doubt (the simulated finger is still unlike the real one,
+                        // see models/tactile/MODEL_CARD.md) but its vote counts.
+                        if matches!(
+                            v.doubt,
+                            Some(Doubt::DeadChannel { .. } | Doubt::OutOfRange { .. })
+                        ) {
+                            entry.unknown += 1;
+                        }
+                        if let Some(d) = &v.doubt {
+                            entry.doubts.push(format!("{d:?}"));
+                        }
+                        let doubted_dip = cand.is_some()
+                            && doubted_no_crack_with_dip(
+                                v,
+                                no_crack_class,
+                                extent.as_ref().map(|e| e.confidence),
+                                dip_outweighs_doubt,
+                            );
+                        if v.class as usize == crack_class || doubted_dip {
+                            entry.crossings.push(crossing);
+                        } else {
+                            entry.vetoes += 1;
+                        }
+                        if doubted_dip {
+                            entry.doubts.push(format!(
+                                "slide {}: read as no crack ({:.2}), doubted; its proximity dip \
+                             ({:.2}) stands for a crack",
+                                records[0].0,
+                                v.confidence,
+                                extent.as_ref().map_or(0.0, |e| e.confidence)
+                            ));
                         }
                     }
-                    if !ratios.is_empty() {
-                        f.height_ratio = Some(ratios.iter().sum::<f64>() / ratios.len() as f64);
+                    if let Some(w) = &wv {
+                        let std = w.width.as_ref().map_or(0.0, |e| e.std_mm);
+                        entry.widths.push((w.label, std));
                     }
-                    // Stopped before the crossing, or past it with no ratio from what it read:
-                    // nothing rules out what stands there.
-                    f.stands = passed.is_some_and(|p| !p || ratios.is_empty());
                 }
             }
+            if let (Some(c), Some(h)) = (cand, config.print_check_mm) {
+                let confirmed = felt.iter_mut().find(|(k, _)| *k == c).map(|(_, f)| f);
+                if let Some(f) = confirmed {
+                    let pass = crackbot_planner::raised_pass(slide, planner.settings(), &workspace)
+                        .zip(planner.settings().raised_pass);
+                    if let (true, Some(([from, to], raised))) = (reads_as_crack(f), pass) {
+                        // The finger rises and backs off behind where the strokes left it, then
+                        // passes raised to as far past the other end (the planner's raised pass):
+                        // both ends of the raised pass are sound surface, whatever the state
+                        // stream's spacing.
+                        let d = passes::unit(from, to);
+                        let backwards = d[0] * u[0] + d[1] * u[1] < 0.0;
+                        rig.hover_and_record(finger_at, from, h, raised.speed_mm_s, None)?;
+                        let ((hs, hx), obstruction) = rig.hover_and_record(
+                            from,
+                            to,
+                            h,
+                            raised.speed_mm_s,
+                            Some(RAISED_PASS_GUARD_COUNTS),
+                        )?;
+                        // A point of the raised pass's line (mm from `from`) on the slide's axis,
+                        // as the strokes' positions.
+                        let on_axis = |v: f64| {
+                            let p = [from[0] + v * d[0], from[1] + v * d[1]];
+                            (p[0] - slide.start_mm[0]) * u[0] + (p[1] - slide.start_mm[1]) * u[1]
+                        };
+                        // Stopped by something standing: had it gone far enough past every crossing
+                        // (`sign`: +1 where the pass runs along the axis)?
+                        let passed = obstruction.map(|o| {
+                            let sign = if backwards { -1.0 } else { 1.0 };
+                            f.crossings.iter().all(|c| {
+                                let crossing = (c.0[0] - slide.start_mm[0]) * u[0]
+                                    + (c.0[1] - slide.start_mm[1]) * u[1];
+                                sign * (on_axis(o.at_mm) - crossing) > RAISED_PASS_CLEAR_MM
+                            })
+                        });
+                        if let Some(o) = obstruction {
+                            f.doubts.push(format!(
+                                "the raised pass was stopped {:.1} mm along its {:.1} mm: the \
+                             proximity fibre read {:.0} counts above the sound surface, \
+                             something stands under the line",
+                                o.at_mm,
+                                (to[0] - from[0]).hypot(to[1] - from[1]),
+                                o.rise_counts
+                            ));
+                        }
+                        let rec_path = config.out_dir.join(format!("raised-{c:03}.csv"));
+                        save_pass(&rec_path, &hs, &hx, u8::from(backwards))?;
+                        let dark = config.scene.sensor.optics.proximity_dark_counts;
+                        let hp: Vec<f64> = hs.iter().map(|v| v[3]).collect();
+                        let hx: Vec<f64> = hx.iter().map(|&v| on_axis(v)).collect();
+                        let mut ratios = Vec::new();
+                        for (p, x) in &strokes {
+                            match print_check::print_ratio((p, x), (&hp, &hx), dark) {
+                                Ok(Some(k)) => ratios.push(k),
+                                Ok(None) => {}
+                                Err(e) => f.doubts.push(e.to_string()),
+                            }
+                        }
+                        if !ratios.is_empty() {
+                            f.height_ratio = Some(ratios.iter().sum::<f64>() / ratios.len() as f64);
+                        }
+                        // Stopped before the crossing, or past it with no ratio from what it read:
+                        // nothing rules out what stands there.
+                        f.stands = passed.is_some_and(|p| !p || ratios.is_empty());
+                    }
+                }
+            }
+            break;
         }
     }
     stages.explore_s = explore.elapsed().as_secs_f64();

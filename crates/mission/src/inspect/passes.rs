@@ -482,6 +482,78 @@ impl Rig<'_> {
     }
 }
 
+/// Samples at each end of a stroke whose proximity level stands for the surface there (0.05 s
+/// at 400 Hz, about 0.2 mm at the paper's speed).
+const END_SAMPLES: usize = 20;
+
+/// The proximity channel at a stroke's two ends: the medians of its first and last
+/// [`END_SAMPLES`], counts; `None` for a stroke of fewer than three times as many samples.
+pub(super) fn end_levels(p: &[f64]) -> Option<[f64; 2]> {
+    if p.len() < 3 * END_SAMPLES {
+        return None;
+    }
+    let median = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    Some([
+        median(&p[..END_SAMPLES]),
+        median(&p[p.len() - END_SAMPLES..]),
+    ])
+}
+
+/// Whether a stroke's two ends read alike: the darker end's signal above the fibre's dark
+/// level is at least `share` of the brighter end's. A stroke is planned to start and end on
+/// sound surface; one whose ends differ more began or ended on something else (another crack
+/// or a print beside the candidate, a bump's flank, a screw head, a crack wider than its
+/// stroke). A stroke too short to tell agrees.
+pub(super) fn ends_agree(p: &[f64], dark: f64, share: f64) -> bool {
+    match end_levels(p) {
+        Some([a, b]) => {
+            let (lo, hi) = ((a.min(b) - dark).max(0.0), (a.max(b) - dark).max(0.0));
+            lo >= share * hi
+        }
+        None => true,
+    }
+}
+
+/// `slide` moved `by` mm along `candidate`'s axis, to the side where more of the candidate
+/// lies beyond the slide (`by` is a distance; its sign is chosen here); `None` when less than
+/// `by` plus `keep` mm of the candidate lies on that side, or either end would leave
+/// `workspace`.
+pub(super) fn slide_along(
+    slide: &crackbot_planner::Slide,
+    candidate: &Candidate,
+    workspace: &Workspace,
+    by: f64,
+    keep: f64,
+) -> Option<crackbot_planner::Slide> {
+    let u = candidate.axis();
+    let mid = [
+        (slide.start_mm[0] + slide.end_mm[0]) / 2.0,
+        (slide.start_mm[1] + slide.end_mm[1]) / 2.0,
+    ];
+    let t = (mid[0] - candidate.centre_mm[0]) * u[0] + (mid[1] - candidate.centre_mm[1]) * u[1];
+    let half = candidate.length_mm / 2.0;
+    let (room, sign) = if half - t >= half + t {
+        (half - t, 1.0)
+    } else {
+        (half + t, -1.0)
+    };
+    if room.is_nan() || room < by + keep {
+        return None;
+    }
+    let shift = |p: [f64; 2]| [p[0] + sign * by * u[0], p[1] + sign * by * u[1]];
+    let (start, end) = (shift(slide.start_mm), shift(slide.end_mm));
+    (workspace.contains(start) && workspace.contains(end)).then(|| crackbot_planner::Slide {
+        start_mm: start,
+        end_mm: end,
+        moved_along_mm: slide.moved_along_mm + sign * by,
+        ..slide.clone()
+    })
+}
+
 /// Writes one pass in the recordings' CSV layout (the acquisition's columns plus the position).
 pub(super) fn save_pass(
     path: &Path,
@@ -505,6 +577,73 @@ pub(super) fn save_pass(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_stroke_whose_ends_read_unlike_each_other_disagrees() {
+        let dark = 280.0;
+        let stroke = |a: f64, b: f64| {
+            let mut p = vec![a; 40];
+            p.extend(vec![300.0; 40]);
+            p.extend(vec![b; 40]);
+            p
+        };
+        assert!(ends_agree(&stroke(500.0, 480.0), dark, 0.6));
+        assert!(ends_agree(&stroke(500.0, 420.0), dark, 0.6)); // 140 of 220
+        assert!(!ends_agree(&stroke(500.0, 400.0), dark, 0.6)); // 120 of 220
+        assert!(!ends_agree(&stroke(330.0, 500.0), dark, 0.6));
+        // Below the dark level counts as no signal; too short to tell agrees.
+        assert!(!ends_agree(&stroke(270.0, 500.0), dark, 0.6));
+        assert!(ends_agree(&[300.0; 50], dark, 0.6));
+        assert_eq!(end_levels(&[1.0; 59]), None);
+        let mut p = vec![1.0; 30];
+        p.extend(vec![2.0; 30]);
+        assert_eq!(end_levels(&p), Some([1.0, 2.0]));
+    }
+
+    #[test]
+    fn a_slide_moves_along_its_candidate_to_the_longer_side_and_stays_inside() {
+        let ws = Workspace::new(0.0, 200.0, 0.0, 100.0).expect("workspace");
+        // A crack along x from 40 to 80 mm at y = 50, slid across at x = 50 (10 mm from its
+        // start, 30 from its end).
+        let cand = Candidate::from_axis(7, [[40.0, 50.0], [80.0, 50.0]], Some(1.0), 0.9);
+        let slide = crackbot_planner::Slide {
+            candidates: vec![7],
+            row: None,
+            start_mm: [50.0, 40.0],
+            end_mm: [50.0, 60.0],
+            stroke_mm: 20.0,
+            passes: 1,
+            speed_mm_s: 4.6,
+            duration_s: 4.3,
+            sound_run_mm: Some([5.0, 5.0]),
+            shifted_mm: 0.0,
+            clipped: false,
+            moved_along_mm: 0.0,
+        };
+        let moved = slide_along(&slide, &cand, &ws, 4.0, 1.0).expect("room on the far side");
+        assert_eq!(moved.start_mm, [54.0, 40.0]);
+        assert_eq!(moved.end_mm, [54.0, 60.0]);
+        assert_eq!(moved.moved_along_mm, 4.0);
+        assert_eq!(moved.stroke_mm, 20.0);
+        // Slid across near its far end: it moves back towards the start.
+        let near_end = crackbot_planner::Slide {
+            start_mm: [78.0, 40.0],
+            end_mm: [78.0, 60.0],
+            ..slide.clone()
+        };
+        let back = slide_along(&near_end, &cand, &ws, 4.0, 1.0).expect("room behind");
+        assert_eq!(back.start_mm, [74.0, 40.0]);
+        // A short candidate has no room; nor has a slide at the workspace's edge.
+        let short = Candidate::from_axis(8, [[48.0, 50.0], [52.0, 50.0]], None, 0.9);
+        assert!(slide_along(&slide, &short, &ws, 4.0, 1.0).is_none());
+        let edge = crackbot_planner::Slide {
+            start_mm: [50.0, 0.0],
+            end_mm: [50.0, 20.0],
+            ..slide.clone()
+        };
+        let along_y = Candidate::from_axis(9, [[50.0, 10.0], [50.0, 12.0]], None, 0.9);
+        assert!(slide_along(&edge, &along_y, &ws, 4.0, 1.0).is_none());
+    }
 
     #[test]
     pub(super) fn rows_are_cut_into_stroke_long_pieces_without_a_short_tail() {
