@@ -7,7 +7,7 @@ against its scene's truth (standard library only).
         --printed-cracks --speedup 1 --jobs 2 --out RUN
     python3 scripts/trial_errors.py SCENES RUN [RUN ...]
 
-For each touched candidate: what its first stroke crossed (cracks and printed decoys, mm along
+For each touched candidate: what its judged stroke crossed (cracks and printed decoys, mm along
 the stroke, with their widths), screws and bumps within 4.5 mm of the stroke (distance from
 their edge, and height), the print check's ratio and what the mission decided. The reports are
 matched to cracks as `crackbot_mission::experiments::score` does (within 5 mm plus half the
@@ -118,7 +118,13 @@ def trial(scenes, folder, stats, errors, untouched):
     rejected = {r["candidate"]: r for r in report["rejected"]}
     crossed = set()
     for cand, ps in passes.items():
+        # A stroke made again beside the first one (its ends were not both sound surface) is
+        # the one judged: the first has no class.
+        ps = [p for p in ps if p["class"] is not None] or ps
         xs, length = crossings(ps[0]["start_mm"], ps[0]["end_mm"], feats)
+        crossed.update(c[1] for c in xs)
+        for p in passes[cand]:
+            crossed.update(c[1] for c in crossings(p["start_mm"], p["end_mm"], feats)[0])
         crossed.update(c[1] for c in xs)
         near = min(xs, key=lambda c: abs(c[0] - length / 2)) if xs else None
         truth = near[2] if near else "nothing"
@@ -142,6 +148,8 @@ def trial(scenes, folder, stats, errors, untouched):
             result = "crack rejected" if truth == "crack" else "ok"
         else:
             continue
+        if os.environ.get("RATIOS"):
+            print(f"ratio {ratio} {seed} {cand} {truth} {'standing' if standing else '-'} {result}")
         key = (truth, result, "several lines" if len(xs) > 1 else "one line", "standing near" if standing else "")
         stats[key] += 1
         if result != "ok":

@@ -489,6 +489,62 @@ fn a_raised_pass_stops_over_a_screw_head_and_the_candidate_on_it_is_rejected() {
 }
 
 #[test]
+fn a_stroke_that_ends_off_the_sound_surface_is_made_again_beside_it() {
+    use crackbot_mission::experiments::{as_printed, score, trial_params};
+    // Trial scene 9225: a 1.8 mm crack lies on the flank of a 2.9 mm bump. The stroke across
+    // its candidate starts on the flank (its ends read about 340 and 400 counts), and judged
+    // there the crack read as a print (ratio 0.99).
+    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9225).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = InspectConfig::new(scene.clone(), dir.path());
+    c.speedup = 8.0;
+    let r = mission(&c).expect("mission");
+    let not_judged: Vec<_> = r
+        .passes
+        .iter()
+        .filter(|p| {
+            p.doubt
+                .as_deref()
+                .is_some_and(|d| d.starts_with("not judged"))
+        })
+        .collect();
+    assert!(!not_judged.is_empty(), "{:?}", r.passes);
+    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    for p in &not_judged {
+        assert_eq!(p.class, None);
+        assert!(p.candidate.is_some());
+        // Its recording is kept, and the candidate was stroked again on a parallel line 5 mm
+        // along it, and judged there.
+        assert!(std::path::Path::new(&p.recording).is_file());
+        let again = r
+            .passes
+            .iter()
+            .find(|q| q.candidate == p.candidate && q.id > p.id)
+            .expect("stroked again");
+        assert!(again.class.is_some(), "{again:?}");
+        assert!(
+            (dist(p.start_mm, again.start_mm) - 5.0).abs() < 1e-6,
+            "{again:?}"
+        );
+        assert!(
+            (dist(p.end_mm, again.end_mm) - 5.0).abs() < 1e-6,
+            "{again:?}"
+        );
+        // Once only.
+        assert_eq!(
+            r.passes
+                .iter()
+                .filter(|q| q.candidate == p.candidate && q.class.is_none())
+                .count(),
+            1
+        );
+    }
+    // The crack on the bump is found, and nothing else is reported.
+    let s = score(&scene, &r);
+    assert_eq!((s.correct, s.false_reports), (s.cracks, 0), "{s:?}");
+}
+
+#[test]
 fn bad_confirmation_settings_are_refused_before_anything_starts() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = config(dir.path());
