@@ -479,7 +479,8 @@ pub enum Progress {
     /// What the finger feels so far in the stroke under way (every 0.1 s while it is down):
     /// shown only, the pass's verdict comes with [`Progress::Slid`].
     Feeling(Feeling),
-    /// A slide pass is done and judged.
+    /// A slide pass is done: judged, or left unjudged (no class; its doubt says why, and its
+    /// candidate is stroked again beside it).
     Slid {
         /// Slides done.
         done: usize,
@@ -1120,7 +1121,7 @@ fn mission(
                     if let (Some(p_uneven), Some(beside)) = (uneven, beside) {
                         let [e0, e1] = passes::end_levels(p_uneven).unwrap_or_default();
                         for (pass_id, a, b, n, rec_path, attempts) in &records {
-                            report.passes.push(PassRecord {
+                            let rec = PassRecord {
                                 id: *pass_id,
                                 candidate: cand,
                                 start_mm: *a,
@@ -1130,15 +1131,23 @@ fn mission(
                                 confidence: 0.0,
                                 width_mm: None,
                                 doubt: Some(format!(
-                                "not judged: the stroke's ends read {e0:.0} and {e1:.0} counts, \
-                                 not both the sound surface; stroked again {:.1} mm along the \
-                                 candidate",
-                                beside.moved_along_mm - slide.moved_along_mm
-                            )),
+                                    "not judged: the stroke's ends read {e0:.0} and {e1:.0} \
+                                     counts, not both the sound surface; stroked again {:.1} mm \
+                                     along the candidate",
+                                    (beside.moved_along_mm - slide.moved_along_mm).abs()
+                                )),
                                 dip: None,
                                 recording: rec_path.display().to_string(),
                                 attempts: *attempts,
+                            };
+                            // A front end lists every stroke, this one too.
+                            (rig.progress)(&Progress::Slid {
+                                done: si,
+                                of: n_slides,
+                                class: "not judged".into(),
+                                pass: Box::new(rec.clone()),
                             });
+                            report.passes.push(rec);
                         }
                         again = Some(beside);
                         continue 'line;
