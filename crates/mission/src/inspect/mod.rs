@@ -853,6 +853,32 @@ pub fn run_inspection(
 }
 
 /// The class with the most votes (the last of those tied; 0 when there are none).
+/// Announces a finished pass to front ends (`done` of `of` slides) and keeps it in the report.
+/// Its class is shown as "not judged" where its stroke was left unjudged, "–" where it has none.
+fn keep_pass(
+    progress: &mut dyn FnMut(&Progress),
+    report: &mut InspectReport,
+    done: usize,
+    of: usize,
+    rec: PassRecord,
+) {
+    let class = match (&rec.class, &rec.doubt) {
+        (Some(c), _) => c.clone(),
+        (None, Some(d)) if d.starts_with(NOT_JUDGED) => NOT_JUDGED.into(),
+        (None, _) => "–".into(),
+    };
+    progress(&Progress::Slid {
+        done,
+        of,
+        class,
+        pass: Box::new(rec.clone()),
+    });
+    report.passes.push(rec);
+}
+
+/// How an unjudged pass's doubt begins (a stroke whose ends read unlike each other).
+pub const NOT_JUDGED: &str = "not judged";
+
 fn top_class(votes: &[f64]) -> usize {
     votes
         .iter()
@@ -1131,7 +1157,7 @@ fn mission(
                                 confidence: 0.0,
                                 width_mm: None,
                                 doubt: Some(format!(
-                                    "not judged: the stroke's ends read {e0:.0} and {e1:.0} \
+                                    "{NOT_JUDGED}: the stroke's ends read {e0:.0} and {e1:.0} \
                                      counts, not both the sound surface; stroked again {:.1} mm \
                                      along the candidate",
                                     (beside.moved_along_mm - slide.moved_along_mm).abs()
@@ -1141,13 +1167,7 @@ fn mission(
                                 attempts: *attempts,
                             };
                             // A front end lists every stroke, this one too.
-                            (rig.progress)(&Progress::Slid {
-                                done: si,
-                                of: n_slides,
-                                class: "not judged".into(),
-                                pass: Box::new(rec.clone()),
-                            });
-                            report.passes.push(rec);
+                            keep_pass(rig.progress, &mut report, si, n_slides, rec);
                         }
                         again = Some(beside);
                         continue 'line;
@@ -1208,13 +1228,7 @@ fn mission(
                             recording: rec_path.display().to_string(),
                             attempts: *attempts,
                         };
-                        (rig.progress)(&Progress::Slid {
-                            done: si + 1,
-                            of: n_slides,
-                            class: rec.class.clone().unwrap_or_else(|| "–".into()),
-                            pass: Box::new(rec.clone()),
-                        });
-                        report.passes.push(rec);
+                        keep_pass(rig.progress, &mut report, si + 1, n_slides, rec);
                     }
                     let entry = match felt.iter_mut().position(|(c, _)| *c == key) {
                         Some(i) => &mut felt[i].1,
@@ -1356,6 +1370,10 @@ fn mission(
     }
     stages.explore_s = explore.elapsed().as_secs_f64();
 
+    // The least print ratio a crack gives at the print check's height.
+    let ratio_floor = config
+        .print_check_mm
+        .map(|h| shallowest_crack_ratio(&config.scene.sensor.optics, h));
     for (key, f) in felt {
         let total: f64 = f.votes.iter().sum();
         let reads = reads_as_crack(&f);
@@ -1380,12 +1398,10 @@ fn mission(
         let judged = f.unknown < f.passes;
         let print = f.height_ratio.is_some_and(|r| r > print_check::PRINT_RATIO);
         // Below what the shallowest crack gives: something else brightened the raised pass.
-        let too_low = match (f.height_ratio, config.print_check_mm) {
-            (Some(r), Some(h)) => {
-                r < IMPLAUSIBLE_RATIO_SHARE * shallowest_crack_ratio(&config.scene.sensor.optics, h)
-            }
-            _ => false,
-        };
+        let too_low = f
+            .height_ratio
+            .zip(ratio_floor)
+            .is_some_and(|(r, least)| r < IMPLAUSIBLE_RATIO_SHARE * least);
         if reads && !print && !f.stands && !too_low {
             let n = f.crossings.len() as f64;
             let pos = [
@@ -1434,11 +1450,7 @@ fn mission(
                          {:.0} %; something else was in the fibre's view",
                         100.0 * f.height_ratio.unwrap_or(0.0),
                         config.print_check_mm.unwrap_or(0.0),
-                        100.0
-                            * shallowest_crack_ratio(
-                                &config.scene.sensor.optics,
-                                config.print_check_mm.unwrap_or(0.0)
-                            )
+                        100.0 * ratio_floor.unwrap_or(0.0)
                     )
                 } else if print {
                     format!(
