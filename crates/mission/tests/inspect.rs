@@ -508,10 +508,20 @@ fn a_raised_pass_stops_over_a_screw_head_and_the_candidate_on_it_is_rejected() {
 #[test]
 fn a_stroke_that_ends_off_the_sound_surface_is_made_again_beside_it() {
     use crackbot_mission::experiments::{as_printed, score, trial_params};
-    // Trial scene 9225: a 1.8 mm crack lies on the flank of a 2.9 mm bump. The stroke across
-    // its candidate starts on the flank (its ends read about 340 and 400 counts), and judged
-    // there the crack read as a print (ratio 0.99).
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9225).unwrap());
+    // Trial scene 9246: the detector takes a 3.7 mm high screw head for a crack. The stroke
+    // across that candidate starts on the head (its ends read about 730 and 310 counts, where
+    // the sound surface reads about 310 and the dark level is 285), so it cannot tell a crack
+    // from the head. The ends' margin is wide (0.05 of the brighter end's signal, against the
+    // 0.6 that is asked), so the restroke does not hang on the simulated noise.
+    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9246).unwrap());
+    let screw = scene
+        .features
+        .iter()
+        .find_map(|f| match f {
+            crackbot_sim::Feature::Screw { centre, .. } => Some(*centre),
+            _ => None,
+        })
+        .expect("scene 9246 has a screw");
     let dir = tempfile::tempdir().unwrap();
     let mut c = InspectConfig::new(scene.clone(), dir.path());
     c.speedup = 8.0;
@@ -525,40 +535,52 @@ fn a_stroke_that_ends_off_the_sound_surface_is_made_again_beside_it() {
                 .is_some_and(|d| d.starts_with("not judged"))
         })
         .collect();
-    assert!(!not_judged.is_empty(), "{:?}", r.passes);
+    assert_eq!(not_judged.len(), 1, "{:#?}", r.passes);
     let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
-    for p in &not_judged {
-        assert_eq!(p.class, None);
-        assert!(p.candidate.is_some());
-        // Its recording is kept, and the candidate was stroked again on a parallel line 5 mm
-        // along it, and judged there.
-        assert!(std::path::Path::new(&p.recording).is_file());
-        let again = r
-            .passes
+    let p = not_judged[0];
+    assert_eq!(p.class, None);
+    // It is the stroke that began on the screw head.
+    assert!(
+        dist(p.start_mm, screw).min(dist(p.end_mm, screw)) < 5.0,
+        "{p:?}"
+    );
+    // Its recording is kept, and the candidate was stroked again on a parallel line 5 mm
+    // along it, and judged there: nothing to report.
+    assert!(std::path::Path::new(&p.recording).is_file());
+    let again = r
+        .passes
+        .iter()
+        .find(|q| q.candidate == p.candidate && q.id > p.id)
+        .expect("stroked again");
+    assert!(again.class.is_some(), "{again:?}");
+    assert!(
+        (dist(p.start_mm, again.start_mm) - 5.0).abs() < 1e-6,
+        "{again:?}"
+    );
+    assert!(
+        (dist(p.end_mm, again.end_mm) - 5.0).abs() < 1e-6,
+        "{again:?}"
+    );
+    // Once only.
+    assert_eq!(
+        r.passes
             .iter()
-            .find(|q| q.candidate == p.candidate && q.id > p.id)
-            .expect("stroked again");
-        assert!(again.class.is_some(), "{again:?}");
-        assert!(
-            (dist(p.start_mm, again.start_mm) - 5.0).abs() < 1e-6,
-            "{again:?}"
-        );
-        assert!(
-            (dist(p.end_mm, again.end_mm) - 5.0).abs() < 1e-6,
-            "{again:?}"
-        );
-        // Once only.
-        assert_eq!(
-            r.passes
-                .iter()
-                .filter(|q| q.candidate == p.candidate && q.class.is_none())
-                .count(),
-            1
-        );
-    }
-    // The crack on the bump is found, and nothing else is reported.
+            .filter(|q| q.candidate == p.candidate)
+            .count(),
+        2
+    );
+    assert!(
+        r.cracks.iter().all(|k| k.candidate != p.candidate),
+        "{:#?}",
+        r.cracks
+    );
+    // The scene's three cracks are found.
     let s = score(&scene, &r);
-    assert_eq!((s.correct, s.false_reports), (s.cracks, 0), "{s:?}");
+    assert_eq!(
+        s.correct, s.cracks,
+        "{s:?}\n{:#?}\n{:#?}",
+        r.cracks, r.passes
+    );
 }
 
 #[test]
