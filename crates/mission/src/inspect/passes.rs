@@ -554,6 +554,27 @@ pub(super) fn slide_along(
     })
 }
 
+/// The print check's ratio of one raised pass (`raised`: proximity counts and positions on
+/// the strokes' axis), the mean over the candidate's strokes of
+/// [`print_check::print_ratio`]; a stroke the check cannot use adds its reason to `doubts`.
+/// `None` when no stroke gave a ratio.
+pub(super) fn raised_ratio(
+    strokes: &[(Vec<f64>, Vec<f64>)],
+    raised: (&[f64], &[f64]),
+    dark: f64,
+    doubts: &mut Vec<String>,
+) -> Option<f64> {
+    let mut ratios = Vec::new();
+    for (p, x) in strokes {
+        match print_check::print_ratio((p, x), raised, dark) {
+            Ok(Some(k)) => ratios.push(k),
+            Ok(None) => {}
+            Err(e) => doubts.push(e.to_string()),
+        }
+    }
+    (!ratios.is_empty()).then(|| ratios.iter().sum::<f64>() / ratios.len() as f64)
+}
+
 /// Writes one pass in the recordings' CSV layout (the acquisition's columns plus the position).
 pub(super) fn save_pass(
     path: &Path,

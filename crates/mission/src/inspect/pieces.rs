@@ -282,6 +282,7 @@ mod tests {
                 votes: Vec::new(),
                 doubts: Vec::new(),
                 height_ratio: None,
+                print_ratios: Vec::new(),
                 pieces: Vec::new(),
             },
         }
