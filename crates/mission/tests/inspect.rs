@@ -682,6 +682,33 @@ fn a_print_ratio_near_the_threshold_is_measured_again_and_the_mean_decides() {
 }
 
 #[test]
+fn a_stroke_across_two_cracks_reports_its_candidate_where_its_own_dip_is() {
+    use crackbot_mission::experiments::{as_printed, score, trial_params};
+    // Trial scene 9570: the stroke across a 0.76 mm crack's candidate also runs into a 3.6 mm
+    // crack 4.9 mm away. Its proximity channel dips over both, back to the surface between
+    // them, and the localiser's one dip spanning both (8.5 mm wide) put the report between the
+    // cracks: a false report and a missed crack.
+    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9570).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = InspectConfig::new(scene.clone(), dir.path());
+    c.speedup = 8.0;
+    let r = mission(&c).expect("mission");
+    let s = score(&scene, &r);
+    assert_eq!(s.false_reports, 0, "{s:?}\n{:#?}", r.passes);
+    assert!(s.correct >= 2, "{s:?}");
+    assert!(
+        s.localisation_mm.iter().all(|&e| e < 1.0),
+        "{s:?}\n{:#?}",
+        r.passes
+    );
+    // Every judged stroke's dip is about as wide as its crack (none over 5 mm: the widest
+    // crack is 3.6 mm).
+    for p in r.passes.iter().filter(|p| p.class.is_some()) {
+        assert!(p.dip.as_ref().is_none_or(|d| d.width_mm < 5.0), "{p:?}");
+    }
+}
+
+#[test]
 fn bad_confirmation_settings_are_refused_before_anything_starts() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = config(dir.path());

@@ -379,6 +379,21 @@ pub const PRINT_RATIO_DOUBT: f64 = 0.08;
 /// ([`PRINT_RATIO_DOUBT`]): an even number, as many each way.
 pub const PRINT_CHECK_PASSES_IN_DOUBT: usize = 4;
 
+/// A candidate stroke's dip wider than the candidate (its detected width, or the planner's
+/// assumed one) by more than this, mm, is looked at for several dips
+/// ([`SEPARATE_DIPS_GAP_MM`]): the stroke also crossed a second crack or a print beside the
+/// candidate, and the localiser, which counts everything between a dip's first and last sample
+/// below half depth (a wide crack's middle can come back up), put the candidate between them. On
+/// the simulated trial scenes 9300–9419 and 9540–9659, three such strokes (9325, 9396, 9570)
+/// put their crack's report between two cracks, or a crack and a print, 3.6–4.9 mm apart.
+pub const SEPARATE_DIPS_EXCESS_MM: f64 = 2.0;
+/// Dips are separate where the smoothed proximity channel comes back within this share of the
+/// dip's depth of the sound surface's level …
+pub const SEPARATE_DIPS_BACK_SHARE: f64 = 0.15;
+/// … for at least this much of the stroke's travel, mm. The dip nearest the candidate's axis is
+/// then localised alone.
+pub const SEPARATE_DIPS_GAP_MM: f64 = 0.5;
+
 /// How far the print check's raised pass runs past each end of the candidate's stroke, mm (the
 /// default of the planner's [`crackbot_planner::RaisedPass`]; `InspectConfig::planner`'s
 /// `raised_pass` replaces it and the speed below).
@@ -1229,6 +1244,43 @@ fn mission(
                     )
                     .ok()
                     .flatten();
+                    // A stroke that also crossed a second crack or a print beside its candidate:
+                    // the localiser spans both dips, and the one nearest the candidate is its.
+                    let extent = match (&extent, cand) {
+                        (Some(e), Some(id)) if strokes.len() == 1 => candidates
+                            .iter()
+                            .find(|(c, _)| c.id == id)
+                            .filter(|(c, _)| {
+                                let w = c.width_mm.unwrap_or(planner.settings().assumed_width_mm);
+                                e.width_mm > w + SEPARATE_DIPS_EXCESS_MM
+                            })
+                            .and_then(|(c, _)| {
+                                let near = (c.centre_mm[0] - slide.start_mm[0]) * u[0]
+                                    + (c.centre_mm[1] - slide.start_mm[1]) * u[1];
+                                let ps: Vec<f64> = samples[p0..p1].iter().map(|v| v[3]).collect();
+                                let r = passes::nearest_of_several_dips(
+                                    &ps,
+                                    &along[p0..p1],
+                                    e.baseline_counts,
+                                    e.depth_counts,
+                                    near,
+                                    SEPARATE_DIPS_BACK_SHARE,
+                                    SEPARATE_DIPS_GAP_MM,
+                                )?;
+                                crackbot_tactile::localise::localise(
+                                    &samples[p0..p1][r.clone()],
+                                    &along[p0..p1][r],
+                                    &crackbot_tactile::localise::LocaliseConfig {
+                                        min_depth_counts: config.min_dip_counts,
+                                        ..Default::default()
+                                    },
+                                )
+                                .ok()
+                                .flatten()
+                            })
+                            .or(extent),
+                        _ => extent,
+                    };
                     let mid = along.get((p0 + p1) / 2).copied().unwrap_or(len / 2.0);
                     let crossing = extent.as_ref().map_or((at(mid), None), |e| {
                         (at(e.centre_mm), Some([at(e.start_mm), at(e.end_mm)]))

@@ -554,6 +554,89 @@ pub(super) fn slide_along(
     })
 }
 
+/// Where one stroke's proximity dip is several dips apart — the smoothed P back within
+/// `back_share` of the dip's depth of the sound surface's level for at least `gap_mm` of travel
+/// between them (a second crack or a print beside the candidate) — the samples around the dip
+/// nearest `near_mm` along the stroke: from halfway across the gap before it to halfway across
+/// the gap after it. `None` where there is one dip, or `along` is not one pass (it must run one
+/// way). `p` is the proximity channel, `baseline` and `depth` the stroke's dip as the localiser
+/// read it (counts).
+pub(super) fn nearest_of_several_dips(
+    p: &[f64],
+    along: &[f64],
+    baseline: f64,
+    depth: f64,
+    near_mm: f64,
+    back_share: f64,
+    gap_mm: f64,
+) -> Option<std::ops::Range<usize>> {
+    let n = p.len();
+    if n != along.len() || n < 3 || depth.is_nan() || depth <= 0.0 {
+        return None;
+    }
+    let rising = along[n - 1] >= along[0];
+    if along
+        .windows(2)
+        .any(|w| if rising { w[1] < w[0] } else { w[1] > w[0] })
+    {
+        return None;
+    }
+    // The localiser's smoothing: a centred 9-sample moving average.
+    let smooth: Vec<f64> = (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(4), (i + 5).min(n));
+            p[a..b].iter().sum::<f64>() / (b - a) as f64
+        })
+        .collect();
+    let low = baseline - 0.5 * depth;
+    let back = baseline - back_share * depth;
+    // Runs of samples below half depth, as index ranges.
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for (i, &v) in smooth.iter().enumerate() {
+        if v < low {
+            match runs.last_mut() {
+                Some(r) if r.1 == i => r.1 = i + 1,
+                _ => runs.push((i, i + 1)),
+            }
+        }
+    }
+    // Runs joined into dips unless P came back to the surface for `gap_mm` between them.
+    let mut dips: Vec<(usize, usize)> = Vec::new();
+    for r in runs {
+        let apart = dips.last().is_some_and(|d| {
+            let up: Vec<usize> = (d.1..r.0).filter(|&i| smooth[i] >= back).collect();
+            match (up.first(), up.last()) {
+                (Some(&a), Some(&b)) => (along[b] - along[a]).abs() >= gap_mm,
+                _ => false,
+            }
+        });
+        match dips.last_mut() {
+            Some(d) if !apart => d.1 = r.1,
+            _ => dips.push(r),
+        }
+    }
+    if dips.len() < 2 {
+        return None;
+    }
+    let centre = |d: &(usize, usize)| 0.5 * (along[d.0] + along[d.1 - 1]);
+    let k = (0..dips.len()).min_by(|&a, &b| {
+        (centre(&dips[a]) - near_mm)
+            .abs()
+            .total_cmp(&(centre(&dips[b]) - near_mm).abs())
+    })?;
+    let from = if k == 0 {
+        0
+    } else {
+        (dips[k - 1].1 + dips[k].0) / 2
+    };
+    let to = if k + 1 == dips.len() {
+        n
+    } else {
+        (dips[k].1 + dips[k + 1].0) / 2
+    };
+    Some(from..to)
+}
+
 /// The print check's ratio of one raised pass (`raised`: proximity counts and positions on
 /// the strokes' axis), the mean over the candidate's strokes of
 /// [`print_check::print_ratio`]; a stroke the check cannot use adds its reason to `doubts`.
@@ -598,6 +681,69 @@ pub(super) fn save_pass(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn of_two_separate_dips_the_one_nearest_the_candidate_is_taken() {
+        // 10 mm at 0.01 mm a sample; the surface reads 500, dips 200 deep.
+        let along: Vec<f64> = (0..1000).map(|i| f64::from(i) * 0.01).collect();
+        let trace = |dips: &[(f64, f64, f64)]| -> Vec<f64> {
+            along
+                .iter()
+                .map(|&x| {
+                    dips.iter().fold(
+                        500.0,
+                        |p: f64, &(a, b, level)| {
+                            if (a..b).contains(&x) {
+                                p.min(level)
+                            } else {
+                                p
+                            }
+                        },
+                    )
+                })
+                .collect()
+        };
+        let two = trace(&[(2.5, 3.5, 300.0), (6.5, 7.5, 300.0)]);
+        let r = nearest_of_several_dips(&two, &along, 500.0, 200.0, 7.2, 0.15, 0.5).unwrap();
+        assert!(along[r.start] > 3.5 && along[r.start] < 6.5, "{r:?}");
+        assert_eq!(r.end, along.len());
+        let r = nearest_of_several_dips(&two, &along, 500.0, 200.0, 2.0, 0.15, 0.5).unwrap();
+        assert_eq!(r.start, 0);
+        assert!(along[r.end - 1] > 3.5 && along[r.end - 1] < 6.5, "{r:?}");
+        // One dip, or two whose middle stays below the surface (a wide crack's floor coming
+        // back up part way), or a gap shorter than asked: one dip.
+        let one = trace(&[(4.0, 6.0, 300.0)]);
+        assert_eq!(
+            nearest_of_several_dips(&one, &along, 500.0, 200.0, 5.0, 0.15, 0.5),
+            None
+        );
+        let wide = trace(&[(2.5, 7.5, 450.0), (2.5, 3.5, 300.0), (6.5, 7.5, 300.0)]);
+        assert_eq!(
+            nearest_of_several_dips(&wide, &along, 500.0, 200.0, 5.0, 0.15, 0.5),
+            None
+        );
+        let close = trace(&[(2.5, 4.7, 300.0), (5.0, 7.5, 300.0)]);
+        assert_eq!(
+            nearest_of_several_dips(&close, &along, 500.0, 200.0, 5.0, 0.15, 0.5),
+            None
+        );
+        // Positions that turn back are not one pass.
+        let mut back = along.clone();
+        back[500] = 0.0;
+        assert_eq!(
+            nearest_of_several_dips(&two, &back, 500.0, 200.0, 7.2, 0.15, 0.5),
+            None
+        );
+        // Nothing to read: no depth, lengths that differ.
+        assert_eq!(
+            nearest_of_several_dips(&two, &along, 500.0, 0.0, 7.2, 0.15, 0.5),
+            None
+        );
+        assert_eq!(
+            nearest_of_several_dips(&two[1..], &along, 500.0, 200.0, 7.2, 0.15, 0.5),
+            None
+        );
+    }
 
     #[test]
     fn a_stroke_whose_ends_read_unlike_each_other_disagrees() {
