@@ -384,8 +384,10 @@ pub const PRINT_CHECK_PASSES_IN_DOUBT: usize = 4;
 /// ([`SEPARATE_DIPS_GAP_MM`]): the stroke also crossed a second crack or a print beside the
 /// candidate, and the localiser, which counts everything between a dip's first and last sample
 /// below half depth (a wide crack's middle can come back up), put the candidate between them. On
-/// the simulated trial scenes 9300–9419 and 9540–9659, three such strokes (9325, 9396, 9570)
-/// put their crack's report between two cracks, or a crack and a print, 3.6–4.9 mm apart.
+/// the simulated trial scenes 9540–9659 (real time), two such strokes (9566, 9570) put their
+/// crack's report between two cracks 4.3–4.9 mm apart, 1.5 and 1.0 mm off its crack (9570: a
+/// false report and a missed crack). Where the channel does not come back to the surface
+/// between the dips (9325), or the detection spans both (9396), nothing changes.
 pub const SEPARATE_DIPS_EXCESS_MM: f64 = 2.0;
 /// Dips are separate where the smoothed proximity channel comes back within this share of the
 /// dip's depth of the sound surface's level …
