@@ -1434,7 +1434,7 @@ fn mission(
                         let first = passes::raised_ratio(&strokes, (&hp, &hx), dark, &mut f.doubts);
                         let mut ratios: Vec<f64> = first.into_iter().collect();
                         // Near the print threshold: more raised passes, back and forth, and
-                        // their mean decides (each pass's ratio is in the doubts).
+                        // their mean decides (each pass's ratio is kept in `print_ratios`).
                         if let (Some(r), None) = (first, obstruction) {
                             if (r - print_check::PRINT_RATIO).abs() < PRINT_RATIO_DOUBT {
                                 let (mut a, mut b) = (to, from);
