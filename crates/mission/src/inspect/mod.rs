@@ -1402,10 +1402,12 @@ fn mission(
                         )?;
                         // A point of the raised pass's line (mm from `from`) on the slide's axis,
                         // as the strokes' positions.
-                        let on_axis = |v: f64| {
-                            let p = [from[0] + v * d[0], from[1] + v * d[1]];
+                        // A point `v` mm along a raised pass from `a` in direction `dir`.
+                        let on_line_axis = |a: [f64; 2], dir: [f64; 2], v: f64| {
+                            let p = [a[0] + v * dir[0], a[1] + v * dir[1]];
                             (p[0] - slide.start_mm[0]) * u[0] + (p[1] - slide.start_mm[1]) * u[1]
                         };
+                        let on_axis = |v: f64| on_line_axis(from, d, v);
                         // Stopped by something standing: had it gone far enough past every crossing
                         // (`sign`: +1 where the pass runs along the axis)?
                         let passed = obstruction.map(|o| {
@@ -1463,14 +1465,8 @@ fn mission(
                                         break;
                                     }
                                     let rp: Vec<f64> = rs.iter().map(|v| v[3]).collect();
-                                    let rx: Vec<f64> = rx
-                                        .iter()
-                                        .map(|&v| {
-                                            let q = [a[0] + v * dk[0], a[1] + v * dk[1]];
-                                            (q[0] - slide.start_mm[0]) * u[0]
-                                                + (q[1] - slide.start_mm[1]) * u[1]
-                                        })
-                                        .collect();
+                                    let rx: Vec<f64> =
+                                        rx.iter().map(|&v| on_line_axis(a, dk, v)).collect();
                                     ratios.extend(passes::raised_ratio(
                                         &strokes,
                                         (&rp, &rx),
