@@ -373,6 +373,26 @@ pub fn print_ratio(
     Ok(fit_profiles(contact, raised, &dc, &dr, dark))
 }
 
+/// The ratio of the two dips' floors ([`height_ratio`] of one contact and one raised pass; each
+/// floor smoothed over 0.2 mm, as a share of its signal above `dark`): the second estimate of
+/// the same ratio as [`print_ratio`], from the dips' deepest points rather than their profiles.
+/// Its errors are not the profile fit's: a raised dip only a few counts deep biases it towards
+/// "print" (the least of noisy samples lies below the true floor), while a raised spot wider
+/// than the contact one biases the profile fit towards "crack" for a narrow mark. The robot
+/// averages the two where the print ratio is in doubt (`crackbot_mission::inspect`,
+/// `PRINT_RATIO_DOUBT`). `None` when the contact dip is under 5 % of its signal.
+///
+/// Errors as [`dip_area`] for either pass.
+pub fn floor_ratio(
+    contact: (&[f64], &[f64]),
+    raised: (&[f64], &[f64]),
+    dark: f64,
+) -> Result<Option<f64>, TactileError> {
+    let dc = dip_area(contact.0, contact.1, dark)?;
+    let dr = dip_area(raised.0, raised.1, dark)?;
+    Ok(height_ratio(&[dc], &dr))
+}
+
 /// Above this [`print_ratio`] a dip is a print's, not a crack's (chosen on simulated trial
 /// scenes 1000–1029, where cracks came out at 0.56–0.87 but for one at 1.06 and decoys at
 /// 0.90 or more but for one at 0.84; `crates/mission/EXPERIMENTS.md`, "Prints told by two
@@ -432,6 +452,35 @@ mod tests {
         assert!(ratio < PRINT_RATIO);
         let ratio = area_ratio(&[c], &r).unwrap();
         assert!(ratio < 0.75, "{ratio}");
+    }
+
+    #[test]
+    fn the_floor_ratio_tells_ink_from_a_crack_and_names_bad_passes() {
+        let share = |d0: f64, depth: f64| 1.0 - (d0 / (d0 + depth)).powi(2);
+        let ratio = |contact: (Vec<f64>, Vec<f64>), raised: (Vec<f64>, Vec<f64>)| {
+            floor_ratio((&contact.0, &contact.1), (&raised.0, &raised.1), 280.0)
+                .unwrap()
+                .unwrap()
+        };
+        // Ink keeps its share raised; a crack's floor loses it.
+        let ink = ratio(pass(0.6, 1.0, 224.0, 1.1), pass(0.6, 1.0, 27.0, 1.1));
+        assert!((ink - 1.0).abs() < 0.02 && ink > PRINT_RATIO, "{ink}");
+        let crack = ratio(
+            pass(share(1.026, 2.0), 1.0, 224.0, 1.1),
+            pass(share(3.026, 2.0), 1.0, 27.0, 1.1),
+        );
+        assert!(crack < 0.75, "{crack}");
+        // No dip in contact: nothing to compare.
+        let (flat, x) = pass(0.0, 1.0, 224.0, 1.1);
+        let (raised, rx) = pass(0.6, 1.0, 27.0, 1.1);
+        assert_eq!(
+            floor_ratio((&flat, &x), (&raised, &rx), 280.0).unwrap(),
+            None
+        );
+        // A raised pass that reads nothing above the dark level is an error naming it.
+        let dark_pass = vec![281.0; rx.len()];
+        let e = floor_ratio((&flat, &x), (&dark_pass, &rx), 280.0).unwrap_err();
+        assert!(e.to_string().contains("dark level"), "{e}");
     }
 
     /// `pass` with deterministic noise of about `sigma` counts, the positions shifted by

@@ -22,7 +22,9 @@
 //!   share of the signal there, a crack's does not ([`print_check::print_ratio`]; above
 //!   [`print_check::PRINT_RATIO`] it is a print). A first ratio within [`PRINT_RATIO_DOUBT`] of
 //!   that threshold is measured on [`PRINT_CHECK_PASSES_IN_DOUBT`] raised passes, back and
-//!   forth, and their mean decides; every pass is kept (`raised-NNN.csv`, `raised-NNN-K.csv`).
+//!   forth, and the mean over those passes of each one's print ratio and floor ratio
+//!   ([`print_check::floor_ratio`], a second estimate with other errors) decides; every pass is
+//!   kept (`raised-NNN.csv`, `raised-NNN-K.csv`).
 //! * **Pieces of one crack.** The detector may split one crack into several candidates; the
 //!   confirmed ones that continue each other ([`PIECE_GAP_MM`]), or whose crossings the crack
 //!   map joins ([`PIECE_TRACE_GAP_MM`], [`CrackTrace`]), are reported as one crack.
@@ -369,11 +371,18 @@ pub const RESTROKE_ALONG_MM: f64 = 5.0;
 pub const RESTROKE_KEEP_MM: f64 = 1.0;
 
 /// A print ratio within this of [`print_check::PRINT_RATIO`] is measured again: the raised pass
-/// is made back and forth until there are [`PRINT_CHECK_PASSES_IN_DOUBT`] of them, and their
-/// mean decides. On the simulated trials 9420–9539 (speed-up 2), four raised passes over every
-/// candidate read a median 0.012 apart (a crack's and a print's ratios lie 0.22 apart), and
-/// the mean of four put 3 candidates on the wrong side of the threshold where the first pass
-/// alone put 8; every one of the 8 first read within 0.02 of it, but for one crack at 1.07.
+/// is made back and forth until there are [`PRINT_CHECK_PASSES_IN_DOUBT`] of them, and the mean
+/// over the passes of each one's print ratio and floor ratio ([`print_check::floor_ratio`])
+/// decides (the print ratio alone where a pass gives no floor ratio). On the simulated trials
+/// 9420–9539 (speed-up 2), four raised passes over every candidate read a median 0.012 apart (a
+/// crack's and a print's ratios lie 0.22 apart), and the mean of four put 3 candidates on the
+/// wrong side of the threshold where the first pass alone put 8; every one of the 8 first read
+/// within 0.02 of it, but for one crack at 1.07. What four passes leave is not the raised pass's
+/// noise but the estimate's own bias on narrow marks: replayed offline on the saved passes of
+/// 2010 candidates over a crack or a print (looked-at trial runs 9300–9899, real time), the
+/// print ratio put 35 on the wrong side of the threshold, the mean with the floor ratio where
+/// the first ratio was in doubt 24 (12 right that were wrong, 1 wrong that was right;
+/// `crates/mission/EXPERIMENTS.md`, "Two estimates of a ratio in doubt").
 pub const PRINT_RATIO_DOUBT: f64 = 0.08;
 /// Raised passes in all over a candidate whose first print ratio is in doubt
 /// ([`PRINT_RATIO_DOUBT`]): an even number, as many each way.
@@ -650,14 +659,21 @@ pub struct Evidence {
     /// Doubts raised.
     pub doubts: Vec<String>,
     /// The print check's ratio (the dip's share of the signal raised over in contact; about 1
-    /// for a print), when the candidate was passed over raised.
+    /// for a print), when the candidate was passed over raised: the mean of `print_ratios`, or
+    /// where the first was in doubt, the mean over the passes of each one's print and floor
+    /// ratios.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub height_ratio: Option<f64>,
-    /// The print check's ratio of each raised pass, in order (`height_ratio` is their mean):
-    /// one, or [`PRINT_CHECK_PASSES_IN_DOUBT`] where the first was within
-    /// [`PRINT_RATIO_DOUBT`] of the threshold.
+    /// The print check's ratio of each raised pass, in order: one, or
+    /// [`PRINT_CHECK_PASSES_IN_DOUBT`] where the first was within [`PRINT_RATIO_DOUBT`] of the
+    /// threshold.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub print_ratios: Vec<f64>,
+    /// Where the first print ratio was in doubt, each pass's floor ratio
+    /// ([`print_check::floor_ratio`]; `None` where it gave none), in the order of
+    /// `print_ratios`; empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub floor_ratios: Vec<Option<f64>>,
     /// Other confirmed candidates reported as pieces of this crack (their slides are in
     /// `slides`; see [`PIECE_GAP_MM`] and [`PIECE_TRACE_GAP_MM`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -683,6 +699,10 @@ pub struct RejectedCandidate {
     /// The print check's ratio of each raised pass, as [`Evidence::print_ratios`].
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub print_ratios: Vec<f64>,
+    /// Each raised pass's floor ratio where the first was in doubt, as
+    /// [`Evidence::floor_ratios`].
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub floor_ratios: Vec<Option<f64>>,
     /// Recognition votes per class (summed over the slides), as a confirmed crack's evidence
     /// has them: how close the finger came to calling it a crack.
     pub votes: Vec<f64>,
@@ -1021,6 +1041,7 @@ fn mission(
                     doubts: Vec::new(),
                     height_ratio: None,
                     print_ratios: Vec::new(),
+                    floor_ratios: Vec::new(),
                     pieces: Vec::new(),
                 },
             });
@@ -1071,10 +1092,12 @@ fn mission(
         vetoes: usize,
         unknown: usize,
         passes: usize,
-        /// The print check's ratio (the mean of `print_ratios`).
+        /// The print check's ratio that decides ([`Evidence::height_ratio`]).
         height_ratio: Option<f64>,
         /// The print check's ratio of each raised pass.
         print_ratios: Vec<f64>,
+        /// Each raised pass's floor ratio, where the first print ratio was in doubt.
+        floor_ratios: Vec<Option<f64>>,
         /// The print check's raised pass was stopped before it could judge the crossing (before
         /// it had passed it, or with no ratio from what it read): something stands there.
         stands: bool,
@@ -1328,6 +1351,7 @@ fn mission(
                                     passes: 0,
                                     height_ratio: None,
                                     print_ratios: Vec::new(),
+                                    floor_ratios: Vec::new(),
                                     stands: false,
                                 },
                             ));
@@ -1434,11 +1458,15 @@ fn mission(
                         let hp: Vec<f64> = hs.iter().map(|v| v[3]).collect();
                         let hx: Vec<f64> = hx.iter().map(|&v| on_axis(v)).collect();
                         let first = passes::raised_ratio(&strokes, (&hp, &hx), dark, &mut f.doubts);
-                        let mut ratios: Vec<f64> = first.into_iter().collect();
-                        // Near the print threshold: more raised passes, back and forth, and
-                        // their mean decides (each pass's ratio is kept in `print_ratios`).
-                        if let (Some(r), None) = (first, obstruction) {
+                        let mut ratios: Vec<passes::RaisedRatio> = first.into_iter().collect();
+                        // Near the print threshold: more raised passes, back and forth, and the
+                        // mean of their print and floor ratios decides (each pass's are kept in
+                        // `print_ratios` and `floor_ratios`).
+                        let mut in_doubt = false;
+                        if let (Some(first), None) = (first, obstruction) {
+                            let r = first.print;
                             if (r - print_check::PRINT_RATIO).abs() < PRINT_RATIO_DOUBT {
+                                in_doubt = true;
                                 let (mut a, mut b) = (to, from);
                                 for k in 2..=PRINT_CHECK_PASSES_IN_DOUBT {
                                     let ((rs, rx), stopped) = rig.hover_and_record(
@@ -1477,19 +1505,31 @@ fn mission(
                                 }
                                 f.doubts.push(format!(
                                     "the first raised pass's print ratio {r:.3} was within \
-                                     {PRINT_RATIO_DOUBT} of {}: the mean of {} passes decides",
+                                     {PRINT_RATIO_DOUBT} of {}: the mean of {} passes' print \
+                                     and floor ratios decides",
                                     print_check::PRINT_RATIO,
                                     ratios.len(),
                                 ));
                             }
                         }
                         if !ratios.is_empty() {
-                            f.height_ratio = Some(ratios.iter().sum::<f64>() / ratios.len() as f64);
+                            let judged = |m: &passes::RaisedRatio| {
+                                if in_doubt {
+                                    m.in_doubt()
+                                } else {
+                                    m.print
+                                }
+                            };
+                            f.height_ratio =
+                                Some(ratios.iter().map(judged).sum::<f64>() / ratios.len() as f64);
                         }
                         // Stopped before the crossing, or past it with no ratio from what it read:
                         // nothing rules out what stands there.
                         f.stands = passed.is_some_and(|p| !p || ratios.is_empty());
-                        f.print_ratios = ratios;
+                        f.print_ratios = ratios.iter().map(|m| m.print).collect();
+                        if in_doubt {
+                            f.floor_ratios = ratios.iter().map(|m| m.floor).collect();
+                        }
                     }
                 }
             }
@@ -1559,6 +1599,7 @@ fn mission(
                     doubts: f.doubts,
                     height_ratio: f.height_ratio,
                     print_ratios: f.print_ratios,
+                    floor_ratios: f.floor_ratios,
                     pieces: Vec::new(),
                 },
             });
@@ -1598,6 +1639,7 @@ fn mission(
                 slides: f.slides,
                 height_ratio: f.height_ratio,
                 print_ratios: f.print_ratios,
+                floor_ratios: f.floor_ratios,
                 votes: f.votes,
             });
         }

@@ -646,16 +646,41 @@ pub(super) fn raised_ratio(
     raised: (&[f64], &[f64]),
     dark: f64,
     doubts: &mut Vec<String>,
-) -> Option<f64> {
-    let mut ratios = Vec::new();
+) -> Option<RaisedRatio> {
+    let (mut ratios, mut floors) = (Vec::new(), Vec::new());
     for (p, x) in strokes {
         match print_check::print_ratio((p, x), raised, dark) {
             Ok(Some(k)) => ratios.push(k),
             Ok(None) => {}
             Err(e) => doubts.push(e.to_string()),
         }
+        // The same passes as above: an error is already named.
+        if let Ok(Some(k)) = print_check::floor_ratio((p, x), raised, dark) {
+            floors.push(k);
+        }
     }
-    (!ratios.is_empty()).then(|| ratios.iter().sum::<f64>() / ratios.len() as f64)
+    let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+    Some(RaisedRatio {
+        print: mean(&ratios)?,
+        floor: mean(&floors),
+    })
+}
+
+/// What one raised pass measured against the candidate's strokes (means over the strokes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct RaisedRatio {
+    /// [`print_check::print_ratio`].
+    pub print: f64,
+    /// [`print_check::floor_ratio`], the second estimate (`None` where no stroke gave one).
+    pub floor: Option<f64>,
+}
+
+impl RaisedRatio {
+    /// The estimate a ratio in doubt is judged by: the mean of the two, or the print ratio
+    /// alone where there is no floor ratio.
+    pub fn in_doubt(&self) -> f64 {
+        self.floor.map_or(self.print, |f| 0.5 * (self.print + f))
+    }
 }
 
 /// Writes one pass in the recordings' CSV layout (the acquisition's columns plus the position).

@@ -283,6 +283,7 @@ mod tests {
                 doubts: Vec::new(),
                 height_ratio: None,
                 print_ratios: Vec::new(),
+                floor_ratios: Vec::new(),
                 pieces: Vec::new(),
             },
         }

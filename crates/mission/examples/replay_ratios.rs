@@ -1,0 +1,153 @@
+//! The print check replayed on saved fused trials: for each candidate that was passed over
+//! raised, its print ratio and floor ratio on every raised pass, computed again from the trial's
+//! recordings by `crackbot_tactile::print_check` (no arm, no simulator). For judging a new rule
+//! on runs already made:
+//! `cargo run --release -p crackbot-mission --example replay_ratios -- TRIALS_DIR...`, then
+//! join with the scenes' truth (`scripts/trial_errors.py`'s matching).
+//!
+//! One line per candidate: `SEED CANDIDATE DECIDED REPORTED PRINT_1,…,PRINT_N FLOOR_1,…,FLOOR_N`
+//! (`DECIDED` is `confirmed` or `rejected`; `REPORTED` the report's own ratio; `-` where a pass
+//! gave none). Positions along the raised passes are mapped onto the strokes' axis as the
+//! mission does for a pass that runs the planner's default overrun (1.5 mm) past each end; the
+//! profile fit searches ±6 mm of shift, so a pass clipped at the workspace's edge still lines up.
+//! On the fresh trials 9900–10019 (real time) the replayed ratios gave the report's own within
+//! 0.005 for 391 of 409 candidates, and within 0.053 for all: an approximation for comparing
+//! rules, not a copy of the report.
+
+use std::path::Path;
+
+use crackbot_mission::experiments::trial_params;
+use crackbot_mission::inspect::PRINT_CHECK_OVERRUN_MM;
+use crackbot_tactile::print_check::{floor_ratio, print_ratio};
+use serde_json::Value;
+
+type Error = Box<dyn std::error::Error>;
+/// A pass's proximity samples and their positions along it, mm.
+type Pass = (Vec<f64>, Vec<f64>);
+
+/// The proximity column and the position column of a saved pass, and its direction flag.
+fn load(path: &Path) -> Result<(Vec<f64>, Vec<f64>, u8), Error> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let (mut p, mut x, mut dir) = (Vec::new(), Vec::new(), 0u8);
+    for (n, line) in text.lines().enumerate().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 6 {
+            return Err(format!("{}:{}: expected 6 columns", path.display(), n + 1).into());
+        }
+        p.push(f[3].parse()?);
+        dir = f[4].parse()?;
+        x.push(f[5].parse()?);
+    }
+    Ok((p, x, dir))
+}
+
+fn fmt(v: &[Option<f64>]) -> String {
+    v.iter()
+        .map(|r| r.map_or("-".to_string(), |r| format!("{r:.4}")))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+fn main() -> Result<(), Error> {
+    for dir in std::env::args().skip(1) {
+        let mut trials: Vec<_> = std::fs::read_dir(&dir)?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.to_string_lossy().ends_with("-fused"))
+            .collect();
+        trials.sort();
+        for trial in trials {
+            let report: Value =
+                serde_json::from_str(&std::fs::read_to_string(trial.join("report.json"))?)?;
+            let seed = trial
+                .file_name()
+                .and_then(|n| n.to_str())
+                .and_then(|n| n.split('-').nth(1))
+                .unwrap_or("?")
+                .to_string();
+            // The fibre's dark level the mission judged by: the trial scene's sensor's.
+            let scene = crackbot_sim::random_scene(&trial_params(), seed.parse()?)?;
+            let dark = scene.sensor.optics.proximity_dark_counts;
+            let empty = Vec::new();
+            let passes = report["passes"].as_array().unwrap_or(&empty);
+            let decided = report["cracks"]
+                .as_array()
+                .unwrap_or(&empty)
+                .iter()
+                .filter_map(|c| Some((c["candidate"].as_u64()?, "confirmed", &c["evidence"])))
+                .chain(
+                    report["rejected"]
+                        .as_array()
+                        .unwrap_or(&empty)
+                        .iter()
+                        .filter_map(|c| Some((c["candidate"].as_u64()?, "rejected", c))),
+                );
+            for (cand, verdict, holder) in decided {
+                let Some(reported) = holder["height_ratio"].as_f64() else {
+                    continue;
+                };
+                // The judged strokes: the candidate's passes with a verdict.
+                let judged: Vec<&Value> = passes
+                    .iter()
+                    .filter(|p| p["candidate"].as_u64() == Some(cand) && !p["class"].is_null())
+                    .collect();
+                let Some(first) = judged.first() else {
+                    continue;
+                };
+                let ends = |p: &Value| -> Option<f64> {
+                    let a: [f64; 2] = serde_json::from_value(p["start_mm"].clone()).ok()?;
+                    let b: [f64; 2] = serde_json::from_value(p["end_mm"].clone()).ok()?;
+                    Some((b[0] - a[0]).hypot(b[1] - a[1]))
+                };
+                let length = ends(first).ok_or("a pass without its ends")?;
+                let mut strokes = Vec::new();
+                for p in &judged {
+                    let path = p["recording"]
+                        .as_str()
+                        .ok_or("a pass without its recording")?;
+                    let (v, x, d) = load(Path::new(path))?;
+                    let along = x.iter().map(|&x| if d == 0 { x } else { length - x });
+                    strokes.push((v, along.collect::<Vec<f64>>()));
+                }
+                let (mut prints, mut floors) = (Vec::new(), Vec::new());
+                for k in 1.. {
+                    let name = if k == 1 {
+                        format!("raised-{cand:03}.csv")
+                    } else {
+                        format!("raised-{cand:03}-{k}.csv")
+                    };
+                    let path = trial.join(name);
+                    if !path.exists() {
+                        break;
+                    }
+                    let (v, x, back) = load(&path)?;
+                    let along: Vec<f64> = x
+                        .iter()
+                        .map(|&x| {
+                            if back == 0 {
+                                x - PRINT_CHECK_OVERRUN_MM
+                            } else {
+                                length + PRINT_CHECK_OVERRUN_MM - x
+                            }
+                        })
+                        .collect();
+                    let mean = |f: &dyn Fn(&Pass) -> Option<f64>| {
+                        let r: Vec<f64> = strokes.iter().filter_map(f).collect();
+                        (!r.is_empty()).then(|| r.iter().sum::<f64>() / r.len() as f64)
+                    };
+                    prints.push(mean(&|(p, x)| {
+                        print_ratio((p, x), (&v, &along), dark).ok().flatten()
+                    }));
+                    floors.push(mean(&|(p, x)| {
+                        floor_ratio((p, x), (&v, &along), dark).ok().flatten()
+                    }));
+                }
+                println!(
+                    "{seed} {cand} {verdict} {reported:.4} {} {}",
+                    fmt(&prints),
+                    fmt(&floors)
+                );
+            }
+        }
+    }
+    Ok(())
+}
