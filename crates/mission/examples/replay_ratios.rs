@@ -18,12 +18,14 @@ use std::path::Path;
 
 use crackbot_mission::experiments::trial_params;
 use crackbot_mission::inspect::PRINT_CHECK_OVERRUN_MM;
-use crackbot_tactile::print_check::{floor_ratio, print_ratio};
+use crackbot_tactile::print_check::print_ratios;
 use serde_json::Value;
 
+#[path = "support/trials.rs"]
+mod trials;
+use trials::{fused_trials, SavedTrial};
+
 type Error = Box<dyn std::error::Error>;
-/// A pass's proximity samples and their positions along it, mm.
-type Pass = (Vec<f64>, Vec<f64>);
 
 /// The proximity column and the position column of a saved pass, and its direction flag.
 fn load(path: &Path) -> Result<(Vec<f64>, Vec<f64>, u8), Error> {
@@ -50,20 +52,12 @@ fn fmt(v: &[Option<f64>]) -> String {
 
 fn main() -> Result<(), Error> {
     for dir in std::env::args().skip(1) {
-        let mut trials: Vec<_> = std::fs::read_dir(&dir)?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.to_string_lossy().ends_with("-fused"))
-            .collect();
-        trials.sort();
-        for trial in trials {
-            let report: Value =
-                serde_json::from_str(&std::fs::read_to_string(trial.join("report.json"))?)?;
-            let seed = trial
-                .file_name()
-                .and_then(|n| n.to_str())
-                .and_then(|n| n.split('-').nth(1))
-                .unwrap_or("?")
-                .to_string();
+        for SavedTrial {
+            folder: trial,
+            seed,
+            report,
+        } in fused_trials(Path::new(&dir))?
+        {
             // The fibre's dark level the mission judged by: the trial scene's sensor's.
             let scene = crackbot_sim::random_scene(&trial_params(), seed.parse()?)?;
             let dark = scene.sensor.optics.proximity_dark_counts;
@@ -130,16 +124,15 @@ fn main() -> Result<(), Error> {
                             }
                         })
                         .collect();
-                    let mean = |f: &dyn Fn(&Pass) -> Option<f64>| {
-                        let r: Vec<f64> = strokes.iter().filter_map(f).collect();
+                    let ratios: Vec<_> = strokes
+                        .iter()
+                        .filter_map(|(p, x)| print_ratios((p, x), (&v, &along), dark).ok())
+                        .collect();
+                    let mean = |r: Vec<f64>| {
                         (!r.is_empty()).then(|| r.iter().sum::<f64>() / r.len() as f64)
                     };
-                    prints.push(mean(&|(p, x)| {
-                        print_ratio((p, x), (&v, &along), dark).ok().flatten()
-                    }));
-                    floors.push(mean(&|(p, x)| {
-                        floor_ratio((p, x), (&v, &along), dark).ok().flatten()
-                    }));
+                    prints.push(mean(ratios.iter().filter_map(|r| r.print).collect()));
+                    floors.push(mean(ratios.iter().filter_map(|r| r.floor).collect()));
                 }
                 println!(
                     "{seed} {cand} {verdict} {reported:.4} {} {}",

@@ -5,10 +5,16 @@
 //! for each reach, mm). For tuning `crackbot_mission::inspect::PIECE_TRACE_GAP_MM`:
 //! `cargo run --release -p crackbot-mission --example trace_pairs -- TRIALS_DIR...`.
 
+use std::path::Path;
+
 use crackbot_mission::inspect::{turn_deg, CrackTrace};
 use crackbot_vision::model::{build_detector, DetectorChoice};
 use crackbot_vision::preprocess::PostprocessParams;
 use serde_json::Value;
+
+#[path = "support/trials.rs"]
+mod trials;
+use trials::{fused_trials, SavedTrial};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let post = PostprocessParams {
@@ -17,20 +23,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let mut detector = build_detector(&DetectorChoice::default(), post)?;
     for dir in std::env::args().skip(1) {
-        let mut trials: Vec<_> = std::fs::read_dir(&dir)?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.to_string_lossy().ends_with("-fused"))
-            .collect();
-        trials.sort();
-        for trial in trials {
-            let report: Value =
-                serde_json::from_str(&std::fs::read_to_string(trial.join("report.json"))?)?;
-            let seed = trial
-                .file_name()
-                .and_then(|n| n.to_str())
-                .and_then(|n| n.split('-').nth(1))
-                .unwrap_or("?")
-                .to_string();
+        for SavedTrial {
+            folder: trial,
+            seed,
+            report,
+        } in fused_trials(Path::new(&dir))?
+        {
             let rows: Vec<[f64; 3]> =
                 serde_json::from_value(report["frame"]["surface_to_image"].clone())?;
             // The report keeps surface → image; the trace wants pixel → surface.

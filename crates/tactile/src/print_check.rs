@@ -365,12 +365,35 @@ pub fn print_ratio(
     raised: (&[f64], &[f64]),
     dark: f64,
 ) -> Result<Option<f64>, TactileError> {
+    Ok(print_ratios(contact, raised, dark)?.print)
+}
+
+/// Both estimates of one raised pass against one contact pass, each pass's dip found once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PrintRatios {
+    /// [`print_ratio`].
+    pub print: Option<f64>,
+    /// [`floor_ratio`].
+    pub floor: Option<f64>,
+}
+
+/// [`print_ratio`] and [`floor_ratio`] of the same passes, each pass's dip found once.
+///
+/// Errors as [`dip_area`] for either pass.
+pub fn print_ratios(
+    contact: (&[f64], &[f64]),
+    raised: (&[f64], &[f64]),
+    dark: f64,
+) -> Result<PrintRatios, TactileError> {
     let dc = dip_area(contact.0, contact.1, dark)?;
     let dr = dip_area(raised.0, raised.1, dark)?;
-    if dc.relative_depth >= SATURATED_SHARE {
-        return Ok(height_ratio(&[dc], &dr));
-    }
-    Ok(fit_profiles(contact, raised, &dc, &dr, dark))
+    let floor = height_ratio(&[dc], &dr);
+    let print = if dc.relative_depth >= SATURATED_SHARE {
+        floor
+    } else {
+        fit_profiles(contact, raised, &dc, &dr, dark)
+    };
+    Ok(PrintRatios { print, floor })
 }
 
 /// The ratio of the two dips' floors ([`height_ratio`] of one contact and one raised pass; each
@@ -388,9 +411,7 @@ pub fn floor_ratio(
     raised: (&[f64], &[f64]),
     dark: f64,
 ) -> Result<Option<f64>, TactileError> {
-    let dc = dip_area(contact.0, contact.1, dark)?;
-    let dr = dip_area(raised.0, raised.1, dark)?;
-    Ok(height_ratio(&[dc], &dr))
+    Ok(print_ratios(contact, raised, dark)?.floor)
 }
 
 /// Above this [`print_ratio`] a dip is a print's, not a crack's (chosen on simulated trial

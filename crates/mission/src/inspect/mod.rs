@@ -22,7 +22,8 @@
 //!   share of the signal there, a crack's does not ([`print_check::print_ratio`]; above
 //!   [`print_check::PRINT_RATIO`] it is a print). A first ratio within [`PRINT_RATIO_DOUBT`] of
 //!   that threshold is measured on [`PRINT_CHECK_PASSES_IN_DOUBT`] raised passes, back and
-//!   forth, and the mean over those passes of each one's print ratio and floor ratio
+//!   forth (stopping after two where their mean is settled, [`PRINT_RATIO_SETTLED`]), and the
+//!   mean over those passes of each one's print ratio and floor ratio
 //!   ([`print_check::floor_ratio`], a second estimate with other errors) decides; every pass is
 //!   kept (`raised-NNN.csv`, `raised-NNN-K.csv`).
 //! * **Pieces of one crack.** The detector may split one crack into several candidates; the
@@ -371,9 +372,9 @@ pub const RESTROKE_ALONG_MM: f64 = 5.0;
 pub const RESTROKE_KEEP_MM: f64 = 1.0;
 
 /// A print ratio within this of [`print_check::PRINT_RATIO`] is measured again: the raised pass
-/// is made back and forth until there are [`PRINT_CHECK_PASSES_IN_DOUBT`] of them, and the mean
-/// over the passes of each one's print ratio and floor ratio ([`print_check::floor_ratio`])
-/// decides (the print ratio alone where a pass gives no floor ratio). On the simulated trials
+/// is made back and forth, up to [`PRINT_CHECK_PASSES_IN_DOUBT`] times in all (two where they
+/// settle, [`PRINT_RATIO_SETTLED`]), and the mean over the passes of each one's print ratio
+/// and floor ratio ([`print_check::floor_ratio`]) decides (the print ratio alone where a pass gives no floor ratio). On the simulated trials
 /// 9420–9539 (speed-up 2), four raised passes over every candidate read a median 0.012 apart (a
 /// crack's and a print's ratios lie 0.22 apart), and the mean of four put 3 candidates on the
 /// wrong side of the threshold where the first pass alone put 8; every one of the 8 first read
@@ -384,9 +385,17 @@ pub const RESTROKE_KEEP_MM: f64 = 1.0;
 /// the first ratio was in doubt 24 (12 right that were wrong, 1 wrong that was right;
 /// `crates/mission/EXPERIMENTS.md`, "Two estimates of a ratio in doubt").
 pub const PRINT_RATIO_DOUBT: f64 = 0.08;
-/// Raised passes in all over a candidate whose first print ratio is in doubt
+/// Most raised passes in all over a candidate whose first print ratio is in doubt
 /// ([`PRINT_RATIO_DOUBT`]): an even number, as many each way.
 pub const PRINT_CHECK_PASSES_IN_DOUBT: usize = 4;
+/// After each pair of raised passes in doubt (one each way), the passes stop where their mean
+/// (of print and floor ratios) lies at least this far from [`print_check::PRINT_RATIO`]. Replayed
+/// offline on the 347 candidates over a crack or a print measured in doubt (four passes each) in
+/// five trial runs at real time (seeds 9540–10019, 9900–10019 twice), stopping after two where
+/// they lay 0.03–0.06 from the threshold judged every candidate as four passes did (8 on the
+/// wrong side either way); at 0.05, 305 of them stopped after two
+/// (`crates/mission/EXPERIMENTS.md`, "Two estimates of a ratio in doubt").
+pub const PRINT_RATIO_SETTLED: f64 = 0.05;
 
 /// A candidate stroke's dip wider than the candidate (its detected width, or the planner's
 /// assumed one) by more than this, mm, is looked at for several dips
@@ -664,9 +673,9 @@ pub struct Evidence {
     /// ratios.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub height_ratio: Option<f64>,
-    /// The print check's ratio of each raised pass, in order: one, or
+    /// The print check's ratio of each raised pass, in order: one, or two to
     /// [`PRINT_CHECK_PASSES_IN_DOUBT`] where the first was within [`PRINT_RATIO_DOUBT`] of the
-    /// threshold.
+    /// threshold ([`PRINT_RATIO_SETTLED`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub print_ratios: Vec<f64>,
     /// Where the first print ratio was in doubt, each pass's floor ratio
@@ -1502,6 +1511,20 @@ fn mission(
                                         &mut f.doubts,
                                     ));
                                     std::mem::swap(&mut a, &mut b);
+                                    // One pass each way and settled: the rest would not move
+                                    // the mean across the threshold.
+                                    let mean = ratios
+                                        .iter()
+                                        .map(passes::RaisedRatio::in_doubt)
+                                        .sum::<f64>()
+                                        / ratios.len().max(1) as f64;
+                                    if k % 2 == 0
+                                        && ratios.len() == k
+                                        && (mean - print_check::PRINT_RATIO).abs()
+                                            >= PRINT_RATIO_SETTLED
+                                    {
+                                        break;
+                                    }
                                 }
                                 f.doubts.push(format!(
                                     "the first raised pass's print ratio {r:.3} was within \

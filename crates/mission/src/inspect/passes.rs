@@ -649,14 +649,12 @@ pub(super) fn raised_ratio(
 ) -> Option<RaisedRatio> {
     let (mut ratios, mut floors) = (Vec::new(), Vec::new());
     for (p, x) in strokes {
-        match print_check::print_ratio((p, x), raised, dark) {
-            Ok(Some(k)) => ratios.push(k),
-            Ok(None) => {}
+        match print_check::print_ratios((p, x), raised, dark) {
+            Ok(r) => {
+                ratios.extend(r.print);
+                floors.extend(r.floor);
+            }
             Err(e) => doubts.push(e.to_string()),
-        }
-        // The same passes as above: an error is already named.
-        if let Ok(Some(k)) = print_check::floor_ratio((p, x), raised, dark) {
-            floors.push(k);
         }
     }
     let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
