@@ -374,11 +374,12 @@ pub const RESTROKE_KEEP_MM: f64 = 1.0;
 /// A print ratio within this of [`print_check::PRINT_RATIO`] is measured again: the raised pass
 /// is made back and forth, up to [`PRINT_CHECK_PASSES_IN_DOUBT`] times in all (two where they
 /// settle, [`PRINT_RATIO_SETTLED`]), and the mean over the passes of each one's print ratio
-/// and floor ratio ([`print_check::floor_ratio`]) decides (the print ratio alone where a pass gives no floor ratio). On the simulated trials
-/// 9420–9539 (speed-up 2), four raised passes over every candidate read a median 0.012 apart (a
-/// crack's and a print's ratios lie 0.22 apart), and the mean of four put 3 candidates on the
-/// wrong side of the threshold where the first pass alone put 8; every one of the 8 first read
-/// within 0.02 of it, but for one crack at 1.07. What four passes leave is not the raised pass's
+/// and floor ratio ([`print_check::floor_ratio`]) decides (the print ratio alone where a pass
+/// gives no floor ratio). On the simulated trials 9420–9539 (speed-up 2), four raised passes
+/// over every candidate read a median 0.012 apart (a crack's and a print's ratios lie 0.22
+/// apart), and the mean of four put 3 candidates on the wrong side of the threshold where the
+/// first pass alone put 8; every one of the 8 first read within 0.02 of it, but for one crack
+/// at 1.07. What four passes leave is not the raised pass's
 /// noise but the estimate's own bias on narrow marks: replayed offline on the saved passes of
 /// 2010 candidates over a crack or a print (looked-at trial runs 9300–9899, real time), the
 /// print ratio put 35 on the wrong side of the threshold, the mean with the floor ratio where
@@ -1513,16 +1514,12 @@ fn mission(
                                     std::mem::swap(&mut a, &mut b);
                                     // One pass each way and settled: the rest would not move
                                     // the mean across the threshold.
-                                    let mean = ratios
-                                        .iter()
-                                        .map(passes::RaisedRatio::in_doubt)
-                                        .sum::<f64>()
-                                        / ratios.len().max(1) as f64;
-                                    if k % 2 == 0
-                                        && ratios.len() == k
-                                        && (mean - print_check::PRINT_RATIO).abs()
-                                            >= PRINT_RATIO_SETTLED
-                                    {
+                                    let settled =
+                                        passes::judged_ratio(&ratios, true).is_some_and(|m| {
+                                            (m - print_check::PRINT_RATIO).abs()
+                                                >= PRINT_RATIO_SETTLED
+                                        });
+                                    if k % 2 == 0 && ratios.len() == k && settled {
                                         break;
                                     }
                                 }
@@ -1535,17 +1532,7 @@ fn mission(
                                 ));
                             }
                         }
-                        if !ratios.is_empty() {
-                            let judged = |m: &passes::RaisedRatio| {
-                                if in_doubt {
-                                    m.in_doubt()
-                                } else {
-                                    m.print
-                                }
-                            };
-                            f.height_ratio =
-                                Some(ratios.iter().map(judged).sum::<f64>() / ratios.len() as f64);
-                        }
+                        f.height_ratio = passes::judged_ratio(&ratios, in_doubt);
                         // Stopped before the crossing, or past it with no ratio from what it read:
                         // nothing rules out what stands there.
                         f.stands = passed.is_some_and(|p| !p || ratios.is_empty());

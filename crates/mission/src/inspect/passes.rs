@@ -673,6 +673,13 @@ pub(super) struct RaisedRatio {
     pub floor: Option<f64>,
 }
 
+/// The ratio raised passes decide by: the mean of their print ratios, or where the first was in
+/// doubt, of each one's [`RaisedRatio::in_doubt`]; `None` without a pass.
+pub(super) fn judged_ratio(measured: &[RaisedRatio], in_doubt: bool) -> Option<f64> {
+    let judged = |m: &RaisedRatio| if in_doubt { m.in_doubt() } else { m.print };
+    (!measured.is_empty()).then(|| measured.iter().map(judged).sum::<f64>() / measured.len() as f64)
+}
+
 impl RaisedRatio {
     /// The estimate a ratio in doubt is judged by: the mean of the two, or the print ratio
     /// alone where there is no floor ratio.
@@ -848,5 +855,16 @@ mod tests {
             vec![(0, 160), (160, 320), (320, 451)]
         );
         assert!(split_by_travel(&[], 16.0).is_empty());
+    }
+
+    #[test]
+    fn passes_in_doubt_are_judged_by_both_estimates_and_others_by_the_print_ratio() {
+        let pass = |print: f64, floor: Option<f64>| RaisedRatio { print, floor };
+        let passes = [pass(0.86, Some(1.0)), pass(0.84, None)];
+        // Not in doubt: the print ratios' mean.
+        assert!((judged_ratio(&passes, false).unwrap() - 0.85).abs() < 1e-12);
+        // In doubt: each pass's mean of the two (the print ratio where there is no floor ratio).
+        assert!((judged_ratio(&passes, true).unwrap() - (0.93 + 0.84) / 2.0).abs() < 1e-12);
+        assert_eq!(judged_ratio(&[], true), None);
     }
 }
