@@ -242,6 +242,29 @@ pub struct CrackExtent {
     pub passes: u32,
 }
 
+/// The centred moving average of `values` over `width` samples (`width` 0 or 1: the values
+/// themselves), the window shortened at the ends: how the localiser smooths P before its
+/// threshold ([`LocaliseConfig::smooth_samples`]).
+pub fn centred_moving_average(values: impl IntoIterator<Item = f64>, width: usize) -> Vec<f64> {
+    let mut prefix = vec![0.0];
+    let mut acc = 0.0;
+    for v in values {
+        acc += v;
+        prefix.push(acc);
+    }
+    let n = prefix.len() - 1;
+    let width = width.max(1);
+    let half = width / 2;
+    let back = width - 1 - half;
+    (0..n)
+        .map(|i| {
+            let a = i.saturating_sub(back);
+            let b = (i + half + 1).min(n);
+            (prefix[b] - prefix[a]) / (b - a) as f64
+        })
+        .collect()
+}
+
 fn invalid(reason: String) -> TactileError {
     TactileError::Localisation { reason }
 }
@@ -358,22 +381,7 @@ fn localise_checked(
     let sign = travel.signum();
 
     // Smoothed P: centred moving average, windows shrinking at the ends.
-    let mut prefix = Vec::with_capacity(n + 1);
-    prefix.push(0.0);
-    let mut acc = 0.0;
-    for s in samples {
-        acc += s[P];
-        prefix.push(acc);
-    }
-    let half = config.smooth_samples / 2;
-    let back = config.smooth_samples - 1 - half;
-    let smooth: Vec<f64> = (0..n)
-        .map(|i| {
-            let a = i.saturating_sub(back);
-            let b = (i + half + 1).min(n);
-            (prefix[b] - prefix[a]) / (b - a) as f64
-        })
-        .collect();
+    let smooth = centred_moving_average(samples.iter().map(|s| s[P]), config.smooth_samples);
 
     // Noise of P from the sample-to-sample differences (robust: median absolute difference), at least a
     // quantisation step's worth.

@@ -257,3 +257,15 @@ fn simulated_slides_within_measured_error() {
     let mae = errs.iter().sum::<f64>() / errs.len() as f64;
     assert!(mae < 1.5, "centre MAE {mae} mm");
 }
+
+#[test]
+fn the_moving_average_is_centred_and_shortened_at_the_ends() {
+    use crackbot_tactile::localise::centred_moving_average;
+    let v = [0.0, 3.0, 6.0, 9.0, 12.0];
+    // Three samples: each value's neighbours, fewer at the ends.
+    assert_eq!(centred_moving_average(v, 3), vec![1.5, 3.0, 6.0, 9.0, 10.5]);
+    // One sample (or none asked for): the values themselves.
+    assert_eq!(centred_moving_average(v, 1), v.to_vec());
+    assert_eq!(centred_moving_average(v, 0), v.to_vec());
+    assert!(centred_moving_average(std::iter::empty(), 9).is_empty());
+}

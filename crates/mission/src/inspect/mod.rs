@@ -1269,13 +1269,15 @@ fn mission(
                         &dirs[p0..p1],
                         fresh_unit && p0 == 0,
                     )?;
+                    // The localiser with the mission's shallowest dip (both calls below).
+                    let localise_config = crackbot_tactile::localise::LocaliseConfig {
+                        min_depth_counts: config.min_dip_counts,
+                        ..Default::default()
+                    };
                     let extent = crackbot_tactile::localise::localise(
                         &samples[p0..p1],
                         &along[p0..p1],
-                        &crackbot_tactile::localise::LocaliseConfig {
-                            min_depth_counts: config.min_dip_counts,
-                            ..Default::default()
-                        },
+                        &localise_config,
                     )
                     .ok()
                     .flatten();
@@ -1305,10 +1307,7 @@ fn mission(
                                 crackbot_tactile::localise::localise(
                                     &samples[p0..p1][r.clone()],
                                     &along[p0..p1][r],
-                                    &crackbot_tactile::localise::LocaliseConfig {
-                                        min_depth_counts: config.min_dip_counts,
-                                        ..Default::default()
-                                    },
+                                    &localise_config,
                                 )
                                 .ok()
                                 .flatten()
@@ -1465,9 +1464,20 @@ fn mission(
                         let rec_path = config.out_dir.join(format!("raised-{c:03}.csv"));
                         save_pass(&rec_path, &hs, &hx, u8::from(backwards))?;
                         let dark = config.scene.sensor.optics.proximity_dark_counts;
-                        let hp: Vec<f64> = hs.iter().map(|v| v[3]).collect();
-                        let hx: Vec<f64> = hx.iter().map(|&v| on_axis(v)).collect();
-                        let first = passes::raised_ratio(&strokes, (&hp, &hx), dark, &mut f.doubts);
+                        // A raised pass from `start` in direction `dir`: its ratios against the
+                        // strokes, its positions mapped onto the strokes' axis.
+                        let pass_ratio =
+                            |samples: &[[f64; 4]],
+                             xs: &[f64],
+                             start: [f64; 2],
+                             dir: [f64; 2],
+                             doubts: &mut Vec<String>| {
+                                let p: Vec<f64> = samples.iter().map(|v| v[3]).collect();
+                                let x: Vec<f64> =
+                                    xs.iter().map(|&v| on_line_axis(start, dir, v)).collect();
+                                passes::raised_ratio(&strokes, (&p, &x), dark, doubts)
+                            };
+                        let first = pass_ratio(&hs, &hx, from, d, &mut f.doubts);
                         let mut ratios: Vec<passes::RaisedRatio> = first.into_iter().collect();
                         // Near the print threshold: more raised passes, back and forth, and the
                         // mean of their print and floor ratios decides (each pass's are kept in
@@ -1502,15 +1512,7 @@ fn mission(
                                         ));
                                         break;
                                     }
-                                    let rp: Vec<f64> = rs.iter().map(|v| v[3]).collect();
-                                    let rx: Vec<f64> =
-                                        rx.iter().map(|&v| on_line_axis(a, dk, v)).collect();
-                                    ratios.extend(passes::raised_ratio(
-                                        &strokes,
-                                        (&rp, &rx),
-                                        dark,
-                                        &mut f.doubts,
-                                    ));
+                                    ratios.extend(pass_ratio(&rs, &rx, a, dk, &mut f.doubts));
                                     std::mem::swap(&mut a, &mut b);
                                     // One pass each way and settled: the rest would not move
                                     // the mean across the threshold.

@@ -581,13 +581,11 @@ pub(super) fn nearest_of_several_dips(
     {
         return None;
     }
-    // The localiser's smoothing: a centred 9-sample moving average.
-    let smooth: Vec<f64> = (0..n)
-        .map(|i| {
-            let (a, b) = (i.saturating_sub(4), (i + 5).min(n));
-            p[a..b].iter().sum::<f64>() / (b - a) as f64
-        })
-        .collect();
+    // The localiser's own smoothing.
+    let smooth = crackbot_tactile::localise::centred_moving_average(
+        p.iter().copied(),
+        crackbot_tactile::localise::LocaliseConfig::default().smooth_samples,
+    );
     let low = baseline - 0.5 * depth;
     let back = baseline - back_share * depth;
     // Runs of samples below half depth, as index ranges.
@@ -657,7 +655,6 @@ pub(super) fn raised_ratio(
             Err(e) => doubts.push(e.to_string()),
         }
     }
-    let mean = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     Some(RaisedRatio {
         print: mean(&ratios)?,
         floor: mean(&floors),
@@ -677,7 +674,12 @@ pub(super) struct RaisedRatio {
 /// doubt, of each one's [`RaisedRatio::in_doubt`]; `None` without a pass.
 pub(super) fn judged_ratio(measured: &[RaisedRatio], in_doubt: bool) -> Option<f64> {
     let judged = |m: &RaisedRatio| if in_doubt { m.in_doubt() } else { m.print };
-    (!measured.is_empty()).then(|| measured.iter().map(judged).sum::<f64>() / measured.len() as f64)
+    mean(&measured.iter().map(judged).collect::<Vec<_>>())
+}
+
+/// The mean of `v`; `None` when it is empty.
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
 }
 
 impl RaisedRatio {
