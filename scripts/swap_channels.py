@@ -1,15 +1,18 @@
 #!/usr/bin/env python3
-"""Which of the finger's channels keep the deployed width model from reading simulated slides:
-each simulated width recording gets some of its channels replaced by a real recording's, stroke by
-stroke, and the deployed model then reads the hybrids (standard library only).
+"""Which of the finger's channels keep the deployed models from reading simulated slides: each
+simulated recording (width or recognition plates) gets some of its channels replaced by a real
+recording's, stroke by stroke, and a deployed model then reads the hybrids (standard library
+only).
 
     crackbot sim dataset --experiment width --seed 7 --out sim-w7
     crackbot tactile convert ../shared/data/tactile/width --out real-width
     python3 scripts/swap_channels.py sim-w7 real-width hybrid-p --channels p
     crackbot tactile eval --model models/tactile/width.ctm --test hybrid-p --json
 
-Simulated recording `crack_mmW_complete_R` takes its channels from the real
-`crack_mmW_complete_<(R-1) mod 3 + 1>`. A stroke is a run of rows with one (slide, direction); each
+Simulated recording `STEM_complete_R` (e.g. `crack_mm2`, `crack_bump`) takes its channels from
+the real `STEM_complete_<(R-1) mod 3 + 1>`. A stroke is the first run of rows with one (slide,
+direction): the few rows of a later run of the same pair (the direction column flickering at a
+turn) keep their simulated values. Each
 real stroke is stretched linearly in time onto the simulated stroke of the same slide and
 direction (the two take about as long), so the real signal's events keep their order but not
 their exact time. `--channels d1,d2,d3,p` replaces all four: the control, which shows what the
@@ -60,6 +63,11 @@ def stretched(values, n):
     return out
 
 
+def cell(v):
+    """A CSV cell for a non-position column: integers as integers, anything else unrounded."""
+    return int(v) if v == int(v) else f"{v:g}"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("sim", help="folder of simulated width recordings (CSV)")
@@ -75,14 +83,18 @@ def main():
     if not sims:
         sys.exit(f"{a.sim}: no *_complete_*.csv recordings")
     os.makedirs(a.out, exist_ok=True)
+    reals = {}  # each real recording read once, with its strokes
     for path in sims:
         name = os.path.basename(path)
         stem, rep = name.rsplit("_", 1)
         real_path = os.path.join(a.real, f"{stem}_{(int(rep.split('.')[0]) - 1) % 3 + 1}.csv")
         if not os.path.exists(real_path):
             sys.exit(f"{real_path}: no such real recording for {name}")
-        sim, real = read(path), read(real_path)
-        real_strokes = strokes(real)
+        if real_path not in reals:
+            rows = read(real_path)
+            reals[real_path] = (rows, strokes(rows))
+        real, real_strokes = reals[real_path]
+        sim = read(path)
         for key, (s, e) in strokes(sim).items():
             if key not in real_strokes:
                 continue
@@ -95,7 +107,7 @@ def main():
             w = csv.writer(f)
             w.writerow(COLUMNS)
             for r in sim:
-                w.writerow([f"{r[0]:.4f}"] + [int(v) for v in r[1:]])
+                w.writerow([f"{r[0]:.4f}"] + [cell(v) for v in r[1:]])
     print(f"wrote {len(sims)} hybrids to {a.out} (channels {a.channels} from {a.real})")
 
 
