@@ -466,3 +466,93 @@ fn the_recognition_model_learns_every_crack_width_unless_told_not_to() {
     );
     assert!(without <= 0.5, "type-only model: {without}");
 }
+
+#[test]
+fn the_width_model_learns_the_simulated_plates_when_asked() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let widths = tactile_data("width", 1);
+    assert_eq!(widths.len(), 6);
+    let train = |out: &Path, extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "tactile",
+            "train",
+            "--trees",
+            "8",
+            "--max-depth",
+            "8",
+            "--width",
+        ];
+        args.extend(widths.iter().map(String::as_str));
+        args.extend(["--out", utf8(out)]);
+        args.extend_from_slice(extra);
+        let r = crackbot(&args);
+        assert!(r.status.success(), "{}", text(&r.stderr));
+        serde_json::from_str(&std::fs::read_to_string(out.join("width.json")).expect("summary"))
+            .expect("JSON")
+    };
+    let (real, joint) = (dir.path().join("real"), dir.path().join("joint"));
+    train(&real, &[]);
+    let summary = train(&joint, &["--width-sim-seeds", "8"]);
+    // Six real recordings and the simulator's thirty (six plates, five recordings each), named
+    // by their seed.
+    let names: Vec<&str> = summary["training"]["recordings"]
+        .as_array()
+        .expect("recordings")
+        .iter()
+        .map(|r| r.as_str().expect("name"))
+        .collect();
+    assert_eq!(names.len(), 6 + 30, "{names:?}");
+    assert!(
+        names.contains(&"sim-seed8-crack_mm2_complete_5"),
+        "{names:?}"
+    );
+    // Simulated plates of a seed neither model trained on.
+    let sim = dir.path().join("sim12");
+    let r = crackbot(&[
+        "sim",
+        "dataset",
+        "--experiment",
+        "width",
+        "--seed",
+        "12",
+        "--out",
+        utf8(&sim),
+    ]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let slides = |model: &Path| -> f64 {
+        let r = crackbot(&[
+            "tactile",
+            "eval",
+            "--json",
+            "--model",
+            utf8(&model.join("width.ctm")),
+            "--test",
+            utf8(&sim),
+        ]);
+        assert!(r.status.success(), "{}", text(&r.stderr));
+        let json: serde_json::Value = serde_json::from_slice(&r.stdout).expect("JSON");
+        json["slide_accuracy"].as_f64().expect("slide_accuracy")
+    };
+    let (real, joint) = (slides(&real), slides(&joint));
+    assert!(
+        joint >= 0.9 && joint > real + 0.15,
+        "real only {real}, with seed 8 {joint}"
+    );
+    // Simulated plates are added to the width model only.
+    let r = crackbot(&[
+        "tactile",
+        "train",
+        "--recognition",
+        utf8(&data("type")),
+        "--width-sim-seeds",
+        "8",
+        "--out",
+        utf8(dir.path()),
+    ]);
+    assert!(!r.status.success());
+    assert!(
+        text(&r.stderr).contains("--width-sim-seeds adds simulated plates to the width model"),
+        "{}",
+        text(&r.stderr)
+    );
+}

@@ -233,7 +233,7 @@ pub struct CompareArgs {
     slide: u32,
 }
 
-fn bar(total: usize, what: &str) -> ProgressBar {
+pub(crate) fn bar(total: usize, what: &str) -> ProgressBar {
     let bar = if std::env::var_os("CI").is_some() {
         ProgressBar::hidden()
     } else {

@@ -456,21 +456,30 @@ pub struct Written {
     pub rows: usize,
 }
 
-/// Generates every recording of the experiment into `out` (created if needed) as
-/// `<stem>_complete_<r>.<ext>` with `ext` "csv" or "mat", calling `progress(done, total)` after
-/// each recording.
-pub fn generate(
+/// One simulated recording of [`simulate`], not yet written anywhere.
+#[derive(Debug, Clone)]
+pub struct Simulated {
+    /// Its file stem, `<stem>_complete_<r>` as the authors named theirs.
+    pub name: String,
+    /// Its label.
+    pub label: f64,
+    /// Its repetition number.
+    pub repetition: u32,
+    /// The recording.
+    pub recording: Recording,
+}
+
+/// Simulates every recording of the experiment in memory, in the order and with the draws
+/// [`generate`] writes them, calling `progress(done, total)` after each recording.
+pub fn simulate(
     config: &ExperimentConfig,
-    out: &Path,
-    ext: &str,
     mut progress: impl FnMut(usize, usize),
-) -> Result<Vec<Written>, SimError> {
+) -> Result<Vec<Simulated>, SimError> {
     config.validate()?;
-    std::fs::create_dir_all(out).map_err(SimError::io(out))?;
     let surfaces = config.surfaces();
     let total = surfaces.len() * config.recordings as usize;
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
-    let mut written = Vec::with_capacity(total);
+    let mut out = Vec::with_capacity(total);
     for (k, (stem, label, surface, edge_x)) in surfaces.iter().enumerate() {
         for r in 1..=config.recordings {
             let (lo, hi) = config.start_range_mm;
@@ -484,7 +493,7 @@ pub fn generate(
             // The haptic device's frame: the stroke starts somewhere 8–14 mm from its origin.
             let offset = rng.random_range(8.0..14.0);
             let seed = rng.random::<u64>();
-            let rec = simulate_recording(
+            let recording = simulate_recording(
                 config,
                 surface,
                 config.mount(k),
@@ -496,16 +505,40 @@ pub fn generate(
                 offset,
                 seed,
             )?;
-            let path = out.join(format!("{stem}_complete_{r}.{ext}"));
-            write_recording(&path, &rec)?;
-            written.push(Written {
-                path,
+            out.push(Simulated {
+                name: format!("{stem}_complete_{r}"),
                 label: *label,
                 repetition: r,
-                rows: rec.rows.len(),
+                recording,
             });
-            progress(written.len(), total);
+            progress(out.len(), total);
         }
+    }
+    Ok(out)
+}
+
+/// Generates every recording of the experiment into `out` (created if needed) as
+/// `<stem>_complete_<r>.<ext>` with `ext` "csv" or "mat", calling `progress(done, total)` after
+/// each recording is simulated.
+pub fn generate(
+    config: &ExperimentConfig,
+    out: &Path,
+    ext: &str,
+    progress: impl FnMut(usize, usize),
+) -> Result<Vec<Written>, SimError> {
+    config.validate()?;
+    std::fs::create_dir_all(out).map_err(SimError::io(out))?;
+    let simulated = simulate(config, progress)?;
+    let mut written = Vec::with_capacity(simulated.len());
+    for s in simulated {
+        let path = out.join(format!("{}.{ext}", s.name));
+        write_recording(&path, &s.recording)?;
+        written.push(Written {
+            path,
+            label: s.label,
+            repetition: s.repetition,
+            rows: s.recording.rows.len(),
+        });
     }
     Ok(written)
 }

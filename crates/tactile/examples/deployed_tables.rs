@@ -11,10 +11,14 @@
 //! by a whole 5–12 counts, up or down, fixed per recording (what remounting the fibres does;
 //! between the authors' two sessions the flat levels moved by about 10 counts).
 //!
+//! `CRACKBOT_WIDTH_SIM_SEEDS=8,9` adds the simulator's width plates of those seeds to every width
+//! fold's training, as `crackbot tactile train --width-sim-seeds 8 9` does, and a column with the
+//! slides right on simulated width plates of seeds the training never saw (7, 12, 13).
+//!
 //! ```sh
 //! CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-tactile --example deployed_tables [recognition|width]
 //! ```
-//! Data: the authors' repetitions 1–3 only.
+//! Data: the authors' repetitions 1–3, and simulated plates where asked.
 
 use std::path::PathBuf;
 
@@ -25,6 +29,24 @@ use crackbot_tactile::model::{TactileModel, TrainConfig};
 use crackbot_tactile::online::classify_recording;
 
 type Recs = Vec<(PathBuf, Recording)>;
+
+/// Seeds of the simulated width plates every model is tested on; never trained on.
+const HELD_OUT_SIM_SEEDS: [u64; 3] = [7, 12, 13];
+
+/// The simulator's width experiment for `seed`, in memory.
+fn simulated_widths(seed: u64) -> Result<Recs, Box<dyn std::error::Error>> {
+    use crackbot_sim::experiment::{simulate, Experiment as SimExperiment, ExperimentConfig};
+    let config = ExperimentConfig::paper(SimExperiment::Width, seed);
+    Ok(simulate(&config, |_, _| {})?
+        .into_iter()
+        .map(|s| {
+            (
+                PathBuf::from(format!("sim-seed{seed}-{}", s.name)),
+                s.recording,
+            )
+        })
+        .collect())
+}
 
 /// The recordings of `all` whose repetition column is one of `reps`.
 fn pick(all: &Recs, reps: &[u32]) -> Recs {
@@ -66,6 +88,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         Err(_) => None,
     };
+    let sim_seeds: Vec<u64> = match std::env::var("CRACKBOT_WIDTH_SIM_SEEDS") {
+        Ok(v) => v
+            .split(',')
+            .map(|s| s.trim().parse())
+            .collect::<Result<_, _>>()
+            .map_err(|e| format!("CRACKBOT_WIDTH_SIM_SEEDS must be seeds, e.g. 8,9: {e}"))?,
+        Err(_) => Vec::new(),
+    };
+    if let Some(s) = sim_seeds.iter().find(|s| HELD_OUT_SIM_SEEDS.contains(s)) {
+        return Err(format!("simulated seed {s} is a test seed ({HELD_OUT_SIM_SEEDS:?})").into());
+    }
     let mut folds: Vec<(Vec<u32>, u32)> = vec![(vec![2, 3], 1), (vec![1, 3], 2), (vec![1, 2], 3)];
     for a in 1..=3 {
         for b in 1..=3 {
@@ -97,6 +130,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         } else {
             Vec::new()
         };
+        // Simulated width plates: trained on (the seeds asked for), tested on (the held-out ones).
+        let (mut sim_train, mut sim_test) = (Recs::new(), Vec::new());
+        if experiment == Experiment::Width {
+            for &seed in &sim_seeds {
+                sim_train.extend(simulated_widths(seed)?);
+            }
+            for seed in HELD_OUT_SIM_SEEDS {
+                sim_test.push(simulated_widths(seed)?);
+            }
+        }
         let config = TrainConfig {
             n_trees: 32,
             max_depth: Some(10),
@@ -106,12 +149,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 Experiment::Width => SlideVote::Context,
             }),
         };
-        println!("{experiment:?}, slide vote {}:", config.slide_vote.name());
-        println!("| {experiment:?}: train → test | windows | slides | offsets moved: windows / slides | width plates: windows / slides | width MAE posterior mean / mode / regressor (slides), mm |");
-        println!("|---|---|---|---|---|---|");
+        println!(
+            "{experiment:?}, slide vote {}{}:",
+            config.slide_vote.name(),
+            if sim_train.is_empty() {
+                String::new()
+            } else {
+                format!(", with the simulated width plates of seeds {sim_seeds:?}")
+            }
+        );
+        println!("| {experiment:?}: train → test | windows | slides | offsets moved: windows / slides | width plates: windows / slides | width MAE posterior mean / mode / regressor (slides), mm | simulated width plates, seeds {HELD_OUT_SIM_SEEDS:?}: slides |");
+        println!("|---|---|---|---|---|---|---|");
         for (train_reps, test_rep) in &folds {
             let mut train = pick(&all, train_reps);
             train.extend(pick(&width_plates, train_reps));
+            train.extend(sim_train.iter().cloned());
             let test = pick(&all, &[*test_rep]);
             let model = TactileModel::train(&train, Some(experiment), &config, &mut |_, _, _| {})?;
             let report = evaluate_model_recordings(&model, &test)?;
@@ -141,8 +193,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let n = n.max(1) as f64;
                 width = format!("{:.2} / {:.2} / {:.2}", mean / n, mode / n, reg / n);
             }
+            let mut simulated = String::from("–");
+            if !sim_test.is_empty() {
+                let rates = sim_test
+                    .iter()
+                    .map(|t| evaluate_model_recordings(&model, t))
+                    .map(|r| r.map(|r| format!("{:.1} %", 100.0 * r.slide_accuracy)))
+                    .collect::<Result<Vec<_>, _>>()?;
+                simulated = rates.join(" / ");
+            }
             println!(
-                "| {:?} → {} | {:.1} % | {:.1} % | {:.1} % / {:.1} % | {} | {} |",
+                "| {:?} → {} | {:.1} % | {:.1} % | {:.1} % / {:.1} % | {} | {} | {} |",
                 train_reps,
                 test_rep,
                 100.0 * report.window_accuracy,
@@ -150,7 +211,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 100.0 * moved.window_accuracy,
                 100.0 * moved.slide_accuracy,
                 plates,
-                width
+                width,
+                simulated
             );
         }
     }
