@@ -379,6 +379,22 @@ fn convert_reads_width_recordings_as_surface_types_and_names_a_bad_width() {
     assert!(!target.exists());
 }
 
+/// `tactile eval --model MODEL --test TEST --json`: the slides right, 0–1.
+fn model_slide_accuracy(model: &Path, test: &Path) -> f64 {
+    let r = crackbot(&[
+        "tactile",
+        "eval",
+        "--json",
+        "--model",
+        utf8(model),
+        "--test",
+        utf8(test),
+    ]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&r.stdout).expect("JSON");
+    json["slide_accuracy"].as_f64().expect("slide_accuracy")
+}
+
 /// `tactile train` with `--trees 8 --max-depth 8` into `out`, `extra` appended; its stderr.
 fn train_small(recognition: &[String], width: &[String], out: &Path, extra: &[&str]) -> String {
     let mut args: Vec<&str> = vec!["tactile", "train", "--trees", "8", "--max-depth", "8"];
@@ -443,20 +459,7 @@ fn the_recognition_model_learns_every_crack_width_unless_told_not_to() {
         utf8(&test),
     ]);
     assert!(result.status.success(), "{}", text(&result.stderr));
-    let slides = |model: &Path| -> f64 {
-        let r = crackbot(&[
-            "tactile",
-            "eval",
-            "--json",
-            "--model",
-            utf8(&model.join("recognition.ctm")),
-            "--test",
-            utf8(&test),
-        ]);
-        assert!(r.status.success(), "{}", text(&r.stderr));
-        let json: serde_json::Value = serde_json::from_slice(&r.stdout).expect("JSON");
-        json["slide_accuracy"].as_f64().expect("slide_accuracy")
-    };
+    let slides = |model: &Path| model_slide_accuracy(&model.join("recognition.ctm"), &test);
     // Measured with 32 trees on repetitions 1–2 of every plate: the type-only model calls all
     // 24 of these slides "bump", the pooled one calls every one a crack.
     let (with, without) = (slides(&pooled), slides(&type_only));
@@ -519,20 +522,7 @@ fn the_width_model_learns_the_simulated_plates_when_asked() {
         utf8(&sim),
     ]);
     assert!(r.status.success(), "{}", text(&r.stderr));
-    let slides = |model: &Path| -> f64 {
-        let r = crackbot(&[
-            "tactile",
-            "eval",
-            "--json",
-            "--model",
-            utf8(&model.join("width.ctm")),
-            "--test",
-            utf8(&sim),
-        ]);
-        assert!(r.status.success(), "{}", text(&r.stderr));
-        let json: serde_json::Value = serde_json::from_slice(&r.stdout).expect("JSON");
-        json["slide_accuracy"].as_f64().expect("slide_accuracy")
-    };
+    let slides = |model: &Path| model_slide_accuracy(&model.join("width.ctm"), &sim);
     let (real, joint) = (slides(&real), slides(&joint));
     assert!(
         joint >= 0.9 && joint > real + 0.15,

@@ -85,7 +85,7 @@ pub struct TrainArgs {
     /// Also train the width model on the simulator's width plates: the recordings of `crackbot
     /// sim dataset --experiment width --seed S`, simulated in memory, for each seed given (the
     /// recognition model is not given them). The simulated finger's proximity channel still
-    /// differs from the real one on the narrow slots, and a model trained on the real fingers
+    /// differs from the real one on the narrow slots, and a model trained on the real finger
     /// alone reads about 60 % of simulated width slides right; with these it reads both
     /// (models/tactile/MODEL_CARD.md, "Real and simulated fingers").
     #[arg(long, num_args = 1.., value_name = "SEED")]
