@@ -87,6 +87,10 @@ pub struct Score {
     pub localisation_mm: Vec<f64>,
     /// Reported width − true width of each correct report that carries a width, mm.
     pub width_error_mm: Vec<f64>,
+    /// Length of the dip's extent (the localiser's width, calibrated on the real plates) − true
+    /// width of each correct report that carries an extent, mm: a second width estimate, scored
+    /// beside the model's.
+    pub extent_width_error_mm: Vec<f64>,
 }
 
 impl Score {
@@ -130,6 +134,10 @@ pub fn score(scene: &Scene, report: &InspectReport) -> Score {
                 s.localisation_mm.push(d);
                 if let Some(rw) = r.width_mm {
                     s.width_error_mm.push(rw - w);
+                }
+                if let Some([a, b]) = r.extent_mm {
+                    s.extent_width_error_mm
+                        .push((a[0] - b[0]).hypot(a[1] - b[1]) - w);
                 }
             }
             _ => s.false_reports += 1,
@@ -360,6 +368,9 @@ pub struct TrialsReport {
     /// Mean absolute width error of the fused mission's correct reports, mm (`None` when none
     /// carried a width).
     pub fused_width_mae_mm: Option<f64>,
+    /// Mean absolute error of the dip's extent taken as the width, over the fused mission's
+    /// correct reports that carry one, mm (`None` when none did).
+    pub fused_extent_width_mae_mm: Option<f64>,
     /// The paper's figures: vision only, vision + tactile.
     pub paper: [f64; 2],
     /// The finger's error budget over every trial.
@@ -398,7 +409,7 @@ impl TrialsReport {
             );
         }
         out += &format!(
-            "\n| | vision only | vision + tactile |\n|---|---|---|\n| correct detections (this run) | {:.1} % | {:.1} % |\n| the paper | {:.2} % | {:.2} % |\n| localisation error of confirmed cracks | – | {} |\n| width error of confirmed cracks (mean absolute) | – | {} |\n| correct / false / missed, all trials | {} / {} / {} | {} / {} / {} |\n| exploration, mean ± sd (range) | – | {} |\n| trials explored within {} s | – | {} of {} |\n",
+            "\n| | vision only | vision + tactile |\n|---|---|---|\n| correct detections (this run) | {:.1} % | {:.1} % |\n| the paper | {:.2} % | {:.2} % |\n| localisation error of confirmed cracks | – | {} |\n| width error of confirmed cracks (mean absolute) | – | {} |\n| the same, the dip's extent taken as the width | – | {} |\n| correct / false / missed, all trials | {} / {} / {} | {} / {} / {} |\n| exploration, mean ± sd (range) | – | {} |\n| trials explored within {} s | – | {} of {} |\n",
             100.0 * self.vision_correct,
             100.0 * self.fused_correct,
             self.paper[0],
@@ -407,6 +418,8 @@ impl TrialsReport {
                 .map_or_else(|| "– (no crack confirmed)".to_string(), |v| format!("{v:.2} mm")),
             self.fused_width_mae_mm
                 .map_or_else(|| "– (no width reported)".to_string(), |v| format!("{v:.2} mm")),
+            self.fused_extent_width_mae_mm
+                .map_or_else(|| "– (no extent reported)".to_string(), |v| format!("{v:.2} mm")),
             self.vision_totals.correct,
             self.vision_totals.false_reports,
             self.vision_totals.missed,
@@ -549,10 +562,13 @@ pub fn detection_trials(
         .iter()
         .flat_map(|t| t.fused.localisation_mm.iter().copied())
         .collect();
-    let width_errors: Vec<f64> = trials
-        .iter()
-        .flat_map(|t| t.fused.width_error_mm.iter().map(|e| e.abs()))
-        .collect();
+    let mae = |errors: &dyn Fn(&Trial) -> &[f64]| -> Option<f64> {
+        let e: Vec<f64> = trials
+            .iter()
+            .flat_map(|t| errors(t).iter().map(|e| e.abs()))
+            .collect();
+        (!e.is_empty()).then(|| e.iter().sum::<f64>() / e.len() as f64)
+    };
     let mut finger = FingerBudget::default();
     for t in &trials {
         finger.add(&t.finger);
@@ -571,8 +587,8 @@ pub fn detection_trials(
         fused_correct: mean(&|t| t.fused.correct_fraction()),
         fused_localisation_mm: (!locs.is_empty())
             .then(|| locs.iter().sum::<f64>() / locs.len() as f64),
-        fused_width_mae_mm: (!width_errors.is_empty())
-            .then(|| width_errors.iter().sum::<f64>() / width_errors.len() as f64),
+        fused_width_mae_mm: mae(&|t| &t.fused.width_error_mm),
+        fused_extent_width_mae_mm: mae(&|t| &t.fused.extent_width_error_mm),
         trials,
         retried,
         paper: [46.66, 92.85],
@@ -803,6 +819,7 @@ mod tests {
             fused_correct,
             fused_localisation_mm: None,
             fused_width_mae_mm: None,
+            fused_extent_width_mae_mm: None,
             paper: [46.66, 92.85],
             finger,
             vision_totals: Totals::default(),
@@ -872,6 +889,11 @@ mod tests {
         assert!(t.markdown().contains("– (no width reported)"));
         t.fused_width_mae_mm = Some(0.75);
         assert!(t.markdown().contains("(mean absolute) | – | 0.75 mm |"));
+        assert!(t.markdown().contains("– (no extent reported)"));
+        t.fused_extent_width_mae_mm = Some(0.5);
+        assert!(t
+            .markdown()
+            .contains("the dip's extent taken as the width | – | 0.50 mm |"));
         assert!(t
             .markdown()
             .contains("| exploration, mean ± sd (range) | – | – |"));
@@ -1073,8 +1095,15 @@ mod tests {
         for c in &mut r.cracks {
             c.width_mm = Some(2.0);
         }
+        // An extent 1.5 mm long on the 1 mm crack scores +0.5 mm; the decoy's is not scored.
+        for c in &mut r.cracks {
+            let [x, y] = c.position_mm;
+            c.extent_mm = Some([[x, y - 0.75], [x, y + 0.75]]);
+        }
         let s = score(&scene, &r);
         assert_eq!(s.width_error_mm, vec![1.0], "{s:?}");
+        assert_eq!(s.extent_width_error_mm.len(), 1, "{s:?}");
+        assert!((s.extent_width_error_mm[0] - 0.5).abs() < 1e-12, "{s:?}");
         let none = score(&scene, &report_with(&[]));
         assert_eq!((none.correct, none.missed), (0, 4));
         assert_eq!(none.correct_fraction(), 0.0);
