@@ -747,21 +747,17 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
 /// The simulator's width experiment for each seed, in memory, named `sim-seed<S>-<stem>` (the
 /// names the model's training facts list).
 fn simulated_widths(seeds: &[u64]) -> Result<Vec<(PathBuf, Recording)>> {
-    use crackbot_sim::experiment::{simulate, Experiment, ExperimentConfig};
+    use crackbot_sim::experiment::{simulate_named, Experiment, ExperimentConfig};
     let mut out = Vec::new();
     for &seed in seeds {
         let config = ExperimentConfig::paper(Experiment::Width, seed);
         let total = config.surfaces().len() * config.recordings as usize;
         let pb = crate::sim::bar(total, &format!("simulating the width plates, seed {seed}"));
-        let simulated = simulate(&config, |done, _| pb.set_position(done as u64))
-            .with_context(|| format!("simulating the width experiment, seed {seed}"))?;
+        out.extend(
+            simulate_named(&config, |done, _| pb.set_position(done as u64))
+                .with_context(|| format!("simulating the width experiment, seed {seed}"))?,
+        );
         pb.finish_and_clear();
-        out.extend(simulated.into_iter().map(|s| {
-            (
-                PathBuf::from(format!("sim-seed{seed}-{}", s.name)),
-                s.recording,
-            )
-        }));
     }
     Ok(out)
 }

@@ -558,11 +558,8 @@ pub fn detection_trials(
     retried.sort_by_key(|r| r.seed);
     let mean =
         |f: &dyn Fn(&Trial) -> f64| trials.iter().map(f).sum::<f64>() / trials.len().max(1) as f64;
-    let locs: Vec<f64> = trials
-        .iter()
-        .flat_map(|t| t.fused.localisation_mm.iter().copied())
-        .collect();
-    let mae = |errors: &dyn Fn(&Trial) -> &[f64]| -> Option<f64> {
+    // Mean absolute value over every fused trial's list (`None` when all are empty).
+    let mean_abs = |errors: &dyn Fn(&Trial) -> &[f64]| -> Option<f64> {
         let e: Vec<f64> = trials
             .iter()
             .flat_map(|t| errors(t).iter().map(|e| e.abs()))
@@ -585,10 +582,10 @@ pub fn detection_trials(
             .count(),
         vision_correct: mean(&|t| t.vision.correct_fraction()),
         fused_correct: mean(&|t| t.fused.correct_fraction()),
-        fused_localisation_mm: (!locs.is_empty())
-            .then(|| locs.iter().sum::<f64>() / locs.len() as f64),
-        fused_width_mae_mm: mae(&|t| &t.fused.width_error_mm),
-        fused_extent_width_mae_mm: mae(&|t| &t.fused.extent_width_error_mm),
+        // Distances: their absolute values are themselves.
+        fused_localisation_mm: mean_abs(&|t| &t.fused.localisation_mm),
+        fused_width_mae_mm: mean_abs(&|t| &t.fused.width_error_mm),
+        fused_extent_width_mae_mm: mean_abs(&|t| &t.fused.extent_width_error_mm),
         trials,
         retried,
         paper: [46.66, 92.85],

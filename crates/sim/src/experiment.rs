@@ -517,6 +517,22 @@ pub fn simulate(
     Ok(out)
 }
 
+/// [`simulate`], each recording paired with the name the tactile training facts list for it,
+/// `sim-seed<S>-<stem>_complete_<r>` (`S` the experiment's seed): simulated recordings to train
+/// or test the tactile models on beside the authors' files.
+pub fn simulate_named(
+    config: &ExperimentConfig,
+    progress: impl FnMut(usize, usize),
+) -> Result<Vec<(PathBuf, Recording)>, SimError> {
+    Ok(simulate(config, progress)?
+        .into_iter()
+        .map(|s| {
+            let name = format!("sim-seed{}-{}", config.seed, s.name);
+            (PathBuf::from(name), s.recording)
+        })
+        .collect())
+}
+
 /// Generates every recording of the experiment into `out` (created if needed) as
 /// `<stem>_complete_<r>.<ext>` with `ext` "csv" or "mat", calling `progress(done, total)` after
 /// each recording is simulated.

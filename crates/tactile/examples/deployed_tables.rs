@@ -35,17 +35,11 @@ const HELD_OUT_SIM_SEEDS: [u64; 3] = [7, 12, 13];
 
 /// The simulator's width experiment for `seed`, in memory.
 fn simulated_widths(seed: u64) -> Result<Recs, Box<dyn std::error::Error>> {
-    use crackbot_sim::experiment::{simulate, Experiment as SimExperiment, ExperimentConfig};
-    let config = ExperimentConfig::paper(SimExperiment::Width, seed);
-    Ok(simulate(&config, |_, _| {})?
-        .into_iter()
-        .map(|s| {
-            (
-                PathBuf::from(format!("sim-seed{seed}-{}", s.name)),
-                s.recording,
-            )
-        })
-        .collect())
+    use crackbot_sim::experiment::{simulate_named, Experiment as SimExperiment, ExperimentConfig};
+    Ok(simulate_named(
+        &ExperimentConfig::paper(SimExperiment::Width, seed),
+        |_, _| {},
+    )?)
 }
 
 /// The recordings of `all` whose repetition column is one of `reps`.

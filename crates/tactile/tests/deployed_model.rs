@@ -342,7 +342,7 @@ fn the_committed_models_vote_as_their_card_says() {
 /// (99–100 % when committed; a model of the real finger alone read about 60 %).
 #[test]
 fn the_committed_width_model_reads_simulated_plates_it_never_saw() {
-    use crackbot_sim::experiment::{simulate, Experiment as SimExperiment, ExperimentConfig};
+    use crackbot_sim::experiment::{simulate_named, Experiment as SimExperiment, ExperimentConfig};
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/tactile");
     let width = TactileModel::load(&dir.join("width.ctm")).unwrap();
     let names = &width.header.training.recordings;
@@ -353,14 +353,11 @@ fn the_committed_width_model_reads_simulated_plates_it_never_saw() {
         "{names:?}"
     );
     let seed = 12;
-    let recordings: Vec<(PathBuf, Recording)> = simulate(
+    let recordings = simulate_named(
         &ExperimentConfig::paper(SimExperiment::Width, seed),
         |_, _| {},
     )
-    .unwrap()
-    .into_iter()
-    .map(|s| (PathBuf::from(s.name), s.recording))
-    .collect();
+    .unwrap();
     let report = evaluate_model_recordings(&width, &recordings).unwrap();
     assert!(
         report.slide_accuracy >= 0.9,
