@@ -472,15 +472,16 @@ fn a_raised_pass_stops_over_a_screw_head_and_the_candidate_on_it_is_rejected() {
         .iter()
         .filter(|x| x.felt.starts_with("something standing"))
         .collect();
-    assert_eq!(stood.len(), 1, "{:?}", r.rejected);
-    // It was a screw's: its centre lies within a head's radius (plus the finger's reach) of
+    // At least the candidate on the 2.2 mm head; since the thinning keeps thin diagonal cracks
+    // (2026-11-27), also a printed line's end that lies on the other screw's head.
+    assert!(!stood.is_empty(), "{:?}", r.rejected);
+    // Each was a screw's: its centre lies within a head's radius (plus the finger's reach) of
     // one, and no reported crack does.
     let near_screw = |p: [f64; 2]| {
         screws
             .iter()
             .any(|(s, rad)| (p[0] - s[0]).hypot(p[1] - s[1]) < rad + 4.0)
     };
-    assert!(near_screw(stood[0].position_mm), "{:?}", stood[0]);
     assert!(!r.cracks.is_empty());
     for k in &r.cracks {
         assert!(!near_screw(k.position_mm), "{k:?}");
@@ -490,19 +491,20 @@ fn a_raised_pass_stops_over_a_screw_head_and_the_candidate_on_it_is_rejected() {
             .iter()
             .all(|d| !d.contains("raised pass was stopped")));
     }
-    // The pass was stopped near its start (it would have run at least 9 mm: a 6 mm stroke and
-    // 1.5 mm past either end).
-    let raised = std::fs::read_to_string(
-        dir.path()
-            .join(format!("raised-{:03}.csv", stood[0].candidate)),
-    )
-    .unwrap();
-    let reached = raised
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(5).unwrap().parse::<f64>().unwrap())
-        .fold(f64::NEG_INFINITY, f64::max);
-    assert!(reached < 6.0, "{reached}");
+    for x in &stood {
+        assert!(near_screw(x.position_mm), "{x:?}");
+        // The pass was stopped near its start (it would have run at least 9 mm: a 6 mm stroke
+        // and 1.5 mm past either end).
+        let raised =
+            std::fs::read_to_string(dir.path().join(format!("raised-{:03}.csv", x.candidate)))
+                .unwrap();
+        let reached = raised
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(5).unwrap().parse::<f64>().unwrap())
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(reached < 6.0, "{x:?}: {reached}");
+    }
 }
 
 #[test]

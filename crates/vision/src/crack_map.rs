@@ -28,12 +28,12 @@
 //! into branches and at its sharp corners (two cracks meeting in a V, [`CORNER_DEG`]), spurs
 //! shorter than [`SPUR_CELLS`] are dropped, two junctions joined by a branch no longer than
 //! [`BRIDGE_CELLS`] are one crossing (lines crossing at a slant thin to two), and branches are
-//! joined again
-//! where a crack plainly goes on: through a junction the pair of branches that continue each
-//! other best (within [`CONTINUATION_DEG`] of straight), and across a gap no longer than the
-//! dilation joins when both ends point at each other. Each joined run is a [`CrackPiece`]: a
-//! centre-line point near its middle and away from junctions (where a stroke across meets that
-//! crack alone), its local direction and its length.
+//! joined again where a crack plainly goes on: through a junction the pair of branches that
+//! continue each other best (within [`CONTINUATION_DEG`] of straight), and across a gap no
+//! longer than the dilation joins when both ends point at each other and turn no more than
+//! through a junction (two cracks meeting in a V across a gap stay two pieces). Each joined run
+//! is a [`CrackPiece`]: a centre-line point near its middle and away from junctions (where a
+//! stroke across meets that crack alone), its local direction and its length.
 
 use serde::{Deserialize, Serialize};
 
@@ -714,8 +714,13 @@ fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPie
                 continue;
             }
             let u = [v[0] / d, v[1] / d];
-            if angle_deg(branches[ba].outward(ea), u) <= CONTINUATION_DEG
-                && angle_deg(branches[bb].outward(eb), [-u[0], -u[1]]) <= CONTINUATION_DEG
+            let (oa, ob) = (branches[ba].outward(ea), branches[bb].outward(eb));
+            // Each end points at the other, and the two go on from each other as straight as
+            // through a junction: each end within the limit of the line between them alone
+            // would let two cracks meeting in a V at up to twice the limit be joined.
+            if angle_deg(oa, u) <= CONTINUATION_DEG
+                && angle_deg(ob, [-u[0], -u[1]]) <= CONTINUATION_DEG
+                && angle_deg(oa, [-ob[0], -ob[1]]) <= CONTINUATION_DEG
             {
                 gaps.push((d, a, b));
             }
@@ -1048,6 +1053,39 @@ mod tests {
         bent.extend(line_cells((20.0, 40.0), (35.0, 66.0), 1));
         bent.dedup();
         assert_eq!(pieces(&bent, 7, 1.0).len(), 1);
+    }
+
+    #[test]
+    fn two_cracks_meeting_in_a_v_across_a_gap_are_two_pieces() {
+        // Trial scene 10217: two cracks whose ends face each other across a 6-cell gap, the
+        // first running down-right at 35°, the second up-right at 35° (a 70° turn). Each end
+        // points within 40° of the line between them, but the two do not continue each other.
+        let mut cells = line_cells((16.0, 10.0), (30.0, 30.0), 1);
+        cells.extend(line_cells((30.0, 36.0), (16.0, 56.0), 1));
+        let p = pieces(&cells, 7, 1.0);
+        assert_eq!(p.len(), 2, "{p:?}");
+        let mut xs: Vec<f32> = p.iter().map(|q| q.touch[0]).collect();
+        xs.sort_by(f32::total_cmp);
+        assert!(xs[0] < 30.0 && xs[1] > 36.0, "{xs:?}");
+        // The same gap between two pieces of one crack bent by 20°: still one piece.
+        let mut bent = line_cells((20.0, 10.0), (27.0, 30.0), 1);
+        bent.extend(line_cells((27.0, 36.0), (27.0, 56.0), 1));
+        assert_eq!(pieces(&bent, 7, 1.0).len(), 1);
+    }
+
+    #[test]
+    fn a_thin_diagonal_crack_two_cells_thick_is_a_piece_along_its_length() {
+        // Two cells per row, each row one cell to the right: how a thin crack running
+        // diagonally across the map looks (trial scene 10217). The thinning used to eat it from
+        // its end, leaving no centre line and no piece.
+        let cells: Vec<(usize, usize)> = (0..30)
+            .flat_map(|k| [(10 + k, 10 + k), (10 + k, 11 + k)])
+            .collect();
+        let p = pieces(&cells, 7, 1.0);
+        assert_eq!(p.len(), 1, "{p:?}");
+        assert!(p[0].length_px > 35.0, "{p:?}");
+        let a = axis_deg(&p[0]);
+        assert!((a - 45.0).abs() < 10.0, "{a}");
     }
 
     #[test]

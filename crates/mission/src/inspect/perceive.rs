@@ -165,8 +165,10 @@ mod tests {
     fn a_short_crack_along_a_pixel_row_and_one_meeting_another_in_a_v_get_candidates() {
         // Trial scene 6098: a crack 16 mm long running along the frame's rows, whose box is
         // under the crack datasets' 0.1 % of the image. Trial scene 6011: a 31 mm crack that
-        // meets a longer one at a corner, thinned to one bent centre line with it.
-        for (seed, nth) in [(6098, 1), (6011, 0)] {
+        // meets a longer one at a corner, thinned to one bent centre line with it. Trial scene
+        // 10217: a 0.6 mm crack running diagonally across the map's cells, two cells thick,
+        // whose centre line the thinning used to eat whole, ending in a V with another crack.
+        for (seed, nth) in [(6098, 1), (6011, 0), (10217, 0)] {
             let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), seed).unwrap());
             let crack = scene
                 .features
