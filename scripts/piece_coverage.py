@@ -11,22 +11,12 @@ RUN is a `mission trials --out` folder; SCENES holds its `scene-<seed>.json`
 the cracks that gain or lose a piece between the two (2026-11-27, the thinning fix).
 """
 import json
-import math
 import os
 import sys
 
+from trial_errors import dist_poly  # same folder: the trials' own distance
+
 REACH_MM = 2.5
-
-
-def dist_seg(p, a, b):
-    d = (b[0] - a[0], b[1] - a[1])
-    l2 = d[0] ** 2 + d[1] ** 2
-    t = 0 if l2 == 0 else max(0, min(1, ((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2))
-    return math.hypot(p[0] - a[0] - t * d[0], p[1] - a[1] - t * d[1])
-
-
-def dist_poly(p, path):
-    return min(dist_seg(p, path[i], path[i + 1]) for i in range(len(path) - 1))
 
 
 def inverse(m):
