@@ -305,7 +305,10 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
         })
         .collect();
     let all: Vec<_> = chunks.iter().flatten().collect();
-    assert!(chunks.len() > 20, "{} chunks", chunks.len());
+    // One stroke at speed-up 8 arrives in about 40 chunks on an idle machine; under a heavy
+    // load the host drains larger ones (20 seen in CI beside a training job). Streaming, not
+    // one batch at the end, is what is asserted.
+    assert!(chunks.len() > 10, "{} chunks", chunks.len());
     assert!(all.windows(2).all(|w| w[1].t_s >= w[0].t_s - 1e-3));
     let slid: usize = r.passes.iter().map(|p| p.samples).sum();
     assert!(all.len() >= slid, "{} live samples, {slid} slid", all.len());
