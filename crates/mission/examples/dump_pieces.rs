@@ -1,6 +1,7 @@
 //! The pieces the detector's crack map gives on saved fused trials' frames, one JSON line per
 //! trial: `{"seed": S, "surface_to_image": H, "pieces": [[x, y, length], …]}` (the frame's
-//! homography from the trial's report; touch point and centre-line length, image pixels), for `scripts/piece_coverage.py` (which cracks of each scene have a piece to touch):
+//! homography from the trial's report; touch point and centre-line length, image pixels), for
+//! `scripts/piece_coverage.py` (which cracks of each scene have a piece to touch):
 //! `cargo run --release -p crackbot-mission --example dump_pieces -- TRIALS_DIR... > pieces.jsonl`.
 
 use std::path::Path;
