@@ -147,8 +147,9 @@ pub fn dip_area(p: &[f64], along: &[f64], dark: f64) -> Result<DipArea, TactileE
         .enumerate()
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .unwrap_or((0, v[0]));
-    // The sound surface's level, and below the baseline, from the samples near the floor only:
-    // a bump or a screw head farther along brightens a raised pass and would raise both.
+    // The sound surface's level (and, below, the dip's baseline) from the samples near the
+    // floor only: a bump or a screw head farther along brightens a raised pass and would raise
+    // both.
     let near = |xi: f64| (xi - x[m]).abs() <= LEVEL_REACH_MM;
     let mut sorted: Vec<f64> = (0..n).filter(|&i| near(x[i])).map(|i| smooth[i]).collect();
     sorted.sort_by(f64::total_cmp);
@@ -477,8 +478,9 @@ mod tests {
         assert!(ratio > PRINT_RATIO);
     }
 
-    /// [`pass`] over 0–16 mm, brighter by `rise` of its signal from 10.5 mm on (a raised pass
-    /// running onto a bump's flank or towards a screw head).
+    /// A pass over 0–16 mm across a 0.5 mm mark at 5 mm (a 1.1 mm spot, as [`pass`]),
+    /// brighter by `rise` of its signal from 10.5 mm on (a raised pass running onto a bump's
+    /// flank or towards a screw head).
     fn pass_to_a_bump(share: f64, signal: f64, rise: f64) -> (Vec<f64>, Vec<f64>) {
         let along: Vec<f64> = (0..640).map(|i| i as f64 * 0.025).collect();
         let p = along
