@@ -90,6 +90,13 @@ pub struct TrainArgs {
     /// (models/tactile/MODEL_CARD.md, "Real and simulated fingers").
     #[arg(long, num_args = 1.., value_name = "SEED")]
     width_sim_seeds: Vec<u64>,
+    /// Also train the recognition model on the simulator's surface-type plates: the recordings
+    /// of `crackbot sim dataset --experiment recognition --seed S`, simulated in memory, for
+    /// each seed given. The authors' slides over the wavy plate all begin at one place against
+    /// its waves, and a model trained on them alone misreads simulated wavy slides that begin
+    /// elsewhere (`crates/sim/docs/calibration.md`, "It is where the stroke starts").
+    #[arg(long, num_args = 1.., value_name = "SEED")]
+    recognition_sim_seeds: Vec<u64>,
 }
 
 /// Arguments of `crackbot tactile tradeoff`.
@@ -746,16 +753,22 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
 
 /// The simulator's width experiment for each seed, in memory, named `sim-seed<S>-<stem>` (the
 /// names the model's training facts list).
-fn simulated_widths(seeds: &[u64]) -> Result<Vec<(PathBuf, Recording)>> {
-    use crackbot_sim::experiment::{simulate_named, Experiment, ExperimentConfig};
+/// The simulator's plates of `experiment` for each of `seeds`, simulated in memory and named
+/// `sim-seed<S>-…`.
+fn simulated_plates(
+    experiment: crackbot_sim::experiment::Experiment,
+    seeds: &[u64],
+) -> Result<Vec<(PathBuf, Recording)>> {
+    use crackbot_sim::experiment::{simulate_named, ExperimentConfig};
     let mut out = Vec::new();
     for &seed in seeds {
-        let config = ExperimentConfig::paper(Experiment::Width, seed);
+        let config = ExperimentConfig::paper(experiment, seed);
         let total = config.surfaces().len() * config.recordings as usize;
-        let pb = crate::sim::bar(total, &format!("simulating the width plates, seed {seed}"));
+        let what = format!("the {} experiment, seed {seed}", experiment.name());
+        let pb = crate::sim::bar(total, &format!("simulating {what}"));
         out.extend(
             simulate_named(&config, |done, _| pb.set_position(done as u64))
-                .with_context(|| format!("simulating the width experiment, seed {seed}"))?,
+                .with_context(|| format!("simulating {what}"))?,
         );
         pb.finish_and_clear();
     }
@@ -770,6 +783,12 @@ fn train(args: TrainArgs) -> Result<()> {
     }
     if !args.width_sim_seeds.is_empty() && args.width.is_empty() {
         bail!("--width-sim-seeds adds simulated plates to the width model: give --width recordings too");
+    }
+    if !args.recognition_sim_seeds.is_empty() && args.recognition.is_empty() {
+        bail!(
+            "--recognition-sim-seeds adds simulated plates to the recognition model: give \
+             --recognition recordings too"
+        );
     }
     std::fs::create_dir_all(&args.out)
         .map_err(|e| anyhow::anyhow!("creating {}: {e}", args.out.display()))?;
@@ -792,6 +811,10 @@ fn train(args: TrainArgs) -> Result<()> {
         let (recordings, pooled) = match experiment {
             Experiment::Recognition => {
                 let mut recordings = collect_recordings(paths)?;
+                recordings.extend(simulated_plates(
+                    crackbot_sim::experiment::Experiment::Recognition,
+                    &args.recognition_sim_seeds,
+                )?);
                 let pooled = if args.recognition_type_only {
                     Vec::new()
                 } else {
@@ -803,7 +826,10 @@ fn train(args: TrainArgs) -> Result<()> {
             }
             Experiment::Width => {
                 let mut recordings = std::mem::take(&mut widths);
-                recordings.extend(simulated_widths(&args.width_sim_seeds)?);
+                recordings.extend(simulated_plates(
+                    crackbot_sim::experiment::Experiment::Width,
+                    &args.width_sim_seeds,
+                )?);
                 (recordings, 0)
             }
         };
