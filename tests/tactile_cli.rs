@@ -395,13 +395,16 @@ fn model_slide_accuracy(model: &Path, test: &Path) -> f64 {
     json["slide_accuracy"].as_f64().expect("slide_accuracy")
 }
 
-/// `tactile train` with `--trees 8 --max-depth 8` into `out`, `extra` appended; its stderr.
+/// `tactile train` with `--trees 8 --max-depth 8` into `out` (each kind of recordings given
+/// where there are some), `extra` appended; its stderr.
 fn train_small(recognition: &[String], width: &[String], out: &Path, extra: &[&str]) -> String {
     let mut args: Vec<&str> = vec!["tactile", "train", "--trees", "8", "--max-depth", "8"];
-    args.push("--recognition");
-    args.extend(recognition.iter().map(String::as_str));
-    args.push("--width");
-    args.extend(width.iter().map(String::as_str));
+    for (flag, files) in [("--recognition", recognition), ("--width", width)] {
+        if !files.is_empty() {
+            args.push(flag);
+            args.extend(files.iter().map(String::as_str));
+        }
+    }
     args.extend(["--out", utf8(out)]);
     args.extend_from_slice(extra);
     let r = crackbot(&args);
@@ -470,58 +473,53 @@ fn the_recognition_model_learns_every_crack_width_unless_told_not_to() {
     assert!(without <= 0.5, "type-only model: {without}");
 }
 
+/// The training recordings that the summary of the model `kind` in `out` lists (`kind`:
+/// `recognition` or `width`).
+fn trained_on(out: &Path, kind: &str) -> Vec<String> {
+    let summary = std::fs::read_to_string(out.join(format!("{kind}.json"))).expect("summary");
+    let summary: serde_json::Value = serde_json::from_str(&summary).expect("JSON");
+    summary["training"]["recordings"]
+        .as_array()
+        .expect("recordings")
+        .iter()
+        .map(|r| r.as_str().expect("name").to_string())
+        .collect()
+}
+
+/// `crackbot sim dataset --experiment <experiment> --seed <seed> --out <out>`.
+fn sim_dataset(experiment: &str, seed: &str, out: &Path) {
+    let r = crackbot(&[
+        "sim",
+        "dataset",
+        "--experiment",
+        experiment,
+        "--seed",
+        seed,
+        "--out",
+        utf8(out),
+    ]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+}
+
 #[test]
 fn the_width_model_learns_the_simulated_plates_when_asked() {
     let dir = tempfile::tempdir().expect("temp dir");
     let widths = tactile_data("width", 1);
     assert_eq!(widths.len(), 6);
-    let train = |out: &Path, extra: &[&str]| -> serde_json::Value {
-        let mut args = vec![
-            "tactile",
-            "train",
-            "--trees",
-            "8",
-            "--max-depth",
-            "8",
-            "--width",
-        ];
-        args.extend(widths.iter().map(String::as_str));
-        args.extend(["--out", utf8(out)]);
-        args.extend_from_slice(extra);
-        let r = crackbot(&args);
-        assert!(r.status.success(), "{}", text(&r.stderr));
-        serde_json::from_str(&std::fs::read_to_string(out.join("width.json")).expect("summary"))
-            .expect("JSON")
-    };
     let (real, joint) = (dir.path().join("real"), dir.path().join("joint"));
-    train(&real, &[]);
-    let summary = train(&joint, &["--width-sim-seeds", "8"]);
+    train_small(&[], &widths, &real, &[]);
+    train_small(&[], &widths, &joint, &["--width-sim-seeds", "8"]);
+    let names = trained_on(&joint, "width");
     // Six real recordings and the simulator's thirty (six plates, five recordings each), named
     // by their seed.
-    let names: Vec<&str> = summary["training"]["recordings"]
-        .as_array()
-        .expect("recordings")
-        .iter()
-        .map(|r| r.as_str().expect("name"))
-        .collect();
     assert_eq!(names.len(), 6 + 30, "{names:?}");
     assert!(
-        names.contains(&"sim-seed8-crack_mm2_complete_5"),
+        names.iter().any(|n| n == "sim-seed8-crack_mm2_complete_5"),
         "{names:?}"
     );
     // Simulated plates of a seed neither model trained on.
     let sim = dir.path().join("sim12");
-    let r = crackbot(&[
-        "sim",
-        "dataset",
-        "--experiment",
-        "width",
-        "--seed",
-        "12",
-        "--out",
-        utf8(&sim),
-    ]);
-    assert!(r.status.success(), "{}", text(&r.stderr));
+    sim_dataset("width", "12", &sim);
     let slides = |model: &Path| model_slide_accuracy(&model.join("width.ctm"), &sim);
     let (real, joint) = (slides(&real), slides(&joint));
     assert!(
@@ -552,56 +550,23 @@ fn the_recognition_model_learns_the_simulated_plates_when_asked() {
     let dir = tempfile::tempdir().expect("temp dir");
     let types = tactile_data("type", 1);
     assert_eq!(types.len(), 4);
-    let train = |out: &Path, extra: &[&str]| -> serde_json::Value {
-        let mut args = vec![
-            "tactile",
-            "train",
-            "--trees",
-            "8",
-            "--max-depth",
-            "8",
-            "--recognition",
-        ];
-        args.extend(types.iter().map(String::as_str));
-        args.extend(["--out", utf8(out)]);
-        args.extend_from_slice(extra);
-        let r = crackbot(&args);
-        assert!(r.status.success(), "{}", text(&r.stderr));
-        serde_json::from_str(
-            &std::fs::read_to_string(out.join("recognition.json")).expect("summary"),
-        )
-        .expect("JSON")
-    };
     let (real, joint) = (dir.path().join("real"), dir.path().join("joint"));
-    train(&real, &[]);
-    let summary = train(&joint, &["--recognition-sim-seeds", "8"]);
+    train_small(&types, &[], &real, &[]);
+    train_small(&types, &[], &joint, &["--recognition-sim-seeds", "8"]);
+    let names = trained_on(&joint, "recognition");
     // Four real recordings and the simulator's twenty (four plates, five recordings each).
-    let names: Vec<&str> = summary["training"]["recordings"]
-        .as_array()
-        .expect("recordings")
-        .iter()
-        .map(|r| r.as_str().expect("name"))
-        .collect();
     assert_eq!(names.len(), 4 + 20, "{names:?}");
     assert!(
-        names.contains(&"sim-seed8-crack_pattern_complete_5"),
+        names
+            .iter()
+            .any(|n| n == "sim-seed8-crack_pattern_complete_5"),
         "{names:?}"
     );
     // Simulated plates of a seed neither model trained on, whose wavy slides begin where the
     // authors' never did: measured 87.9 % of slides (35 of 60 wavy ones) from the real
     // repetition alone, 100 % with seed 8's plates.
     let sim = dir.path().join("sim23");
-    let r = crackbot(&[
-        "sim",
-        "dataset",
-        "--experiment",
-        "recognition",
-        "--seed",
-        "23",
-        "--out",
-        utf8(&sim),
-    ]);
-    assert!(r.status.success(), "{}", text(&r.stderr));
+    sim_dataset("recognition", "23", &sim);
     let slides = |model: &Path| model_slide_accuracy(&model.join("recognition.ctm"), &sim);
     let (real, joint) = (slides(&real), slides(&joint));
     assert!(
