@@ -751,10 +751,8 @@ fn tradeoff(args: TradeoffArgs) -> Result<()> {
     Ok(())
 }
 
-/// The simulator's width experiment for each seed, in memory, named `sim-seed<S>-<stem>` (the
-/// names the model's training facts list).
-/// The simulator's plates of `experiment` for each of `seeds`, simulated in memory and named
-/// `sim-seed<S>-…`.
+/// The simulator's plates of `experiment` for each of `seeds`, in memory, named
+/// `sim-seed<S>-<stem>` (the names the model's training facts list).
 fn simulated_plates(
     experiment: crackbot_sim::experiment::Experiment,
     seeds: &[u64],
@@ -811,10 +809,7 @@ fn train(args: TrainArgs) -> Result<()> {
         let (recordings, pooled) = match experiment {
             Experiment::Recognition => {
                 let mut recordings = collect_recordings(paths)?;
-                recordings.extend(simulated_plates(
-                    crackbot_sim::experiment::Experiment::Recognition,
-                    &args.recognition_sim_seeds,
-                )?);
+                recordings.extend(simulated_plates(experiment, &args.recognition_sim_seeds)?);
                 let pooled = if args.recognition_type_only {
                     Vec::new()
                 } else {
@@ -826,10 +821,7 @@ fn train(args: TrainArgs) -> Result<()> {
             }
             Experiment::Width => {
                 let mut recordings = std::mem::take(&mut widths);
-                recordings.extend(simulated_plates(
-                    crackbot_sim::experiment::Experiment::Width,
-                    &args.width_sim_seeds,
-                )?);
+                recordings.extend(simulated_plates(experiment, &args.width_sim_seeds)?);
                 (recordings, 0)
             }
         };

@@ -469,21 +469,32 @@ pub struct Simulated {
     pub recording: Recording,
 }
 
-/// Simulates every recording of the experiment in memory, in the order and with the draws
-/// [`generate`] writes them, calling `progress(done, total)` after each recording.
-pub fn simulate(
-    config: &ExperimentConfig,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<Vec<Simulated>, SimError> {
-    config.validate()?;
-    let surfaces = config.surfaces();
-    let total = surfaces.len() * config.recordings as usize;
+/// The random draws of one recording of [`simulate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RecordingDraws {
+    /// The surface, an index into [`ExperimentConfig::surfaces`].
+    pub surface: usize,
+    /// The repetition number (1 to [`ExperimentConfig::recordings`]).
+    pub repetition: u32,
+    /// Where the stroke starts before the feature's near edge, mm.
+    pub start_mm: f64,
+    /// The line across the plate, mm.
+    pub line_y: f64,
+    /// Where the stroke starts in the haptic device's frame, mm.
+    pub position_offset_mm: f64,
+    /// Seed of the recording's noise and roughness.
+    pub seed: u64,
+}
+
+/// Every recording's draws from the experiment's seed, in the order [`simulate`] makes the
+/// recordings (surface by surface, repetition by repetition).
+pub fn recording_draws(config: &ExperimentConfig) -> Vec<RecordingDraws> {
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
-    let mut out = Vec::with_capacity(total);
-    for (k, (stem, label, surface, edge_x)) in surfaces.iter().enumerate() {
-        for r in 1..=config.recordings {
+    let mut out = Vec::new();
+    for surface in 0..config.surfaces().len() {
+        for repetition in 1..=config.recordings {
             let (lo, hi) = config.start_range_mm;
-            let start = if hi > lo {
+            let start_mm = if hi > lo {
                 rng.random_range(lo..hi)
             } else {
                 lo
@@ -491,28 +502,63 @@ pub fn simulate(
             // Lines cross the bump's top (±1 mm) as the authors' slides did.
             let line_y = 50.0 + rng.random_range(-1.0..1.0);
             // The haptic device's frame: the stroke starts somewhere 8–14 mm from its origin.
-            let offset = rng.random_range(8.0..14.0);
+            let position_offset_mm = rng.random_range(8.0..14.0);
             let seed = rng.random::<u64>();
-            let recording = simulate_recording(
-                config,
+            out.push(RecordingDraws {
                 surface,
-                config.mount(k),
-                *label,
-                r,
-                *edge_x,
-                start,
+                repetition,
+                start_mm,
                 line_y,
-                offset,
+                position_offset_mm,
                 seed,
-            )?;
-            out.push(Simulated {
-                name: format!("{stem}_complete_{r}"),
-                label: *label,
-                repetition: r,
-                recording,
             });
-            progress(out.len(), total);
         }
+    }
+    out
+}
+
+/// [`simulate_recording`] of the recording with draws `d`.
+pub fn simulate_drawn(
+    config: &ExperimentConfig,
+    surfaces: &[(String, f64, Surface, f64)],
+    d: &RecordingDraws,
+) -> Result<Recording, SimError> {
+    let (_, label, surface, edge_x) = &surfaces[d.surface];
+    simulate_recording(
+        config,
+        surface,
+        config.mount(d.surface),
+        *label,
+        d.repetition,
+        *edge_x,
+        d.start_mm,
+        d.line_y,
+        d.position_offset_mm,
+        d.seed,
+    )
+}
+
+/// Simulates every recording of the experiment in memory, in the order and with the draws
+/// [`generate`] writes them ([`recording_draws`]), calling `progress(done, total)` after each
+/// recording.
+pub fn simulate(
+    config: &ExperimentConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<Simulated>, SimError> {
+    config.validate()?;
+    let surfaces = config.surfaces();
+    let draws = recording_draws(config);
+    let mut out = Vec::with_capacity(draws.len());
+    for d in &draws {
+        let (stem, label, _, _) = &surfaces[d.surface];
+        let recording = simulate_drawn(config, &surfaces, d)?;
+        out.push(Simulated {
+            name: format!("{stem}_complete_{}", d.repetition),
+            label: *label,
+            repetition: d.repetition,
+            recording,
+        });
+        progress(out.len(), draws.len());
     }
     Ok(out)
 }
