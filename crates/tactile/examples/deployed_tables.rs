@@ -14,6 +14,8 @@
 //! `CRACKBOT_WIDTH_SIM_SEEDS=8,9` adds the simulator's width plates of those seeds to every width
 //! fold's training, as `crackbot tactile train --width-sim-seeds 8 9` does, and a column with the
 //! slides right on simulated width plates of seeds the training never saw (7, 12, 13).
+//! `CRACKBOT_RECOGNITION_SIM_SEEDS=8,9` does the same for recognition (`--recognition-sim-seeds`),
+//! tested on the simulated surface-type plates of seeds 23–26.
 //!
 //! ```sh
 //! CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-tactile --example deployed_tables [recognition|width]
@@ -30,16 +32,46 @@ use crackbot_tactile::online::classify_recording;
 
 type Recs = Vec<(PathBuf, Recording)>;
 
-/// Seeds of the simulated width plates every model is tested on; never trained on.
-const HELD_OUT_SIM_SEEDS: [u64; 3] = [7, 12, 13];
+/// Seeds of the simulated plates every model of `experiment` is tested on; never trained on.
+fn held_out_sim_seeds(experiment: Experiment) -> &'static [u64] {
+    match experiment {
+        Experiment::Recognition => &[23, 24, 25, 26],
+        Experiment::Width => &[7, 12, 13],
+    }
+}
 
-/// The simulator's width experiment for `seed`, in memory.
-fn simulated_widths(seed: u64) -> Result<Recs, Box<dyn std::error::Error>> {
+/// The simulator's plates of `experiment` for `seed`, in memory.
+fn simulated(experiment: Experiment, seed: u64) -> Result<Recs, Box<dyn std::error::Error>> {
     use crackbot_sim::experiment::{simulate_named, Experiment as SimExperiment, ExperimentConfig};
+    let experiment = match experiment {
+        Experiment::Recognition => SimExperiment::Recognition,
+        Experiment::Width => SimExperiment::Width,
+    };
     Ok(simulate_named(
-        &ExperimentConfig::paper(SimExperiment::Width, seed),
+        &ExperimentConfig::paper(experiment, seed),
         |_, _| {},
     )?)
+}
+
+/// The simulated seeds to train `experiment`'s folds on, from its environment variable.
+fn training_sim_seeds(experiment: Experiment) -> Result<Vec<u64>, Box<dyn std::error::Error>> {
+    let name = match experiment {
+        Experiment::Recognition => "CRACKBOT_RECOGNITION_SIM_SEEDS",
+        Experiment::Width => "CRACKBOT_WIDTH_SIM_SEEDS",
+    };
+    let seeds: Vec<u64> = match std::env::var(name) {
+        Ok(v) => v
+            .split(',')
+            .map(|s| s.trim().parse())
+            .collect::<Result<_, _>>()
+            .map_err(|e| format!("{name} must be seeds, e.g. 8,9: {e}"))?,
+        Err(_) => Vec::new(),
+    };
+    let held_out = held_out_sim_seeds(experiment);
+    if let Some(s) = seeds.iter().find(|s| held_out.contains(s)) {
+        return Err(format!("{name}: simulated seed {s} is a test seed ({held_out:?})").into());
+    }
+    Ok(seeds)
 }
 
 /// The recordings of `all` whose repetition column is one of `reps`.
@@ -82,17 +114,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         Err(_) => None,
     };
-    let sim_seeds: Vec<u64> = match std::env::var("CRACKBOT_WIDTH_SIM_SEEDS") {
-        Ok(v) => v
-            .split(',')
-            .map(|s| s.trim().parse())
-            .collect::<Result<_, _>>()
-            .map_err(|e| format!("CRACKBOT_WIDTH_SIM_SEEDS must be seeds, e.g. 8,9: {e}"))?,
-        Err(_) => Vec::new(),
-    };
-    if let Some(s) = sim_seeds.iter().find(|s| HELD_OUT_SIM_SEEDS.contains(s)) {
-        return Err(format!("simulated seed {s} is a test seed ({HELD_OUT_SIM_SEEDS:?})").into());
-    }
     let mut folds: Vec<(Vec<u32>, u32)> = vec![(vec![2, 3], 1), (vec![1, 3], 2), (vec![1, 2], 3)];
     for a in 1..=3 {
         for b in 1..=3 {
@@ -124,16 +145,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         } else {
             Vec::new()
         };
-        // Simulated width plates: trained on (the seeds asked for), tested on (the held-out ones).
-        let (mut sim_train, mut sim_test) = (Recs::new(), Vec::new());
-        if experiment == Experiment::Width {
-            for &seed in &sim_seeds {
-                sim_train.extend(simulated_widths(seed)?);
-            }
-            for seed in HELD_OUT_SIM_SEEDS {
-                sim_test.push(simulated_widths(seed)?);
-            }
+        // Simulated plates: trained on (the seeds asked for), tested on (the held-out ones).
+        let sim_seeds = training_sim_seeds(experiment)?;
+        let held_out = held_out_sim_seeds(experiment);
+        let mut sim_train = Recs::new();
+        for &seed in &sim_seeds {
+            sim_train.extend(simulated(experiment, seed)?);
         }
+        let sim_test = held_out
+            .iter()
+            .map(|&seed| simulated(experiment, seed))
+            .collect::<Result<Vec<_>, _>>()?;
         let config = TrainConfig {
             n_trees: 32,
             max_depth: Some(10),
@@ -149,10 +171,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             if sim_train.is_empty() {
                 String::new()
             } else {
-                format!(", with the simulated width plates of seeds {sim_seeds:?}")
+                format!(", with the simulated plates of seeds {sim_seeds:?}")
             }
         );
-        println!("| {experiment:?}: train → test | windows | slides | offsets moved: windows / slides | width plates: windows / slides | width MAE posterior mean / mode / regressor (slides), mm | simulated width plates, seeds {HELD_OUT_SIM_SEEDS:?}: slides |");
+        println!("| {experiment:?}: train → test | windows | slides | offsets moved: windows / slides | width plates: windows / slides | width MAE posterior mean / mode / regressor (slides), mm | simulated plates, seeds {held_out:?}: slides |");
         println!("|---|---|---|---|---|---|---|");
         for (train_reps, test_rep) in &folds {
             let mut train = pick(&all, train_reps);
@@ -187,15 +209,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let n = n.max(1) as f64;
                 width = format!("{:.2} / {:.2} / {:.2}", mean / n, mode / n, reg / n);
             }
-            let mut simulated = String::from("–");
-            if !sim_test.is_empty() {
-                let rates = sim_test
-                    .iter()
-                    .map(|t| evaluate_model_recordings(&model, t))
-                    .map(|r| r.map(|r| format!("{:.1} %", 100.0 * r.slide_accuracy)))
-                    .collect::<Result<Vec<_>, _>>()?;
-                simulated = rates.join(" / ");
-            }
+            let simulated = sim_test
+                .iter()
+                .map(|t| evaluate_model_recordings(&model, t))
+                .map(|r| r.map(|r| format!("{:.1} %", 100.0 * r.slide_accuracy)))
+                .collect::<Result<Vec<_>, _>>()?
+                .join(" / ");
             println!(
                 "| {:?} → {} | {:.1} % | {:.1} % | {:.1} % / {:.1} % | {} | {} | {} |",
                 train_reps,
