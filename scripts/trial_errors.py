@@ -15,6 +15,11 @@ crack's width, once per crack). Prints a count per (truth, outcome, one or sever
 crossed, something standing near) and one line per error; cracks that no stroke crossed are
 listed with the nearest candidates (a long candidate near a missed crack is often two cracks
 merged into one piece). Used for `crates/mission/EXPERIMENTS.md`, seventh session.
+
+With `PASSES=1` it also prints one line per judged pass over a candidate: `pass SEED CANDIDATE
+TRUTH WIDTH CLASS CONFIDENCE DOUBT DIP` (what the pass's own stroke crossed nearest its middle,
+that crack's or print's width, the recognition verdict, its confidence and doubt, the proximity
+dip's confidence, 0 without a dip); `RATIOS=1` one line per candidate with its print ratio.
 """
 import collections
 import glob
@@ -108,6 +113,19 @@ def trial(scenes, folder, stats, errors, untouched):
         feats = json.load(f)["features"]
     claimed = claimed_cracks(report, feats)
     by_report = {ri: ci for ci, ri in claimed.items()}
+    if os.environ.get("PASSES"):
+        for p in report["passes"]:
+            if p["candidate"] is None or p["class"] is None:
+                continue
+            xs, length = crossings(p["start_mm"], p["end_mm"], feats)
+            near = min(xs, key=lambda c: abs(c[0] - length / 2)) if xs else None
+            dip = p["dip"]["confidence"] if p["dip"] else 0.0
+            doubt = (p["doubt"] or "none").split(" ")[0]
+            print(
+                f"pass {seed} {p['candidate']} {near[2] if near else 'nothing'} "
+                f"{near[3] if near else 0.0:.2f} {p['class'].replace(' ', '_')} "
+                f"{p['confidence']:.3f} {doubt} {dip:.2f}"
+            )
     passes = collections.defaultdict(list)
     for p in report["passes"]:
         if p["candidate"] is not None:

@@ -42,11 +42,7 @@ fn held_out_sim_seeds(experiment: Experiment) -> &'static [u64] {
 
 /// The simulator's plates of `experiment` for `seed`, in memory.
 fn simulated(experiment: Experiment, seed: u64) -> Result<Recs, Box<dyn std::error::Error>> {
-    use crackbot_sim::experiment::{simulate_named, Experiment as SimExperiment, ExperimentConfig};
-    let experiment = match experiment {
-        Experiment::Recognition => SimExperiment::Recognition,
-        Experiment::Width => SimExperiment::Width,
-    };
+    use crackbot_sim::experiment::{simulate_named, ExperimentConfig};
     Ok(simulate_named(
         &ExperimentConfig::paper(experiment, seed),
         |_, _| {},
