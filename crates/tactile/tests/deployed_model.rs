@@ -378,7 +378,8 @@ fn the_committed_width_model_reads_simulated_plates_it_never_saw() {
 
 /// Issue 12's goal for recognition: ≥ 95 % of simulated surface-type slides (100 % on seeds
 /// 23–28 when committed; the model of the real finger alone read 88.8–99.2 %; MODEL_CARD.md,
-/// "Real and simulated fingers"). The real recordings: 12 surface-type and 18 width plates.
+/// "Real and simulated fingers: recognition too"). The real recordings: 12 surface-type and 18
+/// width plates.
 #[test]
 fn the_committed_recognition_model_reads_simulated_plates_it_never_saw() {
     reads_simulated_plates_it_never_saw("recognition.ctm", 30, 20, 23, 0.95);
