@@ -71,6 +71,11 @@ def crossings(p, q, feats):
     return sorted(out), length
 
 
+def nearest_middle(xs, length):
+    """The crossing of `xs` nearest the middle of a stroke `length` mm long, or None."""
+    return min(xs, key=lambda c: abs(c[0] - length / 2)) if xs else None
+
+
 def standing_near(p, q, feats):
     out = []
     for f in feats:
@@ -118,7 +123,7 @@ def trial(scenes, folder, stats, errors, untouched):
             if p["candidate"] is None or p["class"] is None:
                 continue
             xs, length = crossings(p["start_mm"], p["end_mm"], feats)
-            near = min(xs, key=lambda c: abs(c[0] - length / 2)) if xs else None
+            near = nearest_middle(xs, length)
             dip = p["dip"]["confidence"] if p["dip"] else 0.0
             doubt = (p["doubt"] or "none").split(" ")[0]
             print(
@@ -144,7 +149,7 @@ def trial(scenes, folder, stats, errors, untouched):
         for p in passes[cand]:
             crossed.update(c[1] for c in crossings(p["start_mm"], p["end_mm"], feats)[0])
         crossed.update(c[1] for c in xs)
-        near = min(xs, key=lambda c: abs(c[0] - length / 2)) if xs else None
+        near = nearest_middle(xs, length)
         truth = near[2] if near else "nothing"
         standing = standing_near(ps[0]["start_mm"], ps[0]["end_mm"], feats)
         hit = [ri for ri, c in confirmed if c == cand]
