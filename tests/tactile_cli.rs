@@ -381,6 +381,11 @@ fn convert_reads_width_recordings_as_surface_types_and_names_a_bad_width() {
 
 /// `tactile eval --model MODEL --test TEST --json`: the slides right, 0–1.
 fn model_slide_accuracy(model: &Path, test: &Path) -> f64 {
+    model_accuracy(model, test).0
+}
+
+/// `tactile eval --model` on `test`: the shares of slides and of windows right.
+fn model_accuracy(model: &Path, test: &Path) -> (f64, f64) {
     let r = crackbot(&[
         "tactile",
         "eval",
@@ -392,7 +397,12 @@ fn model_slide_accuracy(model: &Path, test: &Path) -> f64 {
     ]);
     assert!(r.status.success(), "{}", text(&r.stderr));
     let json: serde_json::Value = serde_json::from_slice(&r.stdout).expect("JSON");
-    json["slide_accuracy"].as_f64().expect("slide_accuracy")
+    let share = |key: &str| {
+        json[key]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{key} in {json}"))
+    };
+    (share("slide_accuracy"), share("window_accuracy"))
 }
 
 /// `tactile train` with `--trees 8 --max-depth 8` into `out` (each kind of recordings given
@@ -562,16 +572,18 @@ fn the_recognition_model_learns_the_simulated_plates_when_asked() {
             .any(|n| n == "sim-seed8-crack_pattern_complete_5"),
         "{names:?}"
     );
-    // Simulated plates of a seed neither model trained on, whose wavy slides begin where the
-    // authors' never did: measured 87.9 % of slides (35 of 60 wavy ones) from the real
-    // repetition alone, 100 % with seed 8's plates.
+    // Simulated plates of a seed neither model trained on. With strokes starting 5–10 mm before
+    // the feature the real repetition alone read 87.9 % of their slides, seed 8's plates 100 %;
+    // since they start 6–7.4 mm before it, as the real ones do, both read nearly every slide
+    // and the windows tell them apart: measured 60.9 % of windows (98.3 % of slides) from the real
+    // repetition alone, 93.4 % (100 %) with seed 8's plates.
     let sim = dir.path().join("sim23");
     sim_dataset("recognition", "23", &sim);
-    let slides = |model: &Path| model_slide_accuracy(&model.join("recognition.ctm"), &sim);
-    let (real, joint) = (slides(&real), slides(&joint));
+    let shares = |model: &Path| model_accuracy(&model.join("recognition.ctm"), &sim);
+    let ((_, real_windows), (joint_slides, joint_windows)) = (shares(&real), shares(&joint));
     assert!(
-        joint >= 0.95 && joint > real + 0.05,
-        "real only {real}, with seed 8 {joint}"
+        joint_slides >= 0.95 && joint_windows > real_windows + 0.1,
+        "windows: real only {real_windows}, with seed 8 {joint_windows} (slides {joint_slides})"
     );
     // Simulated plates need real ones to join.
     let r = crackbot(&[

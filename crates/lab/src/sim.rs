@@ -125,9 +125,10 @@ pub struct DatasetArgs {
     #[arg(long, default_value_t = crackbot_sim::experiment::PAPER_SPEED_MM_S)]
     speed_mm_s: f64,
     /// Where the strokes start: MIN,MAX mm before the plate's feature, drawn uniformly for each
-    /// recording (default 5,10, the paper's "approximately 5–10 mm from the crack edge"; MIN =
-    /// MAX fixes it). The simulated width figures depend on it: `crates/sim/docs/calibration.md`,
-    /// "Width on six fresh seeds".
+    /// recording (default: 6,7.4 for recognition, the real onsets' reading that transfers best;
+    /// 5,10 for width, the paper's "approximately 5–10 mm from the crack edge"; MIN = MAX fixes
+    /// it). The simulated figures depend on it: `crates/sim/docs/calibration.md`, "Width on six
+    /// fresh seeds" and "Where the strokes start, again".
     #[arg(
         long,
         value_name = "MIN,MAX",

@@ -336,14 +336,16 @@ fn the_committed_models_vote_as_their_card_says() {
 }
 
 /// The committed model `file` learned `real` real recordings and the simulator's plates of seeds
-/// 8 and 9 (`per_seed` recordings each), and reads at least `goal` of the slides of the
-/// simulated plates of `seed`, which it never saw.
+/// 8 and 9 (`per_seed` recordings each), and reads at least `goal` of the slides (and
+/// `window_goal` of the windows, where given) of the simulated plates of `seed`, which it never
+/// saw.
 fn reads_simulated_plates_it_never_saw(
     file: &str,
     real: usize,
     per_seed: usize,
     seed: u64,
     goal: f64,
+    window_goal: Option<f64>,
 ) {
     use crackbot_sim::experiment::{simulate_named, ExperimentConfig};
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/tactile");
@@ -367,20 +369,29 @@ fn reads_simulated_plates_it_never_saw(
         "{file}, seed {seed}: {} of the simulated slides right",
         report.slide_accuracy
     );
+    if let Some(window_goal) = window_goal {
+        assert!(
+            report.window_accuracy >= window_goal,
+            "{file}, seed {seed}: {} of the simulated windows right",
+            report.window_accuracy
+        );
+    }
 }
 
 /// Issue 12's goal for width: ≥ 90 % of simulated width slides (99–100 % when committed; a model
 /// of the real finger alone read about 60 %; MODEL_CARD.md, "Real and simulated fingers").
 #[test]
 fn the_committed_width_model_reads_simulated_plates_it_never_saw() {
-    reads_simulated_plates_it_never_saw("width.ctm", 18, 30, 12, 0.9);
+    reads_simulated_plates_it_never_saw("width.ctm", 18, 30, 12, 0.9, None);
 }
 
 /// Issue 12's goal for recognition: ≥ 95 % of simulated surface-type slides (100 % on seeds
-/// 23–28 when committed; the model of the real finger alone read 88.8–99.2 %; MODEL_CARD.md,
-/// "Real and simulated fingers: recognition too"). The real recordings: 12 surface-type and 18
-/// width plates.
+/// 23–28 when committed). Since the strokes start 6–7.4 mm before the feature the model of the
+/// real finger alone reads 98.3–100 % of those slides too, so the windows say more: the committed
+/// model reads 94.5–99.2 % of them (seed 23: 99.1 %), the real finger's model 68.1–77.4 % (seed
+/// 23: 77.4 %; `crates/sim/docs/calibration.md`, "6–7.4 mm adopted for recognition"). The real
+/// recordings: 12 surface-type and 18 width plates.
 #[test]
 fn the_committed_recognition_model_reads_simulated_plates_it_never_saw() {
-    reads_simulated_plates_it_never_saw("recognition.ctm", 30, 20, 23, 0.95);
+    reads_simulated_plates_it_never_saw("recognition.ctm", 30, 20, 23, 0.95, Some(0.9));
 }
