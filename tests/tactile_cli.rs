@@ -379,12 +379,8 @@ fn convert_reads_width_recordings_as_surface_types_and_names_a_bad_width() {
     assert!(!target.exists());
 }
 
-/// `tactile eval --model MODEL --test TEST --json`: the slides right, 0–1.
-fn model_slide_accuracy(model: &Path, test: &Path) -> f64 {
-    model_accuracy(model, test).0
-}
-
-/// `tactile eval --model` on `test`: the shares of slides and of windows right.
+/// `tactile eval --model MODEL --test TEST --json`: the shares of slides and of windows right,
+/// 0–1.
 fn model_accuracy(model: &Path, test: &Path) -> (f64, f64) {
     let r = crackbot(&[
         "tactile",
@@ -472,7 +468,7 @@ fn the_recognition_model_learns_every_crack_width_unless_told_not_to() {
         utf8(&test),
     ]);
     assert!(result.status.success(), "{}", text(&result.stderr));
-    let slides = |model: &Path| model_slide_accuracy(&model.join("recognition.ctm"), &test);
+    let slides = |model: &Path| model_accuracy(&model.join("recognition.ctm"), &test).0;
     // Measured with 32 trees on repetitions 1–2 of every plate: the type-only model calls all
     // 24 of these slides "bump", the pooled one calls every one a crack.
     let (with, without) = (slides(&pooled), slides(&type_only));
@@ -530,7 +526,7 @@ fn the_width_model_learns_the_simulated_plates_when_asked() {
     // Simulated plates of a seed neither model trained on.
     let sim = dir.path().join("sim12");
     sim_dataset("width", "12", &sim);
-    let slides = |model: &Path| model_slide_accuracy(&model.join("width.ctm"), &sim);
+    let slides = |model: &Path| model_accuracy(&model.join("width.ctm"), &sim).0;
     let (real, joint) = (slides(&real), slides(&joint));
     assert!(
         joint >= 0.9 && joint > real + 0.15,
