@@ -97,8 +97,11 @@ fn fitted_sensor_reproduces_repetition_1() {
     // quantiles prefer the paper's 1 mm wave, 2.53 mm deep width cracks and the fitted
     // 3.85 × 2.45 mm cap (over the broad bump the finger bends about half as much as the real
     // one does), the transfer measures (the issue's goals, chosen on repetition 1 too) do not.
+    // So with the darker proximity floor chosen by transfer (dark 215 counts, the peak scaled
+    // so that the flat plate stays put; docs/calibration.md, "A darker proximity floor,
+    // adopted"): 5.52, 3.14, 6.31, 67.86.
     eprintln!("quantile distance to repetition 1, D1 / D2 / D3 / P: {rms:.2?}");
-    let limits = [5.6, 3.2, 6.4, 55.0];
+    let limits = [5.6, 3.2, 6.4, 69.0];
     for (c, (r, l)) in rms.iter().zip(limits).enumerate() {
         assert!(
             r <= &l,
