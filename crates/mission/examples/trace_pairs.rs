@@ -1,8 +1,9 @@
 //! For each pair of confirmed reports of saved fused trials, how the line between their
 //! crossings lies on the detector's crack map: the detector is run again on the trial's saved
-//! frame. One line per pair: `SEED A B DISTANCE_MM ANGLE_DEG GAP_0.5 GAP_1.0 GAP_1.5` (the largest
+//! frame. One line per pair: `SEED A B DISTANCE_MM ANGLE_DEG GAP_0.5 GAP_1.0 GAP_1.5 PATH_MM` (the largest
 //! angle between the line and the two pieces' directions; the longest stretch off the crack map
-//! for each reach, mm). For tuning `crackbot_mission::inspect::PIECE_TRACE_GAP_MM`:
+//! for each reach, mm; the shortest path over the crack map's pixels from one crossing to
+//! the other, mm, -1 where none). For tuning `crackbot_mission::inspect::PIECE_TRACE_GAP_MM`:
 //! `cargo run --release -p crackbot-mission --example trace_pairs -- TRIALS_DIR...`.
 
 use std::path::Path;
@@ -59,8 +60,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         .iter()
                         .map(|&r| format!("{:.2}", trace.longest_gap_mm(p, q, r)))
                         .collect();
+                    let path = trace
+                        .path_on_map_mm(p, q, 1.0)
+                        .map_or("-1".into(), |d| format!("{d:.1}"));
                     println!(
-                        "{seed} {} {} {:.1} {:.0} {}",
+                        "{seed} {} {} {:.1} {:.0} {} {path}",
                         a["candidate"],
                         b["candidate"],
                         (q[0] - p[0]).hypot(q[1] - p[1]),

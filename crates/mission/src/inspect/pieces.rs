@@ -161,6 +161,106 @@ impl CrackTrace {
     }
 }
 
+impl CrackTrace {
+    /// The crack pixels within `reach_mm` of the plate point `p`, as indices into the mask.
+    fn crack_pixels_near(&self, p: [f64; 2], reach_mm: f64) -> Vec<usize> {
+        let px = |q: [f64; 2]| self.homography.surface_to_pixel(q).ok();
+        let (Some(c), Some(ex), Some(ey)) = (
+            px(p),
+            px([p[0] + reach_mm, p[1]]),
+            px([p[0], p[1] + reach_mm]),
+        ) else {
+            return Vec::new();
+        };
+        let r = (ex[0] - c[0])
+            .hypot(ex[1] - c[1])
+            .max((ey[0] - c[0]).hypot(ey[1] - c[1]));
+        let span = |v: f64, n: usize| {
+            let lo = ((v - r - 0.5).floor().max(0.0) as usize).min(n);
+            let hi = ((v + r + 0.5).ceil().max(0.0) as usize).min(n);
+            lo..hi
+        };
+        let mut out = Vec::new();
+        for y in span(c[1], self.height) {
+            for x in span(c[0], self.width) {
+                let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
+                if dx * dx + dy * dy <= r * r && self.crack[y * self.width + x] {
+                    out.push(y * self.width + x);
+                }
+            }
+        }
+        out
+    }
+
+    /// The length of the shortest path from `a` to `b` (plate mm) that stays on the crack map
+    /// (8-connected crack pixels, starting and ending within `reach_mm` of the points), mm on the
+    /// plate; `None` where no such path exists or an end lies off the map.
+    pub fn path_on_map_mm(&self, a: [f64; 2], b: [f64; 2], reach_mm: f64) -> Option<f64> {
+        use std::cmp::Reverse;
+        use std::collections::BinaryHeap;
+        let starts = self.crack_pixels_near(a, reach_mm);
+        let goals = self.crack_pixels_near(b, reach_mm);
+        if starts.is_empty() || goals.is_empty() {
+            return None;
+        }
+        let mut goal = vec![false; self.crack.len()];
+        for &g in &goals {
+            goal[g] = true;
+        }
+        // Dijkstra over pixels, lengths in plate mm between pixel centres.
+        let centre = |i: usize| {
+            let (x, y) = (i % self.width, i / self.width);
+            self.homography
+                .pixel_to_surface([x as f64 + 0.5, y as f64 + 0.5])
+                .ok()
+        };
+        let mut dist = vec![f64::INFINITY; self.crack.len()];
+        let mut heap = BinaryHeap::new();
+        for &s in &starts {
+            dist[s] = 0.0;
+            heap.push((Reverse(0u64), s));
+        }
+        while let Some((Reverse(d_bits), i)) = heap.pop() {
+            let d = f64::from_bits(d_bits);
+            if d > dist[i] {
+                continue;
+            }
+            if goal[i] {
+                return Some(d);
+            }
+            let (x, y) = ((i % self.width) as isize, (i / self.width) as isize);
+            let Some(pi) = centre(i) else { continue };
+            for (dx, dy) in [
+                (-1, -1),
+                (0, -1),
+                (1, -1),
+                (-1, 0),
+                (1, 0),
+                (-1, 1),
+                (0, 1),
+                (1, 1),
+            ] {
+                let (nx, ny) = (x + dx, y + dy);
+                if nx < 0 || ny < 0 || nx >= self.width as isize || ny >= self.height as isize {
+                    continue;
+                }
+                let j = ny as usize * self.width + nx as usize;
+                if !self.crack[j] {
+                    continue;
+                }
+                let Some(pj) = centre(j) else { continue };
+                let nd = d + (pj[0] - pi[0]).hypot(pj[1] - pi[1]);
+                if nd < dist[j] {
+                    dist[j] = nd;
+                    // Non-negative finite f64s order as their bits do.
+                    heap.push((Reverse(nd.to_bits()), j));
+                }
+            }
+        }
+        None
+    }
+}
+
 /// Whether the strokes across two confirmed pieces met one crack that the camera traced: the
 /// straight line between the points where they met it (the reports' positions) runs within
 /// [`PIECE_ANGLE_DEG`] of both pieces' directions and over the crack map, leaving it (by more
@@ -362,6 +462,35 @@ mod tests {
         let map = CrackMap::new(prob, Letterbox::new(200, 200, 200).unwrap()).unwrap();
         let h = Homography::from_matrix([[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]]);
         CrackTrace::new(&map, h.unwrap())
+    }
+
+    #[test]
+    fn the_path_over_the_crack_map_follows_its_bends_and_stops_at_its_gaps() {
+        // An L: along y = 20 from x = 10 to 50, then up x = 50 to y = 60; apart, y = 80 with a
+        // 6 mm gap at x = 30.
+        let mut cells: Vec<(usize, usize)> = (10..=50).map(|c| (20, c)).collect();
+        cells.extend((20..=60).map(|r| (r, 50)));
+        cells.extend((10..30).chain(36..60).map(|c| (80, c)));
+        let trace = trace_of(&cells);
+        // Around the corner: 40 + 40 mm give or take a cell, where the straight line is 56.6.
+        let around = trace
+            .path_on_map_mm([10.5, 20.5], [50.5, 60.5], 1.0)
+            .expect("the L is connected");
+        assert!((77.0..=81.0).contains(&around), "{around}");
+        assert_eq!(trace.path_on_map_mm([10.5, 20.5], [10.5, 80.5], 1.0), None);
+        assert_eq!(trace.path_on_map_mm([15.5, 80.5], [45.5, 80.5], 1.0), None);
+        // Off the map, outside the frame or not a number: no path.
+        assert_eq!(trace.path_on_map_mm([10.5, 40.5], [50.5, 60.5], 1.0), None);
+        assert_eq!(
+            trace.path_on_map_mm([-500.0, 20.5], [50.5, 60.5], 1.0),
+            None
+        );
+        assert_eq!(
+            trace.path_on_map_mm([f64::NAN, 20.5], [50.5, 60.5], 1.0),
+            None
+        );
+        let here = trace.path_on_map_mm([30.5, 20.5], [30.5, 20.5], 1.0);
+        assert_eq!(here, Some(0.0));
     }
 
     #[test]
