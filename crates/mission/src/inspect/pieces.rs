@@ -110,31 +110,43 @@ impl CrackTrace {
         }
     }
 
-    /// Whether a crack cell lies within `reach_mm` of the plate point `p` (mm); `false` where
-    /// `p` falls outside the frame.
-    pub fn near_crack(&self, p: [f64; 2], reach_mm: f64) -> bool {
+    /// The pixels (indices into the mask) whose centres lie within `reach_mm` of the plate
+    /// point `p` (mm), crack or not; none where `p` falls outside the frame.
+    fn pixels_near(&self, p: [f64; 2], reach_mm: f64) -> impl Iterator<Item = usize> + '_ {
         let px = |q: [f64; 2]| self.homography.surface_to_pixel(q).ok();
-        let (Some(c), Some(ex), Some(ey)) = (
+        let disc = match (
             px(p),
             px([p[0] + reach_mm, p[1]]),
             px([p[0], p[1] + reach_mm]),
-        ) else {
-            return false;
+        ) {
+            (Some(c), Some(ex), Some(ey)) => Some((
+                c,
+                (ex[0] - c[0])
+                    .hypot(ex[1] - c[1])
+                    .max((ey[0] - c[0]).hypot(ey[1] - c[1])),
+            )),
+            _ => None,
         };
-        let r = (ex[0] - c[0])
-            .hypot(ex[1] - c[1])
-            .max((ey[0] - c[0]).hypot(ey[1] - c[1]));
-        let span = |v: f64, n: usize| {
+        let span = |v: f64, r: f64, n: usize| {
             let lo = ((v - r - 0.5).floor().max(0.0) as usize).min(n);
             let hi = ((v + r + 0.5).ceil().max(0.0) as usize).min(n);
             lo..hi
         };
-        span(c[1], self.height).any(|y| {
-            span(c[0], self.width).any(|x| {
-                let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
-                dx * dx + dy * dy <= r * r && self.crack[y * self.width + x]
+        let (w, h) = (self.width, self.height);
+        disc.into_iter().flat_map(move |(c, r)| {
+            span(c[1], r, h).flat_map(move |y| {
+                span(c[0], r, w).filter_map(move |x| {
+                    let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
+                    (dx * dx + dy * dy <= r * r).then_some(y * w + x)
+                })
             })
         })
+    }
+
+    /// Whether a crack cell lies within `reach_mm` of the plate point `p` (mm); `false` where
+    /// `p` falls outside the frame.
+    pub fn near_crack(&self, p: [f64; 2], reach_mm: f64) -> bool {
+        self.pixels_near(p, reach_mm).any(|i| self.crack[i])
     }
 
     /// The longest stretch of the straight line from `a` to `b` (plate mm) with no crack cell
@@ -159,38 +171,6 @@ impl CrackTrace {
         }
         longest as f64 * length / steps as f64
     }
-}
-
-impl CrackTrace {
-    /// The crack pixels within `reach_mm` of the plate point `p`, as indices into the mask.
-    fn crack_pixels_near(&self, p: [f64; 2], reach_mm: f64) -> Vec<usize> {
-        let px = |q: [f64; 2]| self.homography.surface_to_pixel(q).ok();
-        let (Some(c), Some(ex), Some(ey)) = (
-            px(p),
-            px([p[0] + reach_mm, p[1]]),
-            px([p[0], p[1] + reach_mm]),
-        ) else {
-            return Vec::new();
-        };
-        let r = (ex[0] - c[0])
-            .hypot(ex[1] - c[1])
-            .max((ey[0] - c[0]).hypot(ey[1] - c[1]));
-        let span = |v: f64, n: usize| {
-            let lo = ((v - r - 0.5).floor().max(0.0) as usize).min(n);
-            let hi = ((v + r + 0.5).ceil().max(0.0) as usize).min(n);
-            lo..hi
-        };
-        let mut out = Vec::new();
-        for y in span(c[1], self.height) {
-            for x in span(c[0], self.width) {
-                let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
-                if dx * dx + dy * dy <= r * r && self.crack[y * self.width + x] {
-                    out.push(y * self.width + x);
-                }
-            }
-        }
-        out
-    }
 
     /// The length of the shortest path from `a` to `b` (plate mm) that stays on the crack map
     /// (8-connected crack pixels, starting and ending within `reach_mm` of the points), mm on the
@@ -198,8 +178,12 @@ impl CrackTrace {
     pub fn path_on_map_mm(&self, a: [f64; 2], b: [f64; 2], reach_mm: f64) -> Option<f64> {
         use std::cmp::Reverse;
         use std::collections::BinaryHeap;
-        let starts = self.crack_pixels_near(a, reach_mm);
-        let goals = self.crack_pixels_near(b, reach_mm);
+        let on_map = |p| {
+            self.pixels_near(p, reach_mm)
+                .filter(|&i| self.crack[i])
+                .collect::<Vec<_>>()
+        };
+        let (starts, goals) = (on_map(a), on_map(b));
         if starts.is_empty() || goals.is_empty() {
             return None;
         }
