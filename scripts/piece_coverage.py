@@ -48,7 +48,7 @@ def coverage(scenes, dump):
         to_mm = inverse(row["surface_to_image"])
         scene = json.load(open(os.path.join(scenes, f"scene-{seed}.json")))
         feats = [f for f in scene["features"] if "path" in f]
-        touches = [apply(to_mm, (x, y)) for x, y, _ in row["pieces"]]
+        touches = [apply(to_mm, (p[0], p[1])) for p in row["pieces"]]
         pieces += len(touches)
         on_nothing += sum(
             all(dist_poly(p, f["path"]) > REACH_MM + f["width_mm"] / 2 for f in feats)

@@ -1,8 +1,10 @@
 //! The pieces the detector's crack map gives on saved fused trials' frames, one JSON line per
-//! trial: `{"seed": S, "surface_to_image": H, "pieces": [[x, y, length], …]}` (the frame's
-//! homography from the trial's report; touch point and centre-line length, image pixels), for
+//! trial: `{"seed": S, "surface_to_image": H, "pieces": [[x, y, length, ax, ay, bx, by], …]}`
+//! (the frame's homography from the trial's report; touch point, centre-line length and the ends
+//! of its axis, image pixels), for
 //! `scripts/piece_coverage.py` (which cracks of each scene have a piece to touch):
-//! `cargo run --release -p crackbot-mission --example dump_pieces -- TRIALS_DIR... > pieces.jsonl`.
+//! `cargo run --release -p crackbot-mission --example dump_pieces -- [--detector MODEL.onnx]
+//! TRIALS_DIR... > pieces.jsonl` (default: the committed detector).
 
 use std::path::Path;
 
@@ -20,8 +22,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         min_area_fraction: 0.0,
         ..PostprocessParams::default()
     };
-    let mut detector = build_detector(&DetectorChoice::default(), post)?;
-    for dir in std::env::args().skip(1) {
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let mut choice = DetectorChoice::default();
+    if let Some(k) = args.iter().position(|a| a == "--detector") {
+        let model = args.get(k + 1).ok_or("--detector needs a model file")?;
+        choice.model = Some(model.into());
+        args.drain(k..k + 2);
+    }
+    let mut detector = build_detector(&choice, post)?;
+    for dir in args {
         for SavedTrial {
             folder,
             seed,
@@ -30,11 +39,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         {
             let image = image::open(folder.join("frame.png"))?.to_rgb8();
             let (detections, _) = detector.detect_with_map(&image)?;
-            let pieces: Vec<[f32; 3]> = detections
+            let pieces: Vec<[f32; 7]> = detections
                 .iter()
                 .filter_map(|d| d.shape.as_ref())
                 .flat_map(|s| s.pieces.iter())
-                .map(|p| [p.touch[0], p.touch[1], p.length_px])
+                .map(|p| {
+                    let [[ax, ay], [bx, by]] = p.axis;
+                    [p.touch[0], p.touch[1], p.length_px, ax, ay, bx, by]
+                })
                 .collect();
             let h = &report["frame"]["surface_to_image"];
             println!(
