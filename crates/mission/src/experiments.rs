@@ -183,6 +183,12 @@ impl FingerBudget {
         (right, touched)
     }
 
+    /// [`Self::right_calls`] as a share, 0–1 (`None` when the finger touched nothing).
+    pub fn right_call_share(&self) -> Option<f64> {
+        let (right, touched) = self.right_calls();
+        (touched > 0).then(|| right as f64 / touched as f64)
+    }
+
     fn add(&mut self, other: &FingerBudget) {
         for (a, b) in [
             (&mut self.crack, other.crack),
@@ -601,10 +607,9 @@ pub fn detection_trials(
         finger.add(&t.finger);
     }
     let explored: Vec<f64> = trials.iter().map(|t| t.fused_exploration_s).collect();
-    let (right, touched) = finger.right_calls();
     Ok(TrialsReport {
         finger,
-        finger_right_calls: (touched > 0).then(|| right as f64 / touched as f64),
+        finger_right_calls: finger.right_call_share(),
         vision_totals: Totals::of(trials.iter().map(|t| &t.vision)),
         fused_totals: Totals::of(trials.iter().map(|t| &t.fused)),
         fused_exploration_s: Spread::of(&explored),
@@ -851,10 +856,7 @@ mod tests {
             fused_extent_width_mae_mm: None,
             paper: [46.66, 92.85],
             finger,
-            finger_right_calls: {
-                let (right, touched) = finger.right_calls();
-                (touched > 0).then(|| right as f64 / touched as f64)
-            },
+            finger_right_calls: finger.right_call_share(),
             vision_totals: Totals::default(),
             fused_totals: Totals::default(),
             fused_exploration_s: None,
@@ -1104,6 +1106,8 @@ mod tests {
         // The paper's count: the crack confirmed, the screw and the bare plate rejected are
         // right; the decoy confirmed is wrong.
         assert_eq!(b.right_calls(), (3, 4));
+        assert_eq!(b.right_call_share(), Some(0.75));
+        assert_eq!(FingerBudget::default().right_call_share(), None);
         let mut t = empty_report(0.5, 0.5, b);
         assert!(
             t.markdown()
