@@ -465,7 +465,7 @@ impl TrialsReport {
         out += &format!(
             "| the finger's right calls on the candidates it touched (how the paper counts its {:.2} %: 13 of 14) | – | {} |\n",
             self.paper[1],
-            self.finger_right_calls.map_or_else(
+            self.finger.right_call_share().map_or_else(
                 || "– (nothing touched)".to_string(),
                 |v| format!("{right} of {touched}, {:.1} %", 100.0 * v)
             )

@@ -191,12 +191,16 @@ impl CrackTrace {
         for &g in &goals {
             goal[g] = true;
         }
-        // Dijkstra over pixels, lengths in plate mm between pixel centres.
-        let centre = |i: usize| {
-            let (x, y) = (i % self.width, i / self.width);
-            self.homography
-                .pixel_to_surface([x as f64 + 0.5, y as f64 + 0.5])
-                .ok()
+        // Dijkstra over pixels, lengths in plate mm between pixel centres (each pixel mapped to
+        // the plate once, when first reached).
+        let mut centres: Vec<Option<Option<[f64; 2]>>> = vec![None; self.crack.len()];
+        let mut centre = |i: usize| {
+            *centres[i].get_or_insert_with(|| {
+                let (x, y) = (i % self.width, i / self.width);
+                self.homography
+                    .pixel_to_surface([x as f64 + 0.5, y as f64 + 0.5])
+                    .ok()
+            })
         };
         let mut dist = vec![f64::INFINITY; self.crack.len()];
         let mut heap = BinaryHeap::new();
