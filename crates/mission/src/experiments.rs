@@ -223,6 +223,79 @@ fn segment_distance(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
     .fold(f64::INFINITY, f64::min)
 }
 
+/// Lines kept at least this far, edge to edge, from every other feature of their scene stand
+/// apart, mm: the paper's plates, a crack or a print alone under the finger. A stroke reaches
+/// [`crate::inspect::TOUCH_MARGIN_MM`] plus the finger's reach (2.4 mm) beyond the edge of the line
+/// it crosses, so a feature beyond that cannot share its stroke; the crack map's detections join
+/// lines within about twice its dilation (0.02 of the frame, 4 mm on the trial plates). 5 mm is
+/// the first, rounded up; the trials split their score at it ([`ClearanceSplit`]).
+pub const APART_MM: f64 = 5.0;
+
+/// Edge-to-edge gap between a crack or printed decoy and another feature, mm (0 where they touch
+/// or cross); `None` where neither is a line (a screw beside a bump matters to no stroke).
+pub fn feature_gap_mm(a: &Feature, b: &Feature) -> Option<f64> {
+    let line = |f: &Feature| match f {
+        Feature::Crack { path, width_mm, .. } | Feature::Decoy { path, width_mm, .. } => {
+            Some((path.clone(), width_mm / 2.0))
+        }
+        _ => None,
+    };
+    let (path, half, other) = match (line(a), line(b)) {
+        (Some((pa, ha)), Some((pb, hb))) => {
+            let d = pa
+                .windows(2)
+                .flat_map(|s| {
+                    pb.windows(2)
+                        .map(move |t| segment_distance(s[0], s[1], t[0], t[1]))
+                })
+                .fold(f64::INFINITY, f64::min);
+            return Some((d - ha - hb).max(0.0));
+        }
+        (Some((p, h)), None) => (p, h, b),
+        (None, Some((p, h))) => (p, h, a),
+        (None, None) => return None,
+    };
+    let gap = match other {
+        Feature::Bump {
+            centre, radius_mm, ..
+        } => distance_to_polyline(&path, *centre) - radius_mm,
+        Feature::Screw {
+            centre,
+            head_diameter_mm,
+            ..
+        } => distance_to_polyline(&path, *centre) - head_diameter_mm / 2.0,
+        Feature::Wavy { min, max, .. } => {
+            let inside = |p: &[f64; 2]| {
+                (min[0]..=max[0]).contains(&p[0]) && (min[1]..=max[1]).contains(&p[1])
+            };
+            if path.iter().any(inside) {
+                0.0
+            } else {
+                let corners = [*min, [max[0], min[1]], *max, [min[0], max[1]]];
+                path.windows(2)
+                    .flat_map(|s| {
+                        (0..4).map(move |k| {
+                            segment_distance(s[0], s[1], corners[k], corners[(k + 1) % 4])
+                        })
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            }
+        }
+        // Two lines were measured above.
+        Feature::Crack { .. } | Feature::Decoy { .. } => return None,
+    };
+    Some((gap - half).max(0.0))
+}
+
+/// The smallest [`feature_gap_mm`] of a scene: how close its lines come to anything else, mm;
+/// `None` with at most one line and nothing else.
+pub fn clearance_mm(scene: &Scene) -> Option<f64> {
+    let f = &scene.features;
+    (0..f.len())
+        .flat_map(|i| (i + 1..f.len()).filter_map(move |j| feature_gap_mm(&f[i], &f[j])))
+        .reduce(f64::min)
+}
+
 /// Whether the stroke `a`–`b` crosses (or touches) the feature `f`.
 fn stroke_meets(a: [f64; 2], b: [f64; 2], f: &Feature) -> bool {
     let polyline = |path: &[[f64; 2]], half_width: f64| {
@@ -315,6 +388,9 @@ pub struct Trial {
     pub fused_exploration_s: f64,
     /// What the fused mission's finger said about what it touched.
     pub finger: FingerBudget,
+    /// How close the scene's lines come to other features, mm ([`clearance_mm`]; `None`: one
+    /// line alone).
+    pub clearance_mm: Option<f64>,
 }
 
 /// The goal for a fused mission's exploration, s (the paper's vision + tactile trials:
@@ -339,6 +415,49 @@ impl Totals {
             false_reports: t.false_reports + s.false_reports,
             missed: t.missed + s.missed,
         })
+    }
+}
+
+/// The fused score split at [`APART_MM`]: scenes whose lines stand apart from every other
+/// feature (as on the paper's plates) against scenes where a line touches, crosses or runs
+/// beside another line, a screw, a bump or a wavy patch.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct ClearanceSplit {
+    /// Scenes whose lines keep [`APART_MM`] from everything else (or one line alone).
+    pub apart_scenes: usize,
+    /// Their fused correct detections, the mean over those trials (`None`: no such scene).
+    pub apart_correct: Option<f64>,
+    /// Their fused reports.
+    pub apart: Totals,
+    /// The other scenes.
+    pub close_scenes: usize,
+    /// Their fused correct detections (`None`: no such scene).
+    pub close_correct: Option<f64>,
+    /// Their fused reports.
+    pub close: Totals,
+}
+
+impl ClearanceSplit {
+    /// The split of `trials`.
+    pub fn of(trials: &[Trial]) -> Self {
+        let apart = |t: &&Trial| t.clearance_mm.is_none_or(|c| c >= APART_MM);
+        let group = |keep: &dyn Fn(&&Trial) -> bool| {
+            let g: Vec<&Trial> = trials.iter().filter(keep).collect();
+            let share = (!g.is_empty()).then(|| {
+                g.iter().map(|t| t.fused.correct_fraction()).sum::<f64>() / g.len() as f64
+            });
+            (g.len(), share, Totals::of(g.iter().map(|t| &t.fused)))
+        };
+        let (apart_scenes, apart_correct, apart_totals) = group(&apart);
+        let (close_scenes, close_correct, close_totals) = group(&|t| !apart(t));
+        ClearanceSplit {
+            apart_scenes,
+            apart_correct,
+            apart: apart_totals,
+            close_scenes,
+            close_correct,
+            close: close_totals,
+        }
     }
 }
 
@@ -410,6 +529,8 @@ pub struct TrialsReport {
     pub fused_exploration_s: Option<Spread>,
     /// Fused missions that explored within [`EXPLORATION_GOAL_S`].
     pub fused_within_goal: usize,
+    /// The fused score of scenes whose lines stand apart against the others.
+    pub fused_by_clearance: ClearanceSplit,
     /// Missions that failed once and were run again (their failed folders end in `-failed`).
     pub retried: Vec<RetriedMission>,
 }
@@ -469,6 +590,29 @@ impl TrialsReport {
                 || "– (nothing touched)".to_string(),
                 |v| format!("{right} of {touched}, {:.1} %", 100.0 * v)
             )
+        );
+        let split = &self.fused_by_clearance;
+        let share = |correct: Option<f64>, t: &Totals| {
+            correct.map_or_else(
+                || "– (no such scene)".to_string(),
+                |v| {
+                    format!(
+                        "{:.1} % ({} / {} / {})",
+                        100.0 * v,
+                        t.correct,
+                        t.false_reports,
+                        t.missed
+                    )
+                },
+            )
+        };
+        out += &format!(
+            "| correct detections where every line keeps {APART_MM} mm from every other feature, as on the paper's plates ({} of {} scenes; correct / false / missed) | – | {} |\n| correct detections where a line touches, crosses or runs within {APART_MM} mm of another feature ({} scenes) | – | {} |\n",
+            split.apart_scenes,
+            self.trials.len(),
+            share(split.apart_correct, &split.apart),
+            split.close_scenes,
+            share(split.close_correct, &split.close),
         );
         let f = &self.finger;
         let cracks: usize = self.trials.iter().map(|t| t.cracks).sum();
@@ -608,6 +752,7 @@ pub fn detection_trials(
     }
     let explored: Vec<f64> = trials.iter().map(|t| t.fused_exploration_s).collect();
     Ok(TrialsReport {
+        fused_by_clearance: ClearanceSplit::of(&trials),
         finger,
         finger_right_calls: finger.right_call_share(),
         vision_totals: Totals::of(trials.iter().map(|t| &t.vision)),
@@ -655,6 +800,7 @@ fn one_trial(
         fused: score(&scene, &fused),
         fused_exploration_s: fused.exploration_s,
         finger: finger_budget(&scene, &fused),
+        clearance_mm: clearance_mm(&scene),
     })
 }
 
@@ -861,6 +1007,7 @@ mod tests {
             fused_totals: Totals::default(),
             fused_exploration_s: None,
             fused_within_goal: 0,
+            fused_by_clearance: ClearanceSplit::default(),
             retried: Vec::new(),
         }
     }
@@ -1156,5 +1303,107 @@ mod tests {
         let none = score(&scene, &report_with(&[]));
         assert_eq!((none.correct, none.missed), (0, 4));
         assert_eq!(none.correct_fraction(), 0.0);
+    }
+
+    #[test]
+    fn scenes_split_by_how_close_their_lines_come_to_other_features() {
+        let crack = |path: Vec<[f64; 2]>, width_mm: f64| Feature::Crack {
+            path,
+            width_mm,
+            depth_mm: 1.0,
+            edge_radius_mm: 0.2,
+            wall_angle_deg: 90.0,
+        };
+        let decoy = |path: Vec<[f64; 2]>, width_mm: f64| Feature::Decoy {
+            path,
+            width_mm,
+            reflectivity: 0.4,
+        };
+        let a = crack(vec![[10.0, 10.0], [50.0, 10.0]], 2.0);
+        // Parallel 8 mm higher, 1 mm wide: 8 - 1 - 0.5 = 6.5 mm edge to edge.
+        let b = decoy(vec![[10.0, 18.0], [50.0, 18.0]], 1.0);
+        assert!((feature_gap_mm(&a, &b).unwrap() - 6.5).abs() < 1e-9);
+        // Crossing: 0; the order of the pair does not matter.
+        let c = crack(vec![[30.0, 0.0], [30.0, 30.0]], 0.5);
+        assert_eq!(feature_gap_mm(&a, &c), Some(0.0));
+        assert_eq!(feature_gap_mm(&c, &a), Some(0.0));
+        // A screw 10 mm below the crack's line, head 6 mm: 10 - 3 - 1 = 6 mm.
+        let screw = Feature::Screw {
+            centre: [30.0, 0.0],
+            head_diameter_mm: 6.0,
+            height_mm: 2.0,
+        };
+        assert!((feature_gap_mm(&screw, &a).unwrap() - 6.0).abs() < 1e-9);
+        // A bump overlapping the line: 0, not negative.
+        let bump = Feature::Bump {
+            centre: [30.0, 12.0],
+            radius_mm: 5.0,
+            height_mm: 1.0,
+        };
+        assert_eq!(feature_gap_mm(&a, &bump), Some(0.0));
+        assert_eq!(feature_gap_mm(&screw, &bump), None, "neither is a line");
+        // A wavy patch 4 mm below the line (edge 3 mm), and one the line runs through.
+        let wavy = |min: [f64; 2], max: [f64; 2]| Feature::Wavy {
+            min,
+            max,
+            amplitude_mm: 0.5,
+            period_mm: 5.0,
+            direction_deg: 0.0,
+        };
+        assert!(
+            (feature_gap_mm(&a, &wavy([20.0, -10.0], [40.0, 6.0])).unwrap() - 3.0).abs() < 1e-9
+        );
+        assert_eq!(
+            feature_gap_mm(&a, &wavy([0.0, 0.0], [20.0, 20.0])),
+            Some(0.0)
+        );
+        // A scene's clearance is its smallest gap; one line alone has none.
+        let mut scene = Scene::builtin_default();
+        scene.features = vec![a.clone()];
+        assert_eq!(clearance_mm(&scene), None);
+        scene.features = vec![a.clone(), b.clone(), screw.clone()];
+        assert!((clearance_mm(&scene).unwrap() - 6.0).abs() < 1e-9);
+        scene.features.push(c);
+        assert_eq!(clearance_mm(&scene), Some(0.0));
+        // Trials split at APART_MM, each group's share the mean over its trials.
+        let trial = |seed, clearance_mm, correct, missed| Trial {
+            seed,
+            cracks: correct + missed,
+            decoys: 0,
+            vision: Score::default(),
+            fused: Score {
+                cracks: correct + missed,
+                correct,
+                missed,
+                ..Score::default()
+            },
+            fused_exploration_s: 10.0,
+            finger: FingerBudget::default(),
+            clearance_mm,
+        };
+        let trials = [
+            trial(1, None, 1, 0),
+            trial(2, Some(APART_MM), 2, 0),
+            trial(3, Some(0.0), 1, 1),
+            trial(4, Some(4.9), 0, 2),
+        ];
+        let split = ClearanceSplit::of(&trials);
+        assert_eq!((split.apart_scenes, split.close_scenes), (2, 2));
+        assert_eq!(split.apart_correct, Some(1.0));
+        assert_eq!(split.close_correct, Some(0.25));
+        assert_eq!((split.close.correct, split.close.missed), (1, 3));
+        let mut t = empty_report(0.5, 0.5, FingerBudget::default());
+        assert!(
+            t.markdown()
+                .contains("(0 of 0 scenes; correct / false / missed) | – | – (no such scene) |"),
+            "{}",
+            t.markdown()
+        );
+        t.fused_by_clearance = split;
+        assert!(
+            t.markdown().contains("| – | 25.0 % (1 / 0 / 3) |"),
+            "{}",
+            t.markdown()
+        );
     }
 }
