@@ -29,6 +29,11 @@
 //! bump, nothing) against whether the finger confirmed it; and the cracks no stroke crossed,
 //! which touch could never find. It separates what the finger gets wrong from what vision never
 //! proposed.
+//!
+//! **Lines apart or in a tangle** ([`ClearanceSplit`]). The random scenes let features overlap;
+//! the paper's plates hold one crack or print under the finger at a time. The trials split the
+//! fused figure between scenes whose lines keep [`APART_MM`] from every other feature
+//! ([`clearance_mm`]) and the rest, so a reader sees which kind of scene the errors come from.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
