@@ -300,7 +300,7 @@ fn dip_confidence_in_range(c: f64) -> Result<f64, MissionError> {
 }
 
 /// A "no crack" verdict whose confidence is below this is doubted by
-/// [`doubted_no_crack_with_dip`] even where the model's own gate lets it stand (0.5 for the
+/// `doubted_no_crack_with_dip` even where the model's own gate lets it stand (0.5 for the
 /// committed recognition model). Since the committed model learned the simulator's plates too
 /// (2026-11-27, fifteenth session), it no longer doubts every simulated slide as novel, and the
 /// thinnest cracks of the trial scenes (0.5–0.7 mm, thinner than any plate it learned) come out

@@ -24,7 +24,7 @@ use crackbot_vision::crack_map::{CrackMap, MAP_THRESHOLD};
 use super::{Candidate, ReportedCrack};
 
 /// Longest stretch of the line between two crossings that may run off the crack map for the
-/// two pieces to be one crack, mm (see [`traced_between`]): two map cells. On the trial scenes
+/// two pieces to be one crack, mm (see `traced_between`): two map cells. On the trial scenes
 /// 4000–5119 (`examples/trace_pairs.rs`) the lines between crossings of one crack ran off the
 /// map by 0–2.0 mm, those between two cracks along both pieces by 3.5 mm and more, but for
 /// cracks that touch or cross (`crates/mission/EXPERIMENTS.md`, "Pieces joined where the crack
