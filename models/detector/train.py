@@ -2,7 +2,7 @@
 supervision) and the simulator's rendered plates with exact masks (`crackbot-lab sim detector-set`).
 
 Wall-clock budgeted: cosine LR over --minutes. The EMA weights are checkpointed; model selection uses the real val
-splits only (val_all mAP@0.5 through the box rule of seg_post.py), never the unseen rendered scenes.
+splits only (val_all mAP@0.5 through the box rule of contract.py), never the unseen rendered scenes.
 """
 from __future__ import annotations
 

@@ -18,8 +18,8 @@
 //!    detections are sorted by score (ties keep component order) and at most `max_detections`
 //!    are kept.
 //!
-//! `models/detector/seg_post.py` is the independent (numpy + scipy) implementation of the same
-//! rule; `tests/onnx_reference.rs` checks the two agree on real photos.
+//! `models/detector/contract.py` is the independent (numpy + scipy) implementation of the same
+//! rule; `crates/vision/tests/onnx_reference.rs` checks the two agree on real photos.
 //!
 //! **Where to touch** ([`CrackShape::pieces`]). The dilation that joins a broken crack also joins
 //! cracks that run close together or cross, and a component's main axis then passes between
