@@ -239,12 +239,14 @@ pub const APART_MM: f64 = 5.0;
 /// Edge-to-edge gap between a crack or printed decoy and another feature, mm (0 where they touch
 /// or cross); `None` where neither is a line (a screw beside a bump matters to no stroke).
 pub fn feature_gap_mm(a: &Feature, b: &Feature) -> Option<f64> {
-    let line = |f: &Feature| match f {
-        Feature::Crack { path, width_mm, .. } | Feature::Decoy { path, width_mm, .. } => {
-            Some((path.clone(), width_mm / 2.0))
+    fn line(f: &Feature) -> Option<(&[[f64; 2]], f64)> {
+        match f {
+            Feature::Crack { path, width_mm, .. } | Feature::Decoy { path, width_mm, .. } => {
+                Some((path.as_slice(), width_mm / 2.0))
+            }
+            _ => None,
         }
-        _ => None,
-    };
+    }
     let (path, half, other) = match (line(a), line(b)) {
         (Some((pa, ha)), Some((pb, hb))) => {
             let d = pa
@@ -263,12 +265,12 @@ pub fn feature_gap_mm(a: &Feature, b: &Feature) -> Option<f64> {
     let gap = match other {
         Feature::Bump {
             centre, radius_mm, ..
-        } => distance_to_polyline(&path, *centre) - radius_mm,
+        } => distance_to_polyline(path, *centre) - radius_mm,
         Feature::Screw {
             centre,
             head_diameter_mm,
             ..
-        } => distance_to_polyline(&path, *centre) - head_diameter_mm / 2.0,
+        } => distance_to_polyline(path, *centre) - head_diameter_mm / 2.0,
         Feature::Wavy { min, max, .. } => {
             let inside = |p: &[f64; 2]| {
                 (min[0]..=max[0]).contains(&p[0]) && (min[1]..=max[1]).contains(&p[1])
@@ -393,8 +395,8 @@ pub struct Trial {
     pub fused_exploration_s: f64,
     /// What the fused mission's finger said about what it touched.
     pub finger: FingerBudget,
-    /// How close the scene's lines come to other features, mm ([`clearance_mm`]; `None`: one
-    /// line alone).
+    /// How close the scene's lines come to other features, mm ([`clearance_mm`]; `None`: at
+    /// most one line and nothing else).
     pub clearance_mm: Option<f64>,
 }
 
