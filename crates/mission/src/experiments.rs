@@ -228,6 +228,21 @@ fn segment_distance(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
     .fold(f64::INFINITY, f64::min)
 }
 
+/// Least distance between two polylines (0 where they cross), mm.
+fn polyline_distance(p: &[[f64; 2]], q: &[[f64; 2]]) -> f64 {
+    p.windows(2)
+        .flat_map(|s| {
+            q.windows(2)
+                .map(move |t| segment_distance(s[0], s[1], t[0], t[1]))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Whether `p` lies in the axis-aligned rectangle `min`–`max` (edges included).
+fn in_rectangle(min: [f64; 2], max: [f64; 2], p: [f64; 2]) -> bool {
+    (min[0]..=max[0]).contains(&p[0]) && (min[1]..=max[1]).contains(&p[1])
+}
+
 /// Lines kept at least this far, edge to edge, from every other feature of their scene stand
 /// apart, mm: the paper's plates, a crack or a print alone under the finger. A stroke reaches
 /// [`crate::inspect::TOUCH_MARGIN_MM`] plus the finger's reach (2.4 mm) beyond the edge of the line
@@ -249,14 +264,7 @@ pub fn feature_gap_mm(a: &Feature, b: &Feature) -> Option<f64> {
     }
     let (path, half, other) = match (line(a), line(b)) {
         (Some((pa, ha)), Some((pb, hb))) => {
-            let d = pa
-                .windows(2)
-                .flat_map(|s| {
-                    pb.windows(2)
-                        .map(move |t| segment_distance(s[0], s[1], t[0], t[1]))
-                })
-                .fold(f64::INFINITY, f64::min);
-            return Some((d - ha - hb).max(0.0));
+            return Some((polyline_distance(pa, pb) - ha - hb).max(0.0));
         }
         (Some((p, h)), None) => (p, h, b),
         (None, Some((p, h))) => (p, h, a),
@@ -272,20 +280,11 @@ pub fn feature_gap_mm(a: &Feature, b: &Feature) -> Option<f64> {
             ..
         } => distance_to_polyline(path, *centre) - head_diameter_mm / 2.0,
         Feature::Wavy { min, max, .. } => {
-            let inside = |p: &[f64; 2]| {
-                (min[0]..=max[0]).contains(&p[0]) && (min[1]..=max[1]).contains(&p[1])
-            };
-            if path.iter().any(inside) {
+            if path.iter().any(|&p| in_rectangle(*min, *max, p)) {
                 0.0
             } else {
-                let corners = [*min, [max[0], min[1]], *max, [min[0], max[1]]];
-                path.windows(2)
-                    .flat_map(|s| {
-                        (0..4).map(move |k| {
-                            segment_distance(s[0], s[1], corners[k], corners[(k + 1) % 4])
-                        })
-                    })
-                    .fold(f64::INFINITY, f64::min)
+                let outline = [*min, [max[0], min[1]], *max, [min[0], max[1]], *min];
+                polyline_distance(path, &outline)
             }
         }
         // Two lines were measured above.
@@ -326,8 +325,11 @@ fn stroke_meets(a: [f64; 2], b: [f64; 2], f: &Feature) -> bool {
             let n = ((b[0] - a[0]).hypot(b[1] - a[1]) / 0.5).ceil().max(1.0) as usize;
             (0..=n).any(|k| {
                 let t = k as f64 / n as f64;
-                let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
-                (min[0]..=max[0]).contains(&p[0]) && (min[1]..=max[1]).contains(&p[1])
+                in_rectangle(
+                    *min,
+                    *max,
+                    [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])],
+                )
             })
         }
     }
