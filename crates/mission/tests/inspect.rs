@@ -784,6 +784,51 @@ fn a_narrow_print_in_doubt_is_judged_by_its_floor_ratio_too() {
 }
 
 #[test]
+fn a_crack_whose_raised_passes_reach_a_print_past_its_stroke_is_still_a_crack() {
+    use crackbot_mission::experiments::{as_printed, trial_params};
+    use crackbot_sim::surface::distance_to_polyline;
+    use crackbot_sim::Feature;
+    use crackbot_tactile::print_check::PRINT_RATIO;
+    // Trial scene 11998: a 0.77 mm crack whose stroke ends 1.7 mm short of a 3.5 mm print.
+    // The raised passes over it overrun the stroke and their fibre looks ahead: those towards
+    // the print reached it, its dip was their deepest point, and their floor ratios read
+    // 1.15-1.17 against the profile fit's 0.81-0.86. In doubt, the mean of the two (0.91)
+    // rejected the crack as a print (real time, 2026-11-29). The raised dip is now the one
+    // that lines up with the contact dip.
+    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 11998).unwrap());
+    let path = scene
+        .features
+        .iter()
+        .find_map(|f| match f {
+            Feature::Crack { path, width_mm, .. } if *width_mm < 1.0 => Some(path.clone()),
+            _ => None,
+        })
+        .expect("the scene's 0.77 mm crack");
+    let on_it = |p: [f64; 2]| distance_to_polyline(&path, p) < 3.0;
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = InspectConfig::new(scene.clone(), dir.path());
+    c.speedup = 8.0;
+    let r = mission(&c).expect("mission");
+    for k in r.rejected.iter().filter(|k| on_it(k.position_mm)) {
+        assert!(!k.felt.starts_with("a print"), "{k:?}");
+    }
+    let crack = r
+        .cracks
+        .iter()
+        .find(|k| on_it(k.position_mm))
+        .unwrap_or_else(|| panic!("the crack is not reported: {:#?}", r.rejected));
+    let evidence = &crack.evidence;
+    assert!(
+        evidence.height_ratio.is_some_and(|h| h < PRINT_RATIO),
+        "{evidence:?}"
+    );
+    assert!(
+        evidence.floor_ratios.iter().flatten().all(|&f| f < 1.0),
+        "{evidence:?}"
+    );
+}
+
+#[test]
 fn a_stroke_across_two_cracks_reports_its_candidate_where_its_own_dip_is() {
     use crackbot_mission::experiments::{as_printed, score, trial_params};
     // Trial scene 9570: the stroke across a 0.76 mm crack's candidate also runs into a 3.6 mm

@@ -32,6 +32,8 @@
 //!   few counts: at 2 mm the flat surface is only about 27 counts above it.
 //! * A pass at a known height over the same line; the arm must not meet anything on the way
 //!   (the check is meant for candidates the finger already slid over and found no bump on).
+//! * The raised pass's dip is the one that lines up with the contact dip, not its deepest
+//!   point: a raised pass may reach other dark things beside the line ([`print_ratios`]).
 //! * It does not tell a crack from a groove or step of the same depth, nor see a crack filled
 //!   with dark dirt as anything but ink.
 
@@ -93,6 +95,20 @@ fn err(reason: String) -> TactileError {
 /// that is not finite, a pass that does not move, or a baseline less than
 /// [`MIN_SIGNAL_COUNTS`] above `dark`.
 pub fn dip_area(p: &[f64], along: &[f64], dark: f64) -> Result<DipArea, TactileError> {
+    dip_area_within(p, along, dark, None)
+}
+
+/// As [`dip_area`], with the dip's floor searched only among the samples within `within` (mm
+/// along the pass; the whole pass when `None` or when no sample lies there): where a pass
+/// also crosses something else dark, the dip of the line being judged rather than the deepest.
+///
+/// Errors as [`dip_area`].
+pub fn dip_area_within(
+    p: &[f64],
+    along: &[f64],
+    dark: f64,
+    within: Option<[f64; 2]>,
+) -> Result<DipArea, TactileError> {
     if p.len() != along.len() {
         return Err(err(format!(
             "{} proximity samples but {} positions",
@@ -141,11 +157,17 @@ pub fn dip_area(p: &[f64], along: &[f64], dark: f64) -> Result<DipArea, TactileE
             sum / (b - a) as f64
         })
         .collect();
-    let (m, floor) = smooth
-        .iter()
-        .copied()
-        .enumerate()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
+    let searched = |xi: f64| within.is_none_or(|[lo, hi]| xi >= lo && xi <= hi);
+    let deepest = |keep: &dyn Fn(f64) -> bool| {
+        smooth
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|&(i, _)| keep(x[i]))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    };
+    let (m, floor) = deepest(&searched)
+        .or_else(|| deepest(&|_| true))
         .unwrap_or((0, v[0]));
     // The sound surface's level (and, below, the dip's baseline) from the samples near the
     // floor only: a bump or a screw head farther along brightens a raised pass and would raise
@@ -234,6 +256,9 @@ pub const SATURATED_SHARE: f64 = 0.85;
 
 /// Spacing of the grid the passes' dip profiles are binned onto for [`profile_ratio`], mm.
 const GRID_MM: f64 = 0.05;
+/// How far beyond the contact dip's window, placed where the profile fit lines the two passes
+/// up, the raised dip's floor is searched for, mm ([`print_ratios`]).
+pub const RAISED_DIP_SEARCH_MM: f64 = 0.5;
 /// Largest shift between the contact and the raised dip [`profile_ratio`] searches, mm (the
 /// fibre looks ahead along the motion, so passes in opposite directions see the dip about
 /// twice its look-ahead apart).
@@ -291,17 +316,26 @@ pub fn profile_ratio(
 ) -> Result<Option<f64>, TactileError> {
     let dc = dip_area(contact.0, contact.1, dark)?;
     let dr = dip_area(raised.0, raised.1, dark)?;
-    Ok(fit_profiles(contact, raised, &dc, &dr, dark))
+    Ok(fit_profiles(contact, raised, &dc, &dr, dark).map(|fit| fit.factor))
 }
 
-/// [`profile_ratio`] of two passes whose dips are already found.
+/// The least-squares fit of a raised dip onto a contact dip ([`profile_ratio`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ProfileFit {
+    /// The factor `k` in `raised(x) ≈ k · contact(x + shift)`.
+    factor: f64,
+    /// Where the raised pass sees the contact dip, relative to the contact pass, mm.
+    shift_mm: f64,
+}
+
+/// [`profile_ratio`]'s fit of two passes whose dips are already found.
 fn fit_profiles(
     contact: (&[f64], &[f64]),
     raised: (&[f64], &[f64]),
     dc: &DipArea,
     dr: &DipArea,
     dark: f64,
-) -> Option<f64> {
+) -> Option<ProfileFit> {
     if dc.relative_depth < 0.05 {
         return None;
     }
@@ -337,7 +371,7 @@ fn fit_profiles(
     };
     let max_shift = (MAX_SHIFT_MM / GRID_MM).round() as i64;
     let offset = ((c0 - r0) / GRID_MM).round() as i64;
-    let mut best: Option<(f64, f64)> = None;
+    let mut best: Option<(f64, ProfileFit)> = None;
     for s in -max_shift..=max_shift {
         let (mut rc, mut cc, mut rr, mut n) = (0.0, 0.0, 0.0, 0usize);
         for (i, &cv) in c.iter().enumerate().take(w1 + 1).skip(w0) {
@@ -360,10 +394,14 @@ fn fit_profiles(
         }
         let corr = rc / (cc * rr).sqrt();
         if best.is_none_or(|(b, _)| corr > b) {
-            best = Some((corr, rc / (cc - n as f64 * noise).max(0.5 * cc)));
+            let fit = ProfileFit {
+                factor: rc / (cc - n as f64 * noise).max(0.5 * cc),
+                shift_mm: s as f64 * GRID_MM,
+            };
+            best = Some((corr, fit));
         }
     }
-    best.map(|(_, k)| k)
+    best.map(|(_, fit)| fit)
 }
 
 /// The ratio the robot judges a candidate by: [`profile_ratio`], except where the contact dip
@@ -398,6 +436,20 @@ pub struct PrintRatios {
 
 /// [`print_ratio`] and [`floor_ratio`] of the same passes, each pass's dip found once.
 ///
+/// The raised pass's dip is the one the profile fit lines up with the contact dip: its floor
+/// is searched within the contact dip's window, moved by the fit's shift, and
+/// [`RAISED_DIP_SEARCH_MM`] either side ([`dip_area_within`]); the fit is made again against
+/// that dip where it is not the pass's deepest. A raised pass overruns the stroke and its fibre
+/// looks ahead, so it can reach a line or shadow beside the one judged: its deepest point
+/// there set the floor ratio of a 0.77 mm crack beside a 3.5 mm print to 1.15–1.17 on two of
+/// four passes, and the crack was rejected as a print (trial 11998;
+/// `crates/mission/EXPERIMENTS.md`, "The raised dip where the fit puts it"). Where the fit
+/// finds no overlap, the deepest point stands; so it does where the contact dip has reached
+/// the dark level ([`SATURATED_SHARE`]): a flat-bottomed contact dip lines up loosely with a
+/// rounded raised one, and searched where the fit put it, the raised floors of wide cracks
+/// read 0.52–0.66 (0.76–0.85 at the deepest point) and a 1.8 mm print's 0.47, a crack; a line
+/// that dark is the deepest thing its raised pass meets.
+///
 /// Errors as [`dip_area`] for either pass.
 pub fn print_ratios(
     contact: (&[f64], &[f64]),
@@ -405,14 +457,38 @@ pub fn print_ratios(
     dark: f64,
 ) -> Result<PrintRatios, TactileError> {
     let dc = dip_area(contact.0, contact.1, dark)?;
-    let dr = dip_area(raised.0, raised.1, dark)?;
-    let floor = height_ratio(&[dc], &dr);
-    let print = if dc.relative_depth >= SATURATED_SHARE {
-        floor
-    } else {
-        fit_profiles(contact, raised, &dc, &dr, dark)
+    let deepest = dip_area(raised.0, raised.1, dark)?;
+    if dc.relative_depth >= SATURATED_SHARE {
+        // At the dark level the floors decide, the raised one at the pass's deepest point.
+        let floor = height_ratio(&[dc], &deepest);
+        return Ok(PrintRatios {
+            print: floor,
+            floor,
+        });
+    }
+    // The raised pass may cross something darker than the line being judged (another line
+    // beside it, a shadow past the stroke's end): its dip is the one the profile fit lines up
+    // with the contact dip, not the deepest (`RAISED_DIP_SEARCH_MM`).
+    let (dr, fit) = match fit_profiles(contact, raised, &dc, &deepest, dark) {
+        Some(first) => {
+            let within = [
+                dc.window_mm[0] + first.shift_mm - RAISED_DIP_SEARCH_MM,
+                dc.window_mm[1] + first.shift_mm + RAISED_DIP_SEARCH_MM,
+            ];
+            let dr = dip_area_within(raised.0, raised.1, dark, Some(within))?;
+            let fit = if dr == deepest {
+                Some(first)
+            } else {
+                fit_profiles(contact, raised, &dc, &dr, dark)
+            };
+            (dr, fit)
+        }
+        None => (deepest, None),
     };
-    Ok(PrintRatios { print, floor })
+    Ok(PrintRatios {
+        print: fit.map(|fit| fit.factor),
+        floor: height_ratio(&[dc], &dr),
+    })
 }
 
 /// The ratio of the two dips' floors ([`height_ratio`] of one contact and one raised pass; each
@@ -480,7 +556,7 @@ mod tests {
 
     /// A pass over 0–16 mm across a 0.5 mm mark at 5 mm (a 1.1 mm spot, as [`pass`]),
     /// brighter by `rise` of its signal from 10.5 mm on (a raised pass running onto a bump's
-    /// flank or towards a screw head).
+    /// flank or towards a screw head; darker where `rise` is negative).
     fn pass_to_a_bump(share: f64, signal: f64, rise: f64) -> (Vec<f64>, Vec<f64>) {
         let along: Vec<f64> = (0..640).map(|i| i as f64 * 0.025).collect();
         let p = along
@@ -513,6 +589,31 @@ mod tests {
             let d = dip_area(&raised.0, &raised.1, 280.0).unwrap();
             assert!((d.baseline - 307.0).abs() < 0.5, "{d:?}");
         }
+    }
+
+    #[test]
+    fn a_darker_stretch_farther_along_the_raised_pass_is_not_the_dip() {
+        // Contact: a 0.5 mm crack at 5 mm, 60 % of the signal where it covers the spot.
+        // Raised: the same crack at 45 % (a crack: 0.75), the pass running from 10.5 mm on
+        // over something darker, 60 % of its signal (the print beside trial 11998's 0.77 mm
+        // crack, which its raised passes reached beyond the stroke's end). That stretch is the
+        // raised pass's deepest point...
+        let contact = pass_to_a_bump(0.6, 224.0, 0.0);
+        let raised = pass_to_a_bump(0.45, 27.0, -0.6);
+        let deepest = dip_area(&raised.0, &raised.1, 280.0).unwrap();
+        assert!(deepest.window_mm[0] > 9.0, "{deepest:?}");
+        // ...but both estimates judge the crack's own dip, where the fit lines the two up (its
+        // floor against the stretch's read 2.2, a print).
+        let r = print_ratios((&contact.0, &contact.1), (&raised.0, &raised.1), 280.0).unwrap();
+        let (print, floor) = (r.print.unwrap(), r.floor.unwrap());
+        assert!((print - 0.75).abs() < 0.03, "{r:?}");
+        assert!((floor - 0.75).abs() < 0.03, "{r:?}");
+        // Searched within a window, the dip is the one there; a window holding no sample is
+        // the whole pass.
+        let own = dip_area_within(&raised.0, &raised.1, 280.0, Some([4.0, 6.0])).unwrap();
+        assert!(own.window_mm[0] < 5.0 && own.window_mm[1] > 5.0, "{own:?}");
+        let none = dip_area_within(&raised.0, &raised.1, 280.0, Some([40.0, 41.0])).unwrap();
+        assert_eq!(none, deepest);
     }
 
     #[test]
