@@ -407,7 +407,8 @@ fn fit_profiles(
 /// The ratio the robot judges a candidate by: [`profile_ratio`], except where the contact dip
 /// has reached the fibre's dark level ([`SATURATED_SHARE`] of its signal or more), where it is
 /// [`height_ratio`], the ratio of the two dips' floors (each smoothed over 0.2 mm, as shares of
-/// their signal). Each pass's dip is found once.
+/// their signal). The raised pass's dip is the one that lines up with the contact dip
+/// ([`print_ratios`]).
 ///
 /// Why: where no light comes back in contact (a crack whose floor is beyond the fibre's range)
 /// the contact dip is clipped flat at the dark level while the raised one is not, so the two
@@ -425,7 +426,7 @@ pub fn print_ratio(
     Ok(print_ratios(contact, raised, dark)?.print)
 }
 
-/// Both estimates of one raised pass against one contact pass, each pass's dip found once.
+/// Both estimates of one raised pass against one contact pass, from the same two dips.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PrintRatios {
     /// [`print_ratio`].
@@ -434,7 +435,7 @@ pub struct PrintRatios {
     pub floor: Option<f64>,
 }
 
-/// [`print_ratio`] and [`floor_ratio`] of the same passes, each pass's dip found once.
+/// [`print_ratio`] and [`floor_ratio`] of the same passes, from the same two dips.
 ///
 /// The raised pass's dip is the one the profile fit lines up with the contact dip: its floor
 /// is searched within the contact dip's window, moved by the fit's shift, and
