@@ -10,6 +10,8 @@
 //! gave none). Positions along the raised passes are mapped onto the strokes' axis as the
 //! mission does for a pass that runs the planner's default overrun (1.5 mm) past each end; the
 //! profile fit searches ±6 mm of shift, so a pass clipped at the workspace's edge still lines up.
+//! A single judged stroke that also crossed a second line is cut to the samples around the
+//! candidate's own dip, as the mission cuts it (`crackbot_mission::inspect::own_dip`).
 //! On the fresh trials 9900–10019 (real time) the replayed ratios gave the report's own within
 //! 0.005 for 391 of 409 candidates, and within 0.053 for all: an approximation for comparing
 //! rules, not a copy of the report.
@@ -17,7 +19,8 @@
 use std::path::Path;
 
 use crackbot_mission::experiments::trial_params;
-use crackbot_mission::inspect::PRINT_CHECK_OVERRUN_MM;
+use crackbot_mission::inspect::{own_dip, MIN_DIP_COUNTS, PRINT_CHECK_OVERRUN_MM};
+use crackbot_tactile::localise::{localise, LocaliseConfig};
 use crackbot_tactile::print_check::print_ratios;
 use serde_json::Value;
 
@@ -27,20 +30,26 @@ use trials::{fused_trials, SavedTrial};
 
 type Error = Box<dyn std::error::Error>;
 
-/// The proximity column and the position column of a saved pass, and its direction flag.
-fn load(path: &Path) -> Result<(Vec<f64>, Vec<f64>, u8), Error> {
+/// The four channels and the position column of a saved pass, and its direction flag.
+fn load_samples(path: &Path) -> Result<(Vec<[f64; 4]>, Vec<f64>, u8), Error> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let (mut p, mut x, mut dir) = (Vec::new(), Vec::new(), 0u8);
+    let (mut s, mut x, mut dir) = (Vec::new(), Vec::new(), 0u8);
     for (n, line) in text.lines().enumerate().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
         if f.len() != 6 {
             return Err(format!("{}:{}: expected 6 columns", path.display(), n + 1).into());
         }
-        p.push(f[3].parse()?);
+        s.push([f[0].parse()?, f[1].parse()?, f[2].parse()?, f[3].parse()?]);
         dir = f[4].parse()?;
         x.push(f[5].parse()?);
     }
-    Ok((p, x, dir))
+    Ok((s, x, dir))
+}
+
+/// The proximity column and the position column of a saved pass, and its direction flag.
+fn load(path: &Path) -> Result<(Vec<f64>, Vec<f64>, u8), Error> {
+    let (s, x, dir) = load_samples(path)?;
+    Ok((s.iter().map(|v| v[3]).collect(), x, dir))
 }
 
 fn fmt(v: &[Option<f64>]) -> String {
@@ -94,13 +103,64 @@ fn main() -> Result<(), Error> {
                 };
                 let length = ends(first).ok_or("a pass without its ends")?;
                 let mut strokes = Vec::new();
+                let mut samples = Vec::new();
+                let mut whole = Vec::new();
                 for p in &judged {
                     let path = p["recording"]
                         .as_str()
                         .ok_or("a pass without its recording")?;
-                    let (v, x, d) = load(Path::new(path))?;
-                    let along = x.iter().map(|&x| if d == 0 { x } else { length - x });
-                    strokes.push((v, along.collect::<Vec<f64>>()));
+                    let (s, x, d) = load_samples(Path::new(path))?;
+                    let along: Vec<f64> = x
+                        .iter()
+                        .map(|&x| if d == 0 { x } else { length - x })
+                        .collect();
+                    strokes.push((s.iter().map(|v| v[3]).collect::<Vec<f64>>(), along));
+                    samples.push(s);
+                }
+                // One stroke over a second line too: the print check compares against the
+                // samples around the candidate's own dip, as the mission does.
+                if let ([(p, along)], [s]) = (strokes.as_mut_slice(), samples.as_slice()) {
+                    let point = |key: &str| -> Option<[f64; 2]> {
+                        serde_json::from_value(first[key].clone()).ok()
+                    };
+                    let (a, b) = (point("start_mm"), point("end_mm"));
+                    let (origin, other) = match (first["recording"].as_str(), a, b) {
+                        (Some(path), Some(a), Some(b)) => {
+                            if load(Path::new(path))?.2 == 0 {
+                                (a, b)
+                            } else {
+                                (b, a)
+                            }
+                        }
+                        _ => return Err("a pass without its ends".into()),
+                    };
+                    let u = [
+                        (other[0] - origin[0]) / length,
+                        (other[1] - origin[1]) / length,
+                    ];
+                    let candidate = report["candidates"]
+                        .as_array()
+                        .unwrap_or(&empty)
+                        .iter()
+                        .find(|c| c["id"].as_u64() == Some(cand));
+                    let centre: Option<[f64; 2]> =
+                        candidate.and_then(|c| serde_json::from_value(c["centre_mm"].clone()).ok());
+                    let width = candidate
+                        .and_then(|c| c["width_mm"].as_f64())
+                        .unwrap_or(crackbot_planner::Settings::default().assumed_width_mm);
+                    let config = LocaliseConfig {
+                        min_depth_counts: MIN_DIP_COUNTS,
+                        ..Default::default()
+                    };
+                    let extent = localise(s, along, &config).ok().flatten();
+                    if let (Some(c), Some(e)) = (centre, extent) {
+                        let near = (c[0] - origin[0]) * u[0] + (c[1] - origin[1]) * u[1];
+                        if let Some((r, _)) = own_dip(s, along, &e, width, near, &config) {
+                            whole.push((p.clone(), along.clone()));
+                            *p = p[r.clone()].to_vec();
+                            *along = along[r].to_vec();
+                        }
+                    }
                 }
                 let (mut prints, mut floors) = (Vec::new(), Vec::new());
                 for k in 1.. {
@@ -124,10 +184,17 @@ fn main() -> Result<(), Error> {
                             }
                         })
                         .collect();
-                    let ratios: Vec<_> = strokes
-                        .iter()
-                        .filter_map(|(p, x)| print_ratios((p, x), (&v, &along), dark).ok())
-                        .collect();
+                    let of = |strokes: &[(Vec<f64>, Vec<f64>)]| -> Vec<_> {
+                        strokes
+                            .iter()
+                            .filter_map(|(p, x)| print_ratios((p, x), (&v, &along), dark).ok())
+                            .collect()
+                    };
+                    // The whole stroke where its own dip gives no ratio, as the mission does.
+                    let mut ratios = of(&strokes);
+                    if !whole.is_empty() && ratios.iter().all(|r| r.print.is_none()) {
+                        ratios = of(&whole);
+                    }
                     let mean = |r: Vec<f64>| {
                         (!r.is_empty()).then(|| r.iter().sum::<f64>() / r.len() as f64)
                     };

@@ -829,6 +829,44 @@ fn a_crack_whose_raised_passes_reach_a_print_past_its_stroke_is_still_a_crack() 
 }
 
 #[test]
+fn a_print_whose_stroke_ends_on_a_darker_line_is_judged_by_its_own_dip() {
+    use crackbot_mission::experiments::{as_printed, trial_params};
+    use crackbot_sim::surface::distance_to_polyline;
+    use crackbot_sim::Feature;
+    // Trial scene 11494: the stroke across a 0.72 mm printed line ends on a 3.7 mm print. Its
+    // proximity dips over both, back to the surface between them, and the candidate was
+    // located on its own dip; but the print check compared the raised passes with the whole
+    // stroke, whose deepest point is the wide print: the thin print's raised dip, against
+    // that, read 0.59 and it was confirmed as a crack (real time, 2026-11-29). Its own dip
+    // keeps its share raised.
+    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 11494).unwrap());
+    let path = scene
+        .features
+        .iter()
+        .find_map(|f| match f {
+            Feature::Decoy { path, width_mm, .. } if *width_mm < 1.0 => Some(path.clone()),
+            _ => None,
+        })
+        .expect("the scene's 0.72 mm print");
+    let on_it = |p: [f64; 2]| distance_to_polyline(&path, p) < 2.5;
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = InspectConfig::new(scene.clone(), dir.path());
+    c.speedup = 8.0;
+    let r = mission(&c).expect("mission");
+    assert!(
+        r.cracks.iter().all(|k| !on_it(k.position_mm)),
+        "{:#?}",
+        r.cracks
+    );
+    let print = r
+        .rejected
+        .iter()
+        .find(|k| on_it(k.position_mm))
+        .unwrap_or_else(|| panic!("nothing on the print was judged: {:#?}", r.rejected));
+    assert!(print.felt.starts_with("a print"), "{print:?}");
+}
+
+#[test]
 fn a_stroke_across_two_cracks_reports_its_candidate_where_its_own_dip_is() {
     use crackbot_mission::experiments::{as_printed, score, trial_params};
     // Trial scene 9570: the stroke across a 0.76 mm crack's candidate also runs into a 3.6 mm

@@ -68,6 +68,7 @@ mod sensor;
 use arm::*;
 use feel::Feel;
 pub use feel::Feeling;
+pub use passes::own_dip;
 use passes::*;
 pub(crate) use perceive::io_err;
 use perceive::*;
@@ -1182,6 +1183,9 @@ fn mission(
             // Each stroke's proximity channel and positions (for the print check), and where the
             // finger ended.
             let mut strokes: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+            // Where the one stroke also crossed a second line: the samples around the
+            // candidate's own dip (`passes::own_dip`), which its print check compares against.
+            let mut own_dip_samples: Option<std::ops::Range<usize>> = None;
             let mut finger_at = slide.start_mm;
             while p < n_passes {
                 // One classification unit: a stroke forth and back, as the authors' slides are
@@ -1299,37 +1303,31 @@ fn mission(
                     .flatten();
                     // A stroke that also crossed a second crack or a print beside its candidate:
                     // the localiser spans both dips, and the one nearest the candidate is its.
-                    let extent = match (&extent, cand) {
+                    let own = match (&extent, cand) {
                         (Some(e), Some(id)) if strokes.len() == 1 => candidates
                             .iter()
                             .find(|(c, _)| c.id == id)
-                            .filter(|(c, _)| {
-                                let w = c.width_mm.unwrap_or(planner.settings().assumed_width_mm);
-                                e.width_mm > w + SEPARATE_DIPS_EXCESS_MM
-                            })
                             .and_then(|(c, _)| {
+                                let w = c.width_mm.unwrap_or(planner.settings().assumed_width_mm);
                                 let near = (c.centre_mm[0] - slide.start_mm[0]) * u[0]
                                     + (c.centre_mm[1] - slide.start_mm[1]) * u[1];
-                                let ps: Vec<f64> = samples[p0..p1].iter().map(|v| v[3]).collect();
-                                let r = passes::nearest_of_several_dips(
-                                    &ps,
+                                passes::own_dip(
+                                    &samples[p0..p1],
                                     &along[p0..p1],
-                                    e.baseline_counts,
-                                    e.depth_counts,
+                                    e,
+                                    w,
                                     near,
-                                    SEPARATE_DIPS_BACK_SHARE,
-                                    SEPARATE_DIPS_GAP_MM,
-                                )?;
-                                crackbot_tactile::localise::localise(
-                                    &samples[p0..p1][r.clone()],
-                                    &along[p0..p1][r],
                                     &localise_config,
                                 )
-                                .ok()
-                                .flatten()
-                            })
-                            .or(extent),
-                        _ => extent,
+                            }),
+                        _ => None,
+                    };
+                    let extent = match own {
+                        Some((r, e)) => {
+                            own_dip_samples = Some(p0 + r.start..p0 + r.end);
+                            Some(e)
+                        }
+                        None => extent,
                     };
                     let mid = along.get((p0 + p1) / 2).copied().unwrap_or(len / 2.0);
                     let crossing = extent.as_ref().map_or((at(mid), None), |e| {
@@ -1480,6 +1478,17 @@ fn mission(
                         let rec_path = config.out_dir.join(format!("raised-{c:03}.csv"));
                         save_pass(&rec_path, &hs, &hx, u8::from(backwards))?;
                         let dark = config.scene.sensor.optics.proximity_dark_counts;
+                        // The contact dip the raised passes are compared with: a stroke's
+                        // deepest point may be the other line it crossed (a print read against a
+                        // darker line at its stroke's end reads as a crack). The whole stroke
+                        // where its own dip gives no ratio.
+                        let own: Option<Vec<(Vec<f64>, Vec<f64>)>> =
+                            match (&own_dip_samples, strokes.as_slice()) {
+                                (Some(r), [(p, x)]) if r.end <= p.len() => {
+                                    Some(vec![(p[r.clone()].to_vec(), x[r.clone()].to_vec())])
+                                }
+                                _ => None,
+                            };
                         // A raised pass from `start` in direction `dir`: its ratios against the
                         // strokes, its positions mapped onto the strokes' axis.
                         let pass_ratio =
@@ -1491,7 +1500,13 @@ fn mission(
                                 let p: Vec<f64> = samples.iter().map(|v| v[3]).collect();
                                 let x: Vec<f64> =
                                     xs.iter().map(|&v| on_line_axis(start, dir, v)).collect();
-                                passes::raised_ratio(&strokes, (&p, &x), dark, doubts)
+                                own.as_ref()
+                                    .and_then(|own| {
+                                        passes::raised_ratio(own, (&p, &x), dark, &mut Vec::new())
+                                    })
+                                    .or_else(|| {
+                                        passes::raised_ratio(&strokes, (&p, &x), dark, doubts)
+                                    })
                             };
                         let first = pass_ratio(&hs, &hx, from, d, &mut f.doubts);
                         let mut ratios: Vec<passes::RaisedRatio> = first.into_iter().collect();

@@ -635,6 +635,46 @@ pub(super) fn nearest_of_several_dips(
     Some(from..to)
 }
 
+/// A candidate's own dip where its stroke also crossed a second crack or a print beside it:
+/// where the localiser's one dip (`extent`, over the stroke's `samples` at positions `along`)
+/// is wider than the candidate (`candidate_width_mm`) by more than
+/// [`SEPARATE_DIPS_EXCESS_MM`] and the stroke's dips lie apart
+/// ([`nearest_of_several_dips`]), the samples around the one nearest the candidate (`near_mm`
+/// along the stroke) and that dip localised alone. `None` otherwise: the stroke's dip is the
+/// candidate's. The mission reports the candidate where this dip lies and judges its print
+/// check on these samples; `examples/replay_ratios.rs` replays it.
+pub fn own_dip(
+    samples: &[[f64; 4]],
+    along: &[f64],
+    extent: &crackbot_tactile::localise::CrackExtent,
+    candidate_width_mm: f64,
+    near_mm: f64,
+    config: &crackbot_tactile::localise::LocaliseConfig,
+) -> Option<(
+    std::ops::Range<usize>,
+    crackbot_tactile::localise::CrackExtent,
+)> {
+    if samples.len() != along.len()
+        || extent.width_mm <= candidate_width_mm + SEPARATE_DIPS_EXCESS_MM
+    {
+        return None;
+    }
+    let p: Vec<f64> = samples.iter().map(|v| v[3]).collect();
+    let r = nearest_of_several_dips(
+        &p,
+        along,
+        extent.baseline_counts,
+        extent.depth_counts,
+        near_mm,
+        SEPARATE_DIPS_BACK_SHARE,
+        SEPARATE_DIPS_GAP_MM,
+    )?;
+    let own = crackbot_tactile::localise::localise(&samples[r.clone()], &along[r.clone()], config)
+        .ok()
+        .flatten()?;
+    Some((r, own))
+}
+
 /// The print check's ratio of one raised pass (`raised`: proximity counts and positions on
 /// the strokes' axis), the mean over the candidate's strokes of
 /// [`print_check::print_ratio`]; a stroke the check cannot use adds its reason to `doubts`.
