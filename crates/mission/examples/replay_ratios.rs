@@ -30,8 +30,11 @@ use trials::{fused_trials, SavedTrial};
 
 type Error = Box<dyn std::error::Error>;
 
+/// A saved pass: its samples (D1, D2, D3, P), their positions, its direction flag.
+type Pass = (Vec<[f64; 4]>, Vec<f64>, u8);
+
 /// The four channels and the position column of a saved pass, and its direction flag.
-fn load_samples(path: &Path) -> Result<(Vec<[f64; 4]>, Vec<f64>, u8), Error> {
+fn load_samples(path: &Path) -> Result<Pass, Error> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let (mut s, mut x, mut dir) = (Vec::new(), Vec::new(), 0u8);
     for (n, line) in text.lines().enumerate().skip(1) {
