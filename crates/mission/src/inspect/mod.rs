@@ -25,7 +25,9 @@
 //!   forth (stopping after two where their mean is settled, [`PRINT_RATIO_SETTLED`]), and the
 //!   mean over those passes of each one's print ratio and floor ratio
 //!   ([`print_check::floor_ratio`], a second estimate with other errors) decides; every pass is
-//!   kept (`raised-NNN.csv`, `raised-NNN-K.csv`).
+//!   kept (`raised-NNN.csv`, `raised-NNN-K.csv`). Where the stroke also crossed a second line,
+//!   the raised passes are compared with the candidate's own dip ([`own_dip`]), not the
+//!   stroke's deepest point.
 //! * **Pieces of one crack.** The detector may split one crack into several candidates; the
 //!   confirmed ones that continue each other ([`PIECE_GAP_MM`]), or whose crossings the crack
 //!   map joins ([`PIECE_TRACE_GAP_MM`], [`CrackTrace`]), are reported as one crack.
