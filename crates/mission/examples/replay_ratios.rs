@@ -108,6 +108,7 @@ fn main() -> Result<(), Error> {
                 let mut strokes = Vec::new();
                 let mut samples = Vec::new();
                 let mut whole = Vec::new();
+                let mut first_dir = 0u8;
                 for p in &judged {
                     let path = p["recording"]
                         .as_str()
@@ -118,6 +119,9 @@ fn main() -> Result<(), Error> {
                         .map(|&x| if d == 0 { x } else { length - x })
                         .collect();
                     strokes.push((s.iter().map(|v| v[3]).collect::<Vec<f64>>(), along));
+                    if samples.is_empty() {
+                        first_dir = d;
+                    }
                     samples.push(s);
                 }
                 // One stroke over a second line too: the print check compares against the
@@ -127,14 +131,10 @@ fn main() -> Result<(), Error> {
                         serde_json::from_value(first[key].clone()).ok()
                     };
                     let (a, b) = (point("start_mm"), point("end_mm"));
-                    let (origin, other) = match (first["recording"].as_str(), a, b) {
-                        (Some(path), Some(a), Some(b)) => {
-                            if load(Path::new(path))?.2 == 0 {
-                                (a, b)
-                            } else {
-                                (b, a)
-                            }
-                        }
+                    // The strokes' axis runs from where a stroke in direction 0 starts.
+                    let (origin, other) = match (a, b) {
+                        (Some(a), Some(b)) if first_dir == 0 => (a, b),
+                        (Some(a), Some(b)) => (b, a),
                         _ => return Err("a pass without its ends".into()),
                     };
                     let u = [
