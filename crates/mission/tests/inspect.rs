@@ -48,6 +48,34 @@ fn mission(config: &InspectConfig) -> Result<InspectReport, MissionError> {
     run_inspection(config, &stop, |_| {})
 }
 
+/// A fused mission over `scene` at speed-up 8 with the default settings; its recordings go to
+/// a temporary folder that is gone afterwards.
+fn fast_mission(scene: &Scene) -> InspectReport {
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = InspectConfig::new(scene.clone(), dir.path());
+    c.speedup = 8.0;
+    mission(&c).expect("mission")
+}
+
+/// Trial scene `seed` with the authors' printed crack profile, and the path of its first line
+/// under 1 mm wide: a crack where `crack`, else a printed decoy.
+fn trial_scene_and_thin_line(seed: u64, crack: bool) -> (Scene, Vec<[f64; 2]>) {
+    use crackbot_mission::experiments::{as_printed, trial_params};
+    use crackbot_sim::Feature;
+    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), seed).unwrap());
+    let path = scene
+        .features
+        .iter()
+        .find_map(|f| match f {
+            Feature::Crack { path, width_mm, .. } if crack && *width_mm < 1.0 => Some(path),
+            Feature::Decoy { path, width_mm, .. } if !crack && *width_mm < 1.0 => Some(path),
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("trial scene {seed} has no line under 1 mm of that kind"))
+        .clone();
+    (scene, path)
+}
+
 fn config(dir: &std::path::Path) -> InspectConfig {
     let mut c = InspectConfig::new(one_crack(), dir);
     c.speedup = 8.0;
@@ -746,10 +774,7 @@ fn a_narrow_print_in_doubt_is_judged_by_its_floor_ratio_too() {
     // the doubt band (under heavy load here, about one in twenty) tests nothing of this, and
     // the mission is run once more. A run with the print in doubt is judged.
     for attempt in 0..2 {
-        let dir = tempfile::tempdir().unwrap();
-        let mut c = InspectConfig::new(scene.clone(), dir.path());
-        c.speedup = 8.0;
-        let r = mission(&c).expect("mission");
+        let r = fast_mission(&scene);
         let in_doubt = r.cracks.iter().any(|k| !k.evidence.floor_ratios.is_empty())
             || r.rejected.iter().any(|k| !k.floor_ratios.is_empty());
         if !in_doubt && attempt == 0 {
@@ -785,9 +810,7 @@ fn a_narrow_print_in_doubt_is_judged_by_its_floor_ratio_too() {
 
 #[test]
 fn a_crack_whose_raised_passes_reach_a_print_past_its_stroke_is_still_a_crack() {
-    use crackbot_mission::experiments::{as_printed, trial_params};
     use crackbot_sim::surface::distance_to_polyline;
-    use crackbot_sim::Feature;
     use crackbot_tactile::print_check::PRINT_RATIO;
     // Trial scene 11998: a 0.77 mm crack whose stroke ends 1.7 mm short of a 3.5 mm print.
     // The raised passes over it overrun the stroke and their fibre looks ahead: those towards
@@ -795,20 +818,9 @@ fn a_crack_whose_raised_passes_reach_a_print_past_its_stroke_is_still_a_crack() 
     // 1.15-1.17 against the profile fit's 0.81-0.86. In doubt, the mean of the two (0.91)
     // rejected the crack as a print (real time, 2026-11-29). The raised dip is now the one
     // that lines up with the contact dip.
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 11998).unwrap());
-    let path = scene
-        .features
-        .iter()
-        .find_map(|f| match f {
-            Feature::Crack { path, width_mm, .. } if *width_mm < 1.0 => Some(path.clone()),
-            _ => None,
-        })
-        .expect("the scene's 0.77 mm crack");
+    let (scene, path) = trial_scene_and_thin_line(11998, true);
     let on_it = |p: [f64; 2]| distance_to_polyline(&path, p) < 3.0;
-    let dir = tempfile::tempdir().unwrap();
-    let mut c = InspectConfig::new(scene.clone(), dir.path());
-    c.speedup = 8.0;
-    let r = mission(&c).expect("mission");
+    let r = fast_mission(&scene);
     for k in r.rejected.iter().filter(|k| on_it(k.position_mm)) {
         assert!(!k.felt.starts_with("a print"), "{k:?}");
     }
@@ -830,29 +842,16 @@ fn a_crack_whose_raised_passes_reach_a_print_past_its_stroke_is_still_a_crack() 
 
 #[test]
 fn a_print_whose_stroke_ends_on_a_darker_line_is_judged_by_its_own_dip() {
-    use crackbot_mission::experiments::{as_printed, trial_params};
     use crackbot_sim::surface::distance_to_polyline;
-    use crackbot_sim::Feature;
     // Trial scene 11494: the stroke across a 0.72 mm printed line ends on a 3.7 mm print. Its
     // proximity dips over both, back to the surface between them, and the candidate was
     // located on its own dip; but the print check compared the raised passes with the whole
     // stroke, whose deepest point is the wide print: the thin print's raised dip, against
     // that, read 0.59 and it was confirmed as a crack (real time, 2026-11-29). Its own dip
     // keeps its share raised.
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 11494).unwrap());
-    let path = scene
-        .features
-        .iter()
-        .find_map(|f| match f {
-            Feature::Decoy { path, width_mm, .. } if *width_mm < 1.0 => Some(path.clone()),
-            _ => None,
-        })
-        .expect("the scene's 0.72 mm print");
+    let (scene, path) = trial_scene_and_thin_line(11494, false);
     let on_it = |p: [f64; 2]| distance_to_polyline(&path, p) < 2.5;
-    let dir = tempfile::tempdir().unwrap();
-    let mut c = InspectConfig::new(scene.clone(), dir.path());
-    c.speedup = 8.0;
-    let r = mission(&c).expect("mission");
+    let r = fast_mission(&scene);
     assert!(
         r.cracks.iter().all(|k| !on_it(k.position_mm)),
         "{:#?}",
@@ -874,10 +873,7 @@ fn a_stroke_across_two_cracks_reports_its_candidate_where_its_own_dip_is() {
     // them, and the localiser's one dip spanning both (8.5 mm wide) put the report between the
     // cracks: a false report and a missed crack.
     let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9570).unwrap());
-    let dir = tempfile::tempdir().unwrap();
-    let mut c = InspectConfig::new(scene.clone(), dir.path());
-    c.speedup = 8.0;
-    let r = mission(&c).expect("mission");
+    let r = fast_mission(&scene);
     let s = score(&scene, &r);
     assert_eq!(s.false_reports, 0, "{s:?}\n{:#?}", r.passes);
     assert!(s.correct >= 2, "{s:?}");
