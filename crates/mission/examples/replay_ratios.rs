@@ -19,7 +19,9 @@
 use std::path::Path;
 
 use crackbot_mission::experiments::trial_params;
-use crackbot_mission::inspect::{own_dip, MIN_DIP_COUNTS, PRINT_CHECK_OVERRUN_MM};
+use crackbot_mission::inspect::{
+    own_dip, surface_rise_mm, MIN_DIP_COUNTS, PRINT_CHECK_HEIGHT_MM, PRINT_CHECK_OVERRUN_MM,
+};
 use crackbot_tactile::localise::{localise, LocaliseConfig};
 use crackbot_tactile::print_check::print_ratios;
 use serde_json::Value;
@@ -73,6 +75,7 @@ fn main() -> Result<(), Error> {
             // The fibre's dark level the mission judged by: the trial scene's sensor's.
             let scene = crackbot_sim::random_scene(&trial_params(), seed.parse()?)?;
             let dark = scene.sensor.optics.proximity_dark_counts;
+            let height = PRINT_CHECK_HEIGHT_MM;
             let empty = Vec::new();
             let passes = report["passes"].as_array().unwrap_or(&empty);
             let decided = report["cracks"]
@@ -165,7 +168,7 @@ fn main() -> Result<(), Error> {
                         }
                     }
                 }
-                let (mut prints, mut floors) = (Vec::new(), Vec::new());
+                let (mut prints, mut floors, mut rises) = (Vec::new(), Vec::new(), Vec::new());
                 for k in 1.. {
                     let name = if k == 1 {
                         format!("raised-{cand:03}.csv")
@@ -203,11 +206,20 @@ fn main() -> Result<(), Error> {
                     };
                     prints.push(mean(ratios.iter().filter_map(|r| r.print).collect()));
                     floors.push(mean(ratios.iter().filter_map(|r| r.floor).collect()));
+                    rises.push(mean(
+                        ratios
+                            .iter()
+                            .filter_map(|r| {
+                                surface_rise_mm(&scene.sensor.optics, r.levels, dark, height)
+                            })
+                            .collect(),
+                    ));
                 }
                 println!(
-                    "{seed} {cand} {verdict} {reported:.4} {} {}",
+                    "{seed} {cand} {verdict} {reported:.4} {} {} {}",
                     fmt(&prints),
-                    fmt(&floors)
+                    fmt(&floors),
+                    fmt(&rises)
                 );
             }
         }

@@ -841,6 +841,50 @@ fn a_crack_whose_raised_passes_reach_a_print_past_its_stroke_is_still_a_crack() 
 }
 
 #[test]
+fn a_crack_on_a_bumps_flank_is_passed_over_again_as_high_above_it_as_the_check_needs() {
+    use crackbot_sim::surface::distance_to_polyline;
+    use crackbot_tactile::print_check::PRINT_RATIO;
+    // Trial scene 11668: a 1.39 mm crack crosses the flank of a 1.4 mm bump, 0.85 mm up where
+    // its stroke crosses it. The raised pass, held 2 mm above the plate, was 1.2 mm above the
+    // surface there, the crack kept 94 % of its dip as a print does, and it was rejected as a
+    // print (real time, 2026-11-28). The pass is now made again as far above the surface as
+    // the check's height.
+    let scene = crackbot_mission::experiments::as_printed(
+        &crackbot_sim::random_scene(&crackbot_mission::experiments::trial_params(), 11668).unwrap(),
+    );
+    let path = match &scene.features[0] {
+        crackbot_sim::Feature::Crack { path, .. } => path.clone(),
+        f => panic!("trial scene 11668's first feature is not the crack: {f:?}"),
+    };
+    let on_it = |p: [f64; 2]| distance_to_polyline(&path, p) < 3.0;
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = InspectConfig::new(scene.clone(), dir.path());
+    c.speedup = 8.0;
+    let r = mission(&c).expect("mission");
+    let crack = r
+        .cracks
+        .iter()
+        .find(|k| on_it(k.position_mm))
+        .unwrap_or_else(|| panic!("the crack is not reported: {:#?}", r.rejected));
+    let evidence = &crack.evidence;
+    assert!(
+        evidence.height_ratio.is_some_and(|h| h < PRINT_RATIO),
+        "{evidence:?}"
+    );
+    let again = evidence
+        .doubts
+        .iter()
+        .find(|d| d.starts_with("the surface at the line stood"))
+        .unwrap_or_else(|| panic!("no pass made again: {evidence:?}"));
+    assert!(again.contains("above the plate"), "{again}");
+    let id = crack.candidate.expect("a candidate");
+    assert!(dir
+        .path()
+        .join(format!("raised-{id:03}-again.csv"))
+        .is_file());
+}
+
+#[test]
 fn a_print_whose_stroke_ends_on_a_darker_line_is_judged_by_its_own_dip() {
     use crackbot_sim::surface::distance_to_polyline;
     // Trial scene 11494: the stroke across a 0.72 mm printed line ends on a 3.7 mm print. Its

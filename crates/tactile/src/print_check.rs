@@ -30,8 +30,11 @@
 //!
 //! * The fibre's dark level (P with nothing in view, the sensor's calibration), to within a
 //!   few counts: at 2 mm the flat surface is only about 27 counts above it.
-//! * A pass at a known height over the same line; the arm must not meet anything on the way
-//!   (the check is meant for candidates the finger already slid over and found no bump on).
+//! * A pass at a known height above the surface at the line; the arm must not meet anything on
+//!   the way (the check is meant for candidates the finger already slid over and found no bump
+//!   on). Held level over a bump's flank or a curved part, the fibre is nearer the surface than
+//!   that: [`PrintRatios::levels`] tells how near, and the robot makes the pass again where it
+//!   was off (`crackbot_mission::inspect::surface_rise_mm`).
 //! * The raised pass's dip is the one that lines up with the contact dip, not its deepest
 //!   point: a raised pass may reach other dark things beside the line ([`print_ratios`]).
 //! * It does not tell a crack from a groove or step of the same depth, nor see a crack filled
@@ -433,6 +436,10 @@ pub struct PrintRatios {
     pub print: Option<f64>,
     /// [`floor_ratio`].
     pub floor: Option<f64>,
+    /// The sound surface's level beside the contact dip and beside the raised dip (each dip's
+    /// [`DipArea::baseline`]), counts: their ratio above the dark level tells how far the
+    /// raised fibre was from the surface at the line (`crackbot_mission::inspect::surface_rise_mm`).
+    pub levels: [f64; 2],
 }
 
 /// [`print_ratio`] and [`floor_ratio`] of the same passes, from the same two dips.
@@ -465,6 +472,7 @@ pub fn print_ratios(
         return Ok(PrintRatios {
             print: floor,
             floor,
+            levels: [dc.baseline, deepest.baseline],
         });
     }
     // The raised pass may cross something darker than the line being judged (another line
@@ -489,6 +497,7 @@ pub fn print_ratios(
     Ok(PrintRatios {
         print: fit.map(|fit| fit.factor),
         floor: height_ratio(&[dc], &dr),
+        levels: [dc.baseline, dr.baseline],
     })
 }
 
@@ -649,6 +658,14 @@ mod tests {
             pass(share(3.026, 2.0), 1.0, 27.0, 1.1),
         );
         assert!(crack < 0.75, "{crack}");
+        // Both ratios come with the sound surface's level beside each dip.
+        let (c, cx) = pass(0.6, 1.0, 224.0, 1.1);
+        let (r, rx) = pass(0.6, 1.0, 27.0, 1.1);
+        let levels = print_ratios((&c, &cx), (&r, &rx), 280.0).unwrap().levels;
+        assert!(
+            (levels[0] - 504.0).abs() < 0.5 && (levels[1] - 307.0).abs() < 0.5,
+            "{levels:?}"
+        );
         // No dip in contact: nothing to compare.
         let (flat, x) = pass(0.0, 1.0, 224.0, 1.1);
         let (raised, rx) = pass(0.6, 1.0, 27.0, 1.1);

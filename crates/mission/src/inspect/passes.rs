@@ -685,19 +685,22 @@ pub(super) fn raised_ratio(
     dark: f64,
     doubts: &mut Vec<String>,
 ) -> Option<RaisedRatio> {
-    let (mut ratios, mut floors) = (Vec::new(), Vec::new());
+    let (mut ratios, mut floors, mut levels) = (Vec::new(), Vec::new(), Vec::new());
     for (p, x) in strokes {
         match print_check::print_ratios((p, x), raised, dark) {
             Ok(r) => {
                 ratios.extend(r.print);
                 floors.extend(r.floor);
+                levels.push(r.levels);
             }
             Err(e) => doubts.push(e.to_string()),
         }
     }
+    let level = |k: usize| mean(&levels.iter().map(|l| l[k]).collect::<Vec<_>>());
     Some(RaisedRatio {
         print: mean(&ratios)?,
         floor: mean(&floors),
+        levels: [level(0)?, level(1)?],
     })
 }
 
@@ -708,6 +711,9 @@ pub(super) struct RaisedRatio {
     pub print: f64,
     /// [`print_check::floor_ratio`], the second estimate (`None` where no stroke gave one).
     pub floor: Option<f64>,
+    /// [`print_check::PrintRatios::levels`]: the sound surface's level beside the line in
+    /// contact and on the raised pass, counts.
+    pub levels: [f64; 2],
 }
 
 /// The ratio raised passes decide by: the mean of their print ratios, or where the first was in
@@ -901,7 +907,11 @@ mod tests {
 
     #[test]
     fn passes_in_doubt_are_judged_by_both_estimates_and_others_by_the_print_ratio() {
-        let pass = |print: f64, floor: Option<f64>| RaisedRatio { print, floor };
+        let pass = |print: f64, floor: Option<f64>| RaisedRatio {
+            print,
+            floor,
+            levels: [450.0, 270.0],
+        };
         let passes = [pass(0.86, Some(1.0)), pass(0.84, None)];
         // Not in doubt: the print ratios' mean.
         assert!((judged_ratio(&passes, false).unwrap() - 0.85).abs() < 1e-12);
