@@ -169,13 +169,20 @@ fn main() -> Result<(), Error> {
                     }
                 }
                 let (mut prints, mut floors, mut rises) = (Vec::new(), Vec::new(), Vec::new());
+                // A first pass made again higher over a surface standing above the plate
+                // (`raised-NNN-again.csv`) replaces the first.
+                let again = trial.join(format!("raised-{cand:03}-again.csv"));
                 for k in 1.. {
                     let name = if k == 1 {
                         format!("raised-{cand:03}.csv")
                     } else {
                         format!("raised-{cand:03}-{k}.csv")
                     };
-                    let path = trial.join(name);
+                    let path = if k == 1 && again.exists() {
+                        again.clone()
+                    } else {
+                        trial.join(name)
+                    };
                     if !path.exists() {
                         break;
                     }
