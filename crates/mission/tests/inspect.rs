@@ -76,6 +76,26 @@ fn trial_scene_and_thin_line(seed: u64, crack: bool) -> (Scene, Vec<[f64; 2]>) {
     (scene, path)
 }
 
+/// The report's crack where `on_it`, its print check's ratio on the crack's side of the
+/// threshold; panics naming the rejected candidates where there is none.
+fn reported_as_a_crack(
+    r: &InspectReport,
+    on_it: impl Fn([f64; 2]) -> bool,
+) -> &crackbot_mission::inspect::ReportedCrack {
+    let crack = r
+        .cracks
+        .iter()
+        .find(|k| on_it(k.position_mm))
+        .unwrap_or_else(|| panic!("the crack is not reported: {:#?}", r.rejected));
+    let ratio = crack.evidence.height_ratio;
+    assert!(
+        ratio.is_some_and(|h| h < crackbot_tactile::print_check::PRINT_RATIO),
+        "{:?}",
+        crack.evidence
+    );
+    crack
+}
+
 fn config(dir: &std::path::Path) -> InspectConfig {
     let mut c = InspectConfig::new(one_crack(), dir);
     c.speedup = 8.0;
@@ -811,7 +831,6 @@ fn a_narrow_print_in_doubt_is_judged_by_its_floor_ratio_too() {
 #[test]
 fn a_crack_whose_raised_passes_reach_a_print_past_its_stroke_is_still_a_crack() {
     use crackbot_sim::surface::distance_to_polyline;
-    use crackbot_tactile::print_check::PRINT_RATIO;
     // Trial scene 11998: a 0.77 mm crack whose stroke ends 1.7 mm short of a 3.5 mm print.
     // The raised passes over it overrun the stroke and their fibre looks ahead: those towards
     // the print reached it, its dip was their deepest point, and their floor ratios read
@@ -824,16 +843,7 @@ fn a_crack_whose_raised_passes_reach_a_print_past_its_stroke_is_still_a_crack() 
     for k in r.rejected.iter().filter(|k| on_it(k.position_mm)) {
         assert!(!k.felt.starts_with("a print"), "{k:?}");
     }
-    let crack = r
-        .cracks
-        .iter()
-        .find(|k| on_it(k.position_mm))
-        .unwrap_or_else(|| panic!("the crack is not reported: {:#?}", r.rejected));
-    let evidence = &crack.evidence;
-    assert!(
-        evidence.height_ratio.is_some_and(|h| h < PRINT_RATIO),
-        "{evidence:?}"
-    );
+    let evidence = &reported_as_a_crack(&r, on_it).evidence;
     assert!(
         evidence.floor_ratios.iter().flatten().all(|&f| f < 1.0),
         "{evidence:?}"
@@ -843,7 +853,6 @@ fn a_crack_whose_raised_passes_reach_a_print_past_its_stroke_is_still_a_crack() 
 #[test]
 fn a_crack_on_a_bumps_flank_is_passed_over_again_as_high_above_it_as_the_check_needs() {
     use crackbot_sim::surface::distance_to_polyline;
-    use crackbot_tactile::print_check::PRINT_RATIO;
     // Trial scene 11668: a 1.39 mm crack crosses the flank of a 1.4 mm bump, 0.85 mm up where
     // its stroke crosses it. The raised pass, held 2 mm above the plate, was 1.2 mm above the
     // surface there, the crack kept 94 % of its dip as a print does, and it was rejected as a
@@ -861,21 +870,13 @@ fn a_crack_on_a_bumps_flank_is_passed_over_again_as_high_above_it_as_the_check_n
     let mut c = InspectConfig::new(scene.clone(), dir.path());
     c.speedup = 8.0;
     let r = mission(&c).expect("mission");
-    let crack = r
-        .cracks
-        .iter()
-        .find(|k| on_it(k.position_mm))
-        .unwrap_or_else(|| panic!("the crack is not reported: {:#?}", r.rejected));
-    let evidence = &crack.evidence;
-    assert!(
-        evidence.height_ratio.is_some_and(|h| h < PRINT_RATIO),
-        "{evidence:?}"
-    );
-    let again = evidence
+    let crack = reported_as_a_crack(&r, on_it);
+    let again = crack
+        .evidence
         .doubts
         .iter()
         .find(|d| d.starts_with("the surface at the line stood"))
-        .unwrap_or_else(|| panic!("no pass made again: {evidence:?}"));
+        .unwrap_or_else(|| panic!("no pass made again: {:?}", crack.evidence));
     assert!(again.contains("above the plate"), "{again}");
     let id = crack.candidate.expect("a candidate");
     assert!(dir

@@ -1556,6 +1556,26 @@ fn mission(
                                         passes::raised_ratio(&strokes, (&p, &x), dark, doubts)
                                     })
                             };
+                        // One more guarded raised pass from `a` to `b` at `height`, saved as
+                        // `raised-NNN-{name}.csv`; with its direction.
+                        let raised_pass = |rig: &mut Rig<'_>,
+                                           a: [f64; 2],
+                                           b: [f64; 2],
+                                           height: f64,
+                                           name: &str| {
+                            let (pass, stopped) = rig.hover_and_record(
+                                a,
+                                b,
+                                height,
+                                raised.speed_mm_s,
+                                Some(RAISED_PASS_GUARD_COUNTS),
+                            )?;
+                            let dk = passes::unit(a, b);
+                            let back = dk[0] * u[0] + dk[1] * u[1] < 0.0;
+                            let path = config.out_dir.join(format!("raised-{c:03}-{name}.csv"));
+                            save_pass(&path, &pass.0, &pass.1, u8::from(back))?;
+                            Ok::<_, MissionError>((pass, stopped, dk))
+                        };
                         let mut first = pass_ratio(&hs, &hx, from, d, &mut f.doubts);
                         // Where the arm is, and where the next raised pass goes.
                         let (mut a, mut b) = (to, from);
@@ -1574,17 +1594,7 @@ fn mission(
                                 "the surface at the line stood {rise:.2} mm above the plate: the \
                                  raised pass was made again {height:.2} mm up"
                             ));
-                            let ((rs, rx), stopped) = rig.hover_and_record(
-                                a,
-                                b,
-                                height,
-                                raised.speed_mm_s,
-                                Some(RAISED_PASS_GUARD_COUNTS),
-                            )?;
-                            let dk = passes::unit(a, b);
-                            let back = dk[0] * u[0] + dk[1] * u[1] < 0.0;
-                            let path = config.out_dir.join(format!("raised-{c:03}-again.csv"));
-                            save_pass(&path, &rs, &rx, u8::from(back))?;
+                            let ((rs, rx), stopped, dk) = raised_pass(rig, a, b, height, "again")?;
                             if let Some(o) = stopped {
                                 f.doubts.push(format!(
                                     "the raised pass made again was stopped {:.1} mm along: the \
@@ -1610,18 +1620,8 @@ fn mission(
                             if (r - print_check::PRINT_RATIO).abs() < PRINT_RATIO_DOUBT {
                                 in_doubt = true;
                                 for k in 2..=PRINT_CHECK_PASSES_IN_DOUBT {
-                                    let ((rs, rx), stopped) = rig.hover_and_record(
-                                        a,
-                                        b,
-                                        height,
-                                        raised.speed_mm_s,
-                                        Some(RAISED_PASS_GUARD_COUNTS),
-                                    )?;
-                                    let dk = passes::unit(a, b);
-                                    let path =
-                                        config.out_dir.join(format!("raised-{c:03}-{k}.csv"));
-                                    let back = dk[0] * u[0] + dk[1] * u[1] < 0.0;
-                                    save_pass(&path, &rs, &rx, u8::from(back))?;
+                                    let ((rs, rx), stopped, dk) =
+                                        raised_pass(rig, a, b, height, &k.to_string())?;
                                     if let Some(o) = stopped {
                                         f.doubts.push(format!(
                                             "raised pass {k} was stopped {:.1} mm along: the \
