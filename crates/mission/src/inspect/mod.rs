@@ -27,7 +27,9 @@
 //!   ([`print_check::floor_ratio`], a second estimate with other errors) decides; every pass is
 //!   kept (`raised-NNN.csv`, `raised-NNN-K.csv`). Where the stroke also crossed a second line,
 //!   the raised passes are compared with the candidate's own dip ([`own_dip`]), not the
-//!   stroke's deepest point.
+//!   stroke's deepest point. Where the surface at the line stands above the plate (a bump's
+//!   flank, [`surface_rise_mm`] beyond [`SURFACE_RISE_TOLERANCE_MM`]), the first raised pass is
+//!   made again that much higher (`raised-NNN-again.csv`) and replaces it.
 //! * **Pieces of one crack.** The detector may split one crack into several candidates; the
 //!   confirmed ones that continue each other ([`PIECE_GAP_MM`]), or whose crossings the crack
 //!   map joins ([`PIECE_TRACE_GAP_MM`], [`CrackTrace`]), are reported as one crack.
