@@ -14,7 +14,9 @@ matched to cracks as `crackbot_mission::experiments::score` does (within 5 mm pl
 crack's width, once per crack). Prints a count per (truth, outcome, one or several lines
 crossed, something standing near) and one line per error; cracks that no stroke crossed are
 listed with the nearest candidates (a long candidate near a missed crack is often two cracks
-merged into one piece). Used for `crates/mission/EXPERIMENTS.md`, seventh session.
+merged into one piece); last, the errors counted by where they come from (vision: second
+reports, cracks never crossed; the finger: cracks rejected, other things confirmed). Used for
+`crates/mission/EXPERIMENTS.md`, seventh session.
 
 With `PASSES=1` it also prints one line per judged pass over a candidate: `pass SEED CANDIDATE
 TRUTH WIDTH CLASS CONFIDENCE DOUBT DIP` (what the pass's own stroke crossed nearest its middle,
@@ -216,6 +218,31 @@ def main():
     print("\ncracks no stroke crossed:")
     for u in untouched:
         print("  " + u)
+    print("\nerror classes:")
+    for line in error_classes(stats, len(untouched)):
+        print("  " + line)
+
+
+def error_classes(stats, untouched):
+    """The errors by where they come from: vision's (a crack proposed twice, a crack never
+    crossed) and the finger's (a crack rejected, something else confirmed)."""
+    count = collections.Counter()
+    for (truth, result, *_), n in stats.items():
+        if result == "duplicate or off the crack":
+            count["second reports of one crack (or off it)"] += n
+        elif result == "matched to another crack":
+            count["reports matched to another crack"] += n
+        elif result == "crack rejected":
+            count["cracks the finger rejected"] += n
+        elif result != "ok":
+            count["prints, relief or bare plate confirmed"] += n
+    count["cracks no stroke crossed"] = untouched
+    total = sum(count.values())
+    vision = count["second reports of one crack (or off it)"] + untouched
+    finger = count["cracks the finger rejected"] + count["prints, relief or bare plate confirmed"]
+    lines = [f"{n:4d}  {k}" for k, n in sorted(count.items(), key=lambda kv: -kv[1])]
+    lines.append(f"{total:4d}  in all: vision's {vision}, the finger's {finger}, other {total - vision - finger}")
+    return lines
 
 
 if __name__ == "__main__":
