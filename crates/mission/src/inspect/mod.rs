@@ -391,6 +391,7 @@ pub fn shallowest_crack_ratio(optics: &crackbot_sim::optics::OpticsParams, heigh
     let d0 = optics.proximity_height_mm;
     log_slope(d0 + height_mm) / log_slope(d0)
 }
+
 /// How far the surface at the line stands above the plane a raised pass was held over, mm
 /// (negative where it lies below), from the sound surface's level beside the line in contact
 /// and on the raised pass (`levels`, counts, [`crackbot_tactile::print_check::PrintRatios::levels`]):
@@ -1832,8 +1833,9 @@ mod tests {
                 assert!((got - rise).abs() < 1e-9, "r {r} rise {rise}: {got}");
             }
         }
-        // The measured levels of flat trial surfaces (the contact stroke's about 452 counts,
-        // the raised pass's 215 + 0.117 of its signal) are within the tolerance of none.
+        // The levels measured over flat trial plates (the contact stroke's about 452 counts,
+        // the raised pass's 215 + 0.117 of the contact signal) read as no rise, well within
+        // the tolerance.
         let flat = surface_rise_mm(&o, [452.0, 215.0 + 0.117 * 237.0], 215.0, 2.0).unwrap();
         assert!(flat.abs() < SURFACE_RISE_TOLERANCE_MM, "{flat}");
         // Brighter than the curve's peak allows reads as the peak; no signal gives nothing.
