@@ -886,6 +886,35 @@ fn a_crack_on_a_bumps_flank_is_passed_over_again_as_high_above_it_as_the_check_n
 }
 
 #[test]
+fn a_crack_on_a_bumps_flank_that_reads_a_crack_is_not_passed_over_again() {
+    use crackbot_sim::surface::distance_to_polyline;
+    // Trial scene 12747: a 0.93 mm crack on the flank of a 1 mm bump. Its first raised pass
+    // read 0.85 (a crack, in doubt); made again 0.46 mm higher, the pass over the flank's
+    // sloping level misread its dip (0.05, "neither"), and the crack was rejected (real time,
+    // 2026-11-29). Nearer the surface a crack keeps more of its dip, so one that reads a crack
+    // is left to the passes at the check's height.
+    let scene = crackbot_mission::experiments::as_printed(
+        &crackbot_sim::random_scene(&crackbot_mission::experiments::trial_params(), 12747).unwrap(),
+    );
+    let path = match &scene.features[1] {
+        crackbot_sim::Feature::Crack { path, .. } => path.clone(),
+        f => panic!("trial scene 12747's second feature is not the crack: {f:?}"),
+    };
+    let on_it = |p: [f64; 2]| distance_to_polyline(&path, p) < 3.0;
+    let r = fast_mission(&scene);
+    let crack = reported_as_a_crack(&r, on_it);
+    assert!(
+        crack
+            .evidence
+            .doubts
+            .iter()
+            .all(|d| !d.starts_with("the surface at the line stood")),
+        "{:?}",
+        crack.evidence
+    );
+}
+
+#[test]
 fn a_print_whose_stroke_ends_on_a_darker_line_is_judged_by_its_own_dip() {
     use crackbot_sim::surface::distance_to_polyline;
     // Trial scene 11494: the stroke across a 0.72 mm printed line ends on a 3.7 mm print. Its
