@@ -96,6 +96,18 @@ fn reported_as_a_crack(
     crack
 }
 
+/// Trial scene `seed` with the authors' printed crack profile, and the path of its feature
+/// `index`, which must be a crack.
+fn trial_scene_and_crack(seed: u64, index: usize) -> (Scene, Vec<[f64; 2]>) {
+    use crackbot_mission::experiments::{as_printed, trial_params};
+    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), seed).unwrap());
+    let path = match &scene.features[index] {
+        crackbot_sim::Feature::Crack { path, .. } => path.clone(),
+        f => panic!("trial scene {seed}'s feature {index} is not a crack: {f:?}"),
+    };
+    (scene, path)
+}
+
 fn config(dir: &std::path::Path) -> InspectConfig {
     let mut c = InspectConfig::new(one_crack(), dir);
     c.speedup = 8.0;
@@ -858,13 +870,7 @@ fn a_crack_on_a_bumps_flank_is_passed_over_again_as_high_above_it_as_the_check_n
     // surface there, the crack kept 94 % of its dip as a print does, and it was rejected as a
     // print (real time, 2026-11-28). The pass is now made again as far above the surface as
     // the check's height.
-    let scene = crackbot_mission::experiments::as_printed(
-        &crackbot_sim::random_scene(&crackbot_mission::experiments::trial_params(), 11668).unwrap(),
-    );
-    let path = match &scene.features[0] {
-        crackbot_sim::Feature::Crack { path, .. } => path.clone(),
-        f => panic!("trial scene 11668's first feature is not the crack: {f:?}"),
-    };
+    let (scene, path) = trial_scene_and_crack(11668, 0);
     let on_it = |p: [f64; 2]| distance_to_polyline(&path, p) < 3.0;
     let dir = tempfile::tempdir().unwrap();
     let mut c = InspectConfig::new(scene.clone(), dir.path());
@@ -893,13 +899,7 @@ fn a_crack_on_a_bumps_flank_that_reads_a_crack_is_not_passed_over_again() {
     // sloping level misread its dip (0.05, "neither"), and the crack was rejected (real time,
     // 2026-11-29). Nearer the surface a crack keeps more of its dip, so one that reads a crack
     // is left to the passes at the check's height.
-    let scene = crackbot_mission::experiments::as_printed(
-        &crackbot_sim::random_scene(&crackbot_mission::experiments::trial_params(), 12747).unwrap(),
-    );
-    let path = match &scene.features[1] {
-        crackbot_sim::Feature::Crack { path, .. } => path.clone(),
-        f => panic!("trial scene 12747's second feature is not the crack: {f:?}"),
-    };
+    let (scene, path) = trial_scene_and_crack(12747, 1);
     let on_it = |p: [f64; 2]| distance_to_polyline(&path, p) < 3.0;
     let r = fast_mission(&scene);
     let crack = reported_as_a_crack(&r, on_it);
