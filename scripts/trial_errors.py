@@ -226,24 +226,20 @@ def main():
 def error_classes(stats, untouched):
     """The errors by where they come from: vision's (a crack proposed twice, a crack never
     crossed) and the finger's (a crack rejected, something else confirmed)."""
-    count = collections.Counter()
-    for (truth, result, *_), n in stats.items():
-        if result == "duplicate or off the crack":
-            count["second reports of one crack (or off it)"] += n
-        elif result == "matched to another crack":
-            count["reports matched to another crack"] += n
-        elif result == "crack rejected":
-            count["cracks the finger rejected"] += n
-        elif result != "ok":
-            count["prints, relief or bare plate confirmed"] += n
-    count["cracks no stroke crossed"] = untouched
+    second, other_crack = "second reports of one crack (or off it)", "reports matched to another crack"
+    rejected, confirmed = "cracks the finger rejected", "prints, relief or bare plate confirmed"
+    by_result = {"duplicate or off the crack": second, "matched to another crack": other_crack,
+                 "crack rejected": rejected}
+    count = collections.Counter({"cracks no stroke crossed": untouched})
+    for (_, result, *_), n in stats.items():
+        if result != "ok":
+            count[by_result.get(result, confirmed)] += n
     total = sum(count.values())
-    vision = count["second reports of one crack (or off it)"] + untouched
-    finger = count["cracks the finger rejected"] + count["prints, relief or bare plate confirmed"]
-    lines = [f"{n:4d}  {k}" for k, n in sorted(count.items(), key=lambda kv: -kv[1])]
+    vision = count[second] + untouched
+    finger = count[rejected] + count[confirmed]
+    lines = [f"{n:4d}  {k}" for k, n in count.most_common()]
     lines.append(f"{total:4d}  in all: vision's {vision}, the finger's {finger}, other {total - vision - finger}")
     return lines
-
 
 if __name__ == "__main__":
     main()

@@ -75,7 +75,6 @@ fn main() -> Result<(), Error> {
             // The fibre's dark level the mission judged by: the trial scene's sensor's.
             let scene = crackbot_sim::random_scene(&trial_params(), seed.parse()?)?;
             let dark = scene.sensor.optics.proximity_dark_counts;
-            let height = PRINT_CHECK_HEIGHT_MM;
             let empty = Vec::new();
             let passes = report["passes"].as_array().unwrap_or(&empty);
             let decided = report["cracks"]
@@ -217,7 +216,12 @@ fn main() -> Result<(), Error> {
                         ratios
                             .iter()
                             .filter_map(|r| {
-                                surface_rise_mm(&scene.sensor.optics, r.levels, dark, height)
+                                surface_rise_mm(
+                                    &scene.sensor.optics,
+                                    r.levels,
+                                    dark,
+                                    PRINT_CHECK_HEIGHT_MM,
+                                )
                             })
                             .collect(),
                     ));

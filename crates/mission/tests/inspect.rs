@@ -52,17 +52,27 @@ fn mission(config: &InspectConfig) -> Result<InspectReport, MissionError> {
 /// a temporary folder that is gone afterwards.
 fn fast_mission(scene: &Scene) -> InspectReport {
     let dir = tempfile::tempdir().unwrap();
-    let mut c = InspectConfig::new(scene.clone(), dir.path());
+    fast_mission_in(scene, dir.path())
+}
+
+/// [`fast_mission`] with its recordings kept in `dir`.
+fn fast_mission_in(scene: &Scene, dir: &std::path::Path) -> InspectReport {
+    let mut c = InspectConfig::new(scene.clone(), dir);
     c.speedup = 8.0;
     mission(&c).expect("mission")
+}
+
+/// Trial scene `seed` with the authors' printed crack profile.
+fn trial_scene(seed: u64) -> Scene {
+    use crackbot_mission::experiments::{as_printed, trial_params};
+    as_printed(&crackbot_sim::random_scene(&trial_params(), seed).unwrap())
 }
 
 /// Trial scene `seed` with the authors' printed crack profile, and the path of its first line
 /// under 1 mm wide: a crack where `crack`, else a printed decoy.
 fn trial_scene_and_thin_line(seed: u64, crack: bool) -> (Scene, Vec<[f64; 2]>) {
-    use crackbot_mission::experiments::{as_printed, trial_params};
     use crackbot_sim::Feature;
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), seed).unwrap());
+    let scene = trial_scene(seed);
     let path = scene
         .features
         .iter()
@@ -99,8 +109,7 @@ fn reported_as_a_crack(
 /// Trial scene `seed` with the authors' printed crack profile, and the path of its feature
 /// `index`, which must be a crack.
 fn trial_scene_and_crack(seed: u64, index: usize) -> (Scene, Vec<[f64; 2]>) {
-    use crackbot_mission::experiments::{as_printed, trial_params};
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), seed).unwrap());
+    let scene = trial_scene(seed);
     let path = match &scene.features[index] {
         crackbot_sim::Feature::Crack { path, .. } => path.clone(),
         f => panic!("trial scene {seed}'s feature {index} is not a crack: {f:?}"),
@@ -455,11 +464,11 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
 
 #[test]
 fn printed_decoys_are_rejected_by_the_raised_pass_and_cracks_kept() {
-    use crackbot_mission::experiments::{as_printed, finger_budget, trial_params};
+    use crackbot_mission::experiments::finger_budget;
     use crackbot_tactile::print_check::PRINT_RATIO;
     // A trial scene (seed 1000, one of those the check's threshold was chosen on): two cracks of
     // the authors' printed profile and two printed decoys, all proposed by the detector.
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 1000).unwrap());
+    let scene = trial_scene(1000);
     let decoys = scene
         .features
         .iter()
@@ -467,9 +476,7 @@ fn printed_decoys_are_rejected_by_the_raised_pass_and_cracks_kept() {
         .count();
     assert_eq!(decoys, 2);
     let dir = tempfile::tempdir().unwrap();
-    let mut c = InspectConfig::new(scene.clone(), dir.path());
-    c.speedup = 8.0;
-    let r = mission(&c).expect("mission");
+    let r = fast_mission_in(&scene, dir.path());
     let budget = finger_budget(&scene, &r);
     assert_eq!(budget.decoy[0], 0, "a decoy was confirmed: {budget:?}");
     assert!(budget.decoy[1] >= 1, "{budget:?}");
@@ -508,11 +515,10 @@ fn printed_decoys_are_rejected_by_the_raised_pass_and_cracks_kept() {
 
 #[test]
 fn a_raised_pass_stops_over_a_screw_head_and_the_candidate_on_it_is_rejected() {
-    use crackbot_mission::experiments::{as_printed, trial_params};
     use crackbot_sim::Feature;
     // Trial scene 9073: the detector proposes the rim of a 2.2 mm screw head next to a bump,
     // the finger reads it as a crack, and the raised pass (2 mm up) runs into the head.
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9073).unwrap());
+    let scene = trial_scene(9073);
     let screws: Vec<([f64; 2], f64)> = scene
         .features
         .iter()
@@ -527,9 +533,7 @@ fn a_raised_pass_stops_over_a_screw_head_and_the_candidate_on_it_is_rejected() {
         .collect();
     assert!(!screws.is_empty());
     let dir = tempfile::tempdir().unwrap();
-    let mut c = InspectConfig::new(scene.clone(), dir.path());
-    c.speedup = 8.0;
-    let r = mission(&c).expect("mission");
+    let r = fast_mission_in(&scene, dir.path());
     let stood: Vec<_> = r
         .rejected
         .iter()
@@ -572,13 +576,13 @@ fn a_raised_pass_stops_over_a_screw_head_and_the_candidate_on_it_is_rejected() {
 
 #[test]
 fn a_stroke_that_ends_off_the_sound_surface_is_made_again_beside_it() {
-    use crackbot_mission::experiments::{as_printed, score, trial_params};
+    use crackbot_mission::experiments::score;
     // Trial scene 9246: the detector takes a 3.7 mm high screw head for a crack. The stroke
     // across that candidate starts on the head (its ends read about 730 and 310 counts, where
     // the sound surface reads about 310 and the dark level is 285), so it cannot tell a crack
     // from the head. The ends' margin is wide (0.05 of the brighter end's signal, against the
     // 0.6 that is asked), so the restroke does not hang on the simulated noise.
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9246).unwrap());
+    let scene = trial_scene(9246);
     let screw = scene
         .features
         .iter()
@@ -588,9 +592,7 @@ fn a_stroke_that_ends_off_the_sound_surface_is_made_again_beside_it() {
         })
         .expect("scene 9246 has a screw");
     let dir = tempfile::tempdir().unwrap();
-    let mut c = InspectConfig::new(scene.clone(), dir.path());
-    c.speedup = 8.0;
-    let r = mission(&c).expect("mission");
+    let r = fast_mission_in(&scene, dir.path());
     let not_judged: Vec<_> = r
         .passes
         .iter()
@@ -650,7 +652,6 @@ fn a_stroke_that_ends_off_the_sound_surface_is_made_again_beside_it() {
 
 #[test]
 fn a_ratio_in_doubt_is_measured_again_and_both_estimates_decide() {
-    use crackbot_mission::experiments::{as_printed, trial_params};
     use crackbot_mission::inspect::{
         PRINT_CHECK_PASSES_IN_DOUBT, PRINT_RATIO_DOUBT, PRINT_RATIO_SETTLED,
     };
@@ -661,11 +662,9 @@ fn a_ratio_in_doubt_is_measured_again_and_both_estimates_decide() {
     // first reads 0.85-0.88.
     let mut doubted = 0;
     for seed in [9430, 9843] {
-        let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), seed).unwrap());
+        let scene = trial_scene(seed);
         let dir = tempfile::tempdir().unwrap();
-        let mut c = InspectConfig::new(scene, dir.path());
-        c.speedup = 8.0;
-        let r = mission(&c).expect("mission");
+        let r = fast_mission_in(&scene, dir.path());
         // Every candidate passed over raised.
         struct Checked {
             id: u64,
@@ -795,13 +794,13 @@ fn a_ratio_in_doubt_is_measured_again_and_both_estimates_decide() {
 
 #[test]
 fn a_narrow_print_in_doubt_is_judged_by_its_floor_ratio_too() {
-    use crackbot_mission::experiments::{as_printed, score, trial_params};
+    use crackbot_mission::experiments::score;
     use crackbot_mission::inspect::PRINT_CHECK_PASSES_IN_DOUBT;
     use crackbot_tactile::print_check::PRINT_RATIO;
     // Trial scene 9843: a printed decoy 1.16 mm wide whose four raised passes' print ratios
     // averaged 0.875 at real time, and it was reported as a crack. Its floor ratios read about
     // 1.04: ink keeps its share raised. In doubt, the mean of the two estimates decides.
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9843).unwrap());
+    let scene = trial_scene(9843);
     // Its first print ratio reads 0.85-0.88 in nearly every run; a run that reads it outside
     // the doubt band (under heavy load here, about one in twenty) tests nothing of this, and
     // the mission is run once more. A run with the print in doubt is judged.
@@ -873,9 +872,7 @@ fn a_crack_on_a_bumps_flank_is_passed_over_again_as_high_above_it_as_the_check_n
     let (scene, path) = trial_scene_and_crack(11668, 0);
     let on_it = |p: [f64; 2]| distance_to_polyline(&path, p) < 3.0;
     let dir = tempfile::tempdir().unwrap();
-    let mut c = InspectConfig::new(scene.clone(), dir.path());
-    c.speedup = 8.0;
-    let r = mission(&c).expect("mission");
+    let r = fast_mission_in(&scene, dir.path());
     let crack = reported_as_a_crack(&r, on_it);
     let again = crack
         .evidence
@@ -941,12 +938,12 @@ fn a_print_whose_stroke_ends_on_a_darker_line_is_judged_by_its_own_dip() {
 
 #[test]
 fn a_stroke_across_two_cracks_reports_its_candidate_where_its_own_dip_is() {
-    use crackbot_mission::experiments::{as_printed, score, trial_params};
+    use crackbot_mission::experiments::score;
     // Trial scene 9570: the stroke across a 0.76 mm crack's candidate also runs into a 3.6 mm
     // crack 4.9 mm away. Its proximity channel dips over both, back to the surface between
     // them, and the localiser's one dip spanning both (8.5 mm wide) put the report between the
     // cracks: a false report and a missed crack.
-    let scene = as_printed(&crackbot_sim::random_scene(&trial_params(), 9570).unwrap());
+    let scene = trial_scene(9570);
     let r = fast_mission(&scene);
     let s = score(&scene, &r);
     assert_eq!(s.false_reports, 0, "{s:?}\n{:#?}", r.passes);
