@@ -79,8 +79,23 @@ pub struct SlideSim {
     finger: FingerParams,
 }
 
-/// Points across the proximity fibre's spot.
-pub const SPOT_POINTS: usize = 5;
+/// Points across the proximity fibre's spot (the midpoint rule over its diameter).
+///
+/// A mark narrower than the spot darkens the fibre by the share of these points it covers, so
+/// the view steps as the spot moves over it, and the deepest step may hold only over a sliver
+/// of travel. With 5 points (0.23 mm apart for the fitted 1.128 mm spot, the default until
+/// 2026-11-29) a 0.5 mm print covered three points over 0.05 mm of travel and two elsewhere,
+/// and a 0.7 mm one read 0.38 or 0.51 of its share by where the samples fell: a slow pass in
+/// contact (0.01 mm between samples) caught the deeper step and a fast raised one (0.1 mm)
+/// mostly missed it, so a thin print lost share raised, as only a crack should, and read as one
+/// (`crackbot_tactile::print_check`). With 101 points (0.011 mm apart) a print of 0.45–0.7 mm
+/// keeps its share within 4 % at any height and sampling (`tests/extreme.rs`,
+/// `a_thin_print_darkens_the_fibre_alike_at_every_height_and_sampling`; 25 points still stepped
+/// by 8 %). On the simulated trial scenes 12780–12899 (real time) the print ratios of printed
+/// lines of 0.5–0.7 mm went from 0.87 / 0.95 at their 5th percentile / median to 0.90 / 0.97,
+/// cracks' did not move, and the run time did not change measurably (the view is taken once per
+/// 400 Hz sample; `crates/mission/EXPERIMENTS.md`, "The simulated fibre's spot without steps").
+pub const SPOT_POINTS: usize = 101;
 
 /// Where the proximity fibre sits and how it sees, SI units (the calibration varies these).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1028,6 +1028,53 @@ fn traced_proximity_view_matches_a_flat_plate_and_is_shaded_in_a_slot() {
     assert!((straight.intensity - proximity_intensity(1.0, 0.45)).abs() < 1e-12);
 }
 
+/// A printed line narrower than the proximity fibre's spot darkens it by the same share in
+/// contact and raised 2 mm, and whether the fibre is sampled every 0.01 mm (a slow pass in
+/// contact) or every 0.1 mm at any phase (a fast raised pass): the spot's points are close
+/// enough that the view does not step as the spot moves over the line (`run::SPOT_POINTS`). The
+/// print check's ratio rests on this (ink keeps its share at every height).
+#[test]
+fn a_thin_print_darkens_the_fibre_alike_at_every_height_and_sampling() {
+    use crackbot_sim::run::hover_view;
+    let optics = calibrated_sensor().optics;
+    let plate = hover_view(&optics, &flat(), 1.0, [90.0, 50.0], [1.0, 0.0], 0.0);
+    for width_mm in [0.45, 0.5, 0.55, 0.6, 0.7] {
+        let print = Surface {
+            size_mm: [200.0, 100.0],
+            features: vec![Feature::Decoy {
+                path: vec![[FEATURE_X, 0.0], [FEATURE_X, 100.0]],
+                width_mm,
+                reflectivity: 0.36,
+            }],
+        };
+        // The deepest share over a pass sampled every `step` mm from `phase` on.
+        let deepest = |height: f64, step: f64, phase: f64| {
+            let level = hover_view(&optics, &flat(), 1.0, [90.0, 50.0], [1.0, 0.0], height);
+            (0..)
+                .map(|k| FEATURE_X - 4.0 + phase + k as f64 * step)
+                .take_while(|x| *x < FEATURE_X + 1.0)
+                .map(|x| {
+                    let v = hover_view(&optics, &print, 1.0, [x, 50.0], [1.0, 0.0], height);
+                    1.0 - v.intensity / level.intensity
+                })
+                .fold(0.0, f64::max)
+        };
+        let contact = deepest(0.0, 0.01, 0.0);
+        assert!(contact > 0.1, "{width_mm} mm: share {contact}");
+        for phase in [0.0, 0.02, 0.04, 0.06, 0.08] {
+            for (height, step) in [(0.0, 0.1), (2.0, 0.1), (2.0, 0.01)] {
+                let share = deepest(height, step, phase);
+                assert!(
+                    (share / contact - 1.0).abs() < 0.04,
+                    "{width_mm} mm print, {height} mm up, sampled every {step} mm from {phase}: \
+                     share {share:.3} against {contact:.3} in contact"
+                );
+            }
+        }
+    }
+    assert!(plate.intensity > 0.0);
+}
+
 proptest! {
     #![proptest_config(ProptestConfig {
         cases: 16,
