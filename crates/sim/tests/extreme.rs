@@ -6,7 +6,8 @@
 //! implicit integrator while an explicit step at the output rate blows up, the mechanical energy
 //! never grows without input, invalid inputs are refused with the field named, a lateral end
 //! stop drags the fitted finger out of the paper's 10 mm crack (where it jams without one), the
-//! traced proximity cone matches a flat plate and is shaded in a slot, and random cracks, tips,
+//! traced proximity cone matches a flat plate and is shaded in a slot, a print narrower than the
+//! proximity spot darkens it alike at every height and sampling, and random cracks, tips,
 //! speeds, frictions, end stops and cones always give finite samples inside the ADC's range.
 //!
 //! Every sample of every run is checked: all fields finite, ADC counts whole numbers in
