@@ -93,8 +93,10 @@ pub struct SlideSim {
 /// `a_thin_print_darkens_the_fibre_alike_at_every_height_and_sampling`; 25 points still stepped
 /// by 8 %). On the simulated trial scenes 12780–12899 (real time) the print ratios of printed
 /// lines of 0.5–0.7 mm went from 0.87 / 0.95 at their 5th percentile / median to 0.90 / 0.97,
-/// cracks' did not move, and the run time did not change measurably (the view is taken once per
-/// 400 Hz sample; `crates/mission/EXPERIMENTS.md`, "The simulated fibre's spot without steps").
+/// cracks' did not move (`crates/mission/EXPERIMENTS.md`, "The simulated fibre's spot without
+/// steps"). Cost: the finger's stepping takes 2.2 times as long (`benches/sim.rs`,
+/// `sim_finger_slide/sdirk2_x1_default`, one core: 3.19 → 6.93 ms per 8.3 s slide, still about
+/// 1 200 times real time); missions, paced by the arm's real time, did not change.
 pub const SPOT_POINTS: usize = 101;
 
 /// Where the proximity fibre sits and how it sees, SI units (the calibration varies these).
