@@ -1038,7 +1038,6 @@ fn traced_proximity_view_matches_a_flat_plate_and_is_shaded_in_a_slot() {
 fn a_thin_print_darkens_the_fibre_alike_at_every_height_and_sampling() {
     use crackbot_sim::run::hover_view;
     let optics = calibrated_sensor().optics;
-    let plate = hover_view(&optics, &flat(), 1.0, [90.0, 50.0], [1.0, 0.0], 0.0);
     for width_mm in [0.45, 0.5, 0.55, 0.6, 0.7] {
         let print = Surface {
             size_mm: [200.0, 100.0],
@@ -1073,7 +1072,6 @@ fn a_thin_print_darkens_the_fibre_alike_at_every_height_and_sampling() {
             }
         }
     }
-    assert!(plate.intensity > 0.0);
 }
 
 proptest! {
