@@ -241,5 +241,6 @@ def error_classes(stats, untouched):
     lines.append(f"{total:4d}  in all: vision's {vision}, the finger's {finger}, other {total - vision - finger}")
     return lines
 
+
 if __name__ == "__main__":
     main()

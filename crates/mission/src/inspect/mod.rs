@@ -361,10 +361,10 @@ pub const RAISED_PASS_CLEAR_MM: f64 = 2.5;
 /// and the first pass reads a print ([`print_check::PRINT_RATIO`]): held level over a bump's
 /// flank or a curved part, the fibre is nearer the surface than the check's height, and a crack
 /// keeps more of its dip, as a print does (one that reads a crack nearer would read one all the
-/// more at the check's height). Made again that much higher, by at most [`MAX_SURFACE_RISE_MM`]. A surface below the plate (a fibre farther
-/// than the height) is left alone: a crack then keeps less of its dip and ink all of it, so the
-/// two only lie farther apart; and the level beside a dip 2–5 mm wide reads 0.3–0.7 mm low on
-/// flat plates. Replayed on the saved passes of 3288 candidates of the trial runs 11460–12419
+/// more at the check's height). Made again that much higher, by at most
+/// [`MAX_SURFACE_RISE_MM`]. A surface below the plate (a fibre farther than the height) is left
+/// alone: a crack then keeps less of its dip and ink all of it, so the two only lie farther
+/// apart; and the level beside a dip 2–5 mm wide reads 0.3–0.7 mm low on flat plates. Replayed on the saved passes of 3288 candidates of the trial runs 11460–12419
 /// (real time), 5 on flat plates and 12 near bumps rose more than 0.3 mm (flat plates: 99 %
 /// under 0.03 mm), among them two cracks on a bump's flank rejected as prints at 0.94 and 0.89.
 /// Missions run again on those scenes and three fresh sets, made again whatever the first pass
