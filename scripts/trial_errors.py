@@ -15,8 +15,12 @@ crack's width, once per crack). Prints a count per (truth, outcome, one or sever
 crossed, something standing near) and one line per error; cracks that no stroke crossed are
 listed with the nearest candidates (a long candidate near a missed crack is often two cracks
 merged into one piece); last, the errors counted by where they come from (vision: second
-reports, cracks never crossed; the finger: cracks rejected, other things confirmed). Used for
-`crates/mission/EXPERIMENTS.md`, seventh session.
+reports, cracks never crossed; the finger: cracks rejected, other things confirmed); and last
+the fused score as the trials count it (the mean over trials of correct / (reports + missed))
+next to what it would be on the same strokes with a finger that is never wrong (a crack it
+rejected found where no other report claimed it; a print, relief or bare plate it confirmed
+dropped, its crack missed where that report had claimed one): what vision and the plan allow.
+Used for `crates/mission/EXPERIMENTS.md`, seventh and twenty-fifth sessions.
 
 With `PASSES=1` it also prints one line per judged pass over a candidate: `pass SEED CANDIDATE
 TRUTH WIDTH CLASS CONFIDENCE DOUBT DIP` (what the pass's own stroke crossed nearest its middle,
@@ -109,7 +113,7 @@ def claimed_cracks(report, feats):
     return claimed
 
 
-def trial(scenes, folder, stats, errors, untouched):
+def trial(scenes, folder, stats, errors, untouched, totals):
     seed = int(folder.rstrip("/").split("-")[-2])
     with open(os.path.join(folder, "report.json")) as f:
         report = json.load(f)
@@ -142,6 +146,15 @@ def trial(scenes, folder, stats, errors, untouched):
     }
     rejected = {r["candidate"]: r for r in report["rejected"]}
     crossed = set()
+    n_cracks = sum(f["kind"] == "crack" for f in feats)
+    t = collections.Counter()
+    totals.append(t)
+    t["correct"] += len(claimed)
+    t["false"] += len(report["cracks"]) - len(claimed)
+    t["missed"] += n_cracks - len(claimed)
+    # With a finger that is never wrong on the same strokes: the cracks it rejected (and no
+    # other report claimed) found, the other things it confirmed gone.
+    found_by_right_finger = set()
     for cand, ps in passes.items():
         # A stroke made again beside the first one (its ends were not both sound surface) is
         # the one judged: the first has no class.
@@ -167,10 +180,17 @@ def trial(scenes, folder, stats, errors, untouched):
                 )
             else:
                 result = f"{truth} confirmed" + (" (matched to a crack)" if matched is not None else "")
+                if matched is None:
+                    t["right finger: false"] -= 1
+                else:
+                    t["right finger: correct"] -= 1
+                    t["right finger: missed"] += 1
         elif cand in rejected:
             r = rejected[cand]
             decided, ratio = "rejected: " + r["felt"], r.get("height_ratio")
             result = "crack rejected" if truth == "crack" else "ok"
+            if truth == "crack" and near[1] not in claimed:
+                found_by_right_finger.add(near[1])
         else:
             continue
         if os.environ.get("RATIOS"):
@@ -185,6 +205,8 @@ def trial(scenes, folder, stats, errors, untouched):
                 f"{[(round(c[0], 1), c[2], round(c[3], 2)) for c in xs]}; standing {standing}; "
                 f"dip centres {dips}"
             )
+    t["right finger: correct"] += len(found_by_right_finger)
+    t["right finger: missed"] -= len(found_by_right_finger)
     for ci, f in enumerate(feats):
         if f["kind"] != "crack" or ci in claimed or ci in crossed:
             continue
@@ -202,13 +224,13 @@ def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
     scenes = sys.argv[1]
-    stats, errors, untouched = collections.Counter(), [], []
+    stats, errors, untouched, totals = collections.Counter(), [], [], []
     folders = [d for run in sys.argv[2:] for d in sorted(glob.glob(os.path.join(run, "trial-*-fused")))]
     if not folders:
         sys.exit(f"no trial-*-fused folder in {sys.argv[2:]}")
     for d in folders:
         if os.path.exists(os.path.join(d, "report.json")):
-            trial(scenes, d, stats, errors, untouched)
+            trial(scenes, d, stats, errors, untouched, totals)
     print("touched candidates by (truth, outcome, lines the stroke crossed, standing near):")
     for k, v in sorted(stats.items()):
         print(f"  {v:4d}  {', '.join(x for x in k if x)}")
@@ -220,6 +242,9 @@ def main():
         print("  " + u)
     print("\nerror classes:")
     for line in error_classes(stats, len(untouched)):
+        print("  " + line)
+    print("\ncorrect detections (correct / false / missed):")
+    for line in ceiling(totals):
         print("  " + line)
 
 
@@ -239,6 +264,22 @@ def error_classes(stats, untouched):
     finger = count[rejected] + count[confirmed]
     lines = [f"{n:4d}  {k}" for k, n in count.most_common()]
     lines.append(f"{total:4d}  in all: vision's {vision}, the finger's {finger}, other {total - vision - finger}")
+    return lines
+
+
+def ceiling(totals):
+    """The fused score as the trials count it (the mean over the trials of correct / (reports +
+    missed), with the sums), and what it would be on the same strokes with a finger that is
+    never wrong: what vision and the plan allow."""
+    lines = []
+    for label, prefix in (("as run", None), ("with a finger never wrong", "right finger: ")):
+        per_trial = [
+            [t[k] + (t[prefix + k] if prefix else 0) for k in ("correct", "false", "missed")]
+            for t in totals
+        ]
+        c, f, m = (sum(x[i] for x in per_trial) for i in range(3))
+        mean = sum(x[0] / max(sum(x), 1) for x in per_trial) / max(len(per_trial), 1)
+        lines.append(f"{label}: {c} / {f} / {m}, {100.0 * mean:.1f} %")
     return lines
 
 
