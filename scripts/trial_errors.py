@@ -14,9 +14,9 @@ matched to cracks as `crackbot_mission::experiments::score` does (within 5 mm pl
 crack's width, once per crack). Prints a count per (truth, outcome, one or several lines
 crossed, something standing near) and one line per error; cracks that no stroke crossed are
 listed with the nearest candidates (a long candidate near a missed crack is often two cracks
-merged into one piece); last, the errors counted by where they come from (vision: second
-reports, cracks never crossed; the finger: cracks rejected, other things confirmed); and last
-the fused score as the trials count it (the mean over trials of correct / (reports + missed))
+merged into one piece); then the errors counted by where they come from (vision: second
+reports, cracks never crossed; the finger: cracks rejected, other things confirmed); last, the
+fused score as the trials count it (the mean over trials of correct / (reports + missed))
 next to what it would be on the same strokes with a finger that is never wrong (a crack it
 rejected found where no other report claimed it; a print, relief or bare plate it confirmed
 dropped, its crack missed where that report had claimed one): what vision and the plan allow.
@@ -147,13 +147,10 @@ def trial(scenes, folder, stats, errors, untouched, totals):
     rejected = {r["candidate"]: r for r in report["rejected"]}
     crossed = set()
     n_cracks = sum(f["kind"] == "crack" for f in feats)
-    t = collections.Counter()
-    totals.append(t)
-    t["correct"] += len(claimed)
-    t["false"] += len(report["cracks"]) - len(claimed)
-    t["missed"] += n_cracks - len(claimed)
-    # With a finger that is never wrong on the same strokes: the cracks it rejected (and no
-    # other report claimed) found, the other things it confirmed gone.
+    as_run = [len(claimed), len(report["cracks"]) - len(claimed), n_cracks - len(claimed)]
+    # With a finger that is never wrong on the same strokes (correct, false, missed): the
+    # cracks it rejected (and no other report claimed) found, the other things it confirmed gone.
+    right_finger = list(as_run)
     found_by_right_finger = set()
     for cand, ps in passes.items():
         # A stroke made again beside the first one (its ends were not both sound surface) is
@@ -181,10 +178,10 @@ def trial(scenes, folder, stats, errors, untouched, totals):
             else:
                 result = f"{truth} confirmed" + (" (matched to a crack)" if matched is not None else "")
                 if matched is None:
-                    t["right finger: false"] -= 1
+                    right_finger[1] -= 1
                 else:
-                    t["right finger: correct"] -= 1
-                    t["right finger: missed"] += 1
+                    right_finger[0] -= 1
+                    right_finger[2] += 1
         elif cand in rejected:
             r = rejected[cand]
             decided, ratio = "rejected: " + r["felt"], r.get("height_ratio")
@@ -205,8 +202,9 @@ def trial(scenes, folder, stats, errors, untouched, totals):
                 f"{[(round(c[0], 1), c[2], round(c[3], 2)) for c in xs]}; standing {standing}; "
                 f"dip centres {dips}"
             )
-    t["right finger: correct"] += len(found_by_right_finger)
-    t["right finger: missed"] -= len(found_by_right_finger)
+    right_finger[0] += len(found_by_right_finger)
+    right_finger[2] -= len(found_by_right_finger)
+    totals.append((as_run, right_finger))
     for ci, f in enumerate(feats):
         if f["kind"] != "crack" or ci in claimed or ci in crossed:
             continue
@@ -270,13 +268,11 @@ def error_classes(stats, untouched):
 def ceiling(totals):
     """The fused score as the trials count it (the mean over the trials of correct / (reports +
     missed), with the sums), and what it would be on the same strokes with a finger that is
-    never wrong: what vision and the plan allow."""
+    never wrong: what vision and the plan allow. `totals`: per trial, both (correct, false,
+    missed)."""
     lines = []
-    for label, prefix in (("as run", None), ("with a finger never wrong", "right finger: ")):
-        per_trial = [
-            [t[k] + (t[prefix + k] if prefix else 0) for k in ("correct", "false", "missed")]
-            for t in totals
-        ]
+    for label, which in (("as run", 0), ("with a finger never wrong", 1)):
+        per_trial = [t[which] for t in totals]
         c, f, m = (sum(x[i] for x in per_trial) for i in range(3))
         mean = sum(x[0] / max(sum(x), 1) for x in per_trial) / max(len(per_trial), 1)
         lines.append(f"{label}: {c} / {f} / {m}, {100.0 * mean:.1f} %")

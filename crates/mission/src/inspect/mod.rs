@@ -364,9 +364,10 @@ pub const RAISED_PASS_CLEAR_MM: f64 = 2.5;
 /// more at the check's height). Made again that much higher, by at most
 /// [`MAX_SURFACE_RISE_MM`]. A surface below the plate (a fibre farther than the height) is left
 /// alone: a crack then keeps less of its dip and ink all of it, so the two only lie farther
-/// apart; and the level beside a dip 2–5 mm wide reads 0.3–0.7 mm low on flat plates. Replayed on the saved passes of 3288 candidates of the trial runs 11460–12419
-/// (real time), 5 on flat plates and 12 near bumps rose more than 0.3 mm (flat plates: 99 %
-/// under 0.03 mm), among them two cracks on a bump's flank rejected as prints at 0.94 and 0.89.
+/// apart; and the level beside a dip 2–5 mm wide reads 0.3–0.7 mm low on flat plates. Replayed
+/// on the saved passes of 3288 candidates of the trial runs 11460–12419 (real time), 5 on flat
+/// plates and 12 near bumps rose more than 0.3 mm (flat plates: 99 % under 0.03 mm), among them
+/// two cracks on a bump's flank rejected as prints at 0.94 and 0.89.
 /// Missions run again on those scenes and three fresh sets, made again whatever the first pass
 /// read: four cracks and a print set right, four prints beside bumps and a crack set wrong (the
 /// dip over the flank's sloping level misread 2.3–2.9 mm up); the crack and two of the prints

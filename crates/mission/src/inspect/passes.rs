@@ -639,7 +639,7 @@ pub(super) fn nearest_of_several_dips(
 /// where the localiser's one dip (`extent`, over the stroke's `samples` at positions `along`)
 /// is wider than the candidate (`candidate_width_mm`) by more than
 /// [`SEPARATE_DIPS_EXCESS_MM`] and the stroke's dips lie apart
-/// ([`nearest_of_several_dips`]), the samples around the one nearest the candidate (`near_mm`
+/// (`nearest_of_several_dips`), the samples around the one nearest the candidate (`near_mm`
 /// along the stroke) and that dip localised alone. `None` otherwise: the stroke's dip is the
 /// candidate's. The mission reports the candidate where this dip lies and judges its print
 /// check on these samples; `examples/replay_ratios.rs` replays it.
