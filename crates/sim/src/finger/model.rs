@@ -440,6 +440,12 @@ impl FingerModel {
         }
     }
 
+    /// Energy stored in the lateral spring and its end stop at deflection `d` (m), J: what a
+    /// tip held back by a crack's wall gives back when it comes free.
+    pub fn lateral_energy(&self, d: f64) -> f64 {
+        0.5 * self.kx * d * d + self.end_stop_energy(d.abs() - self.travel)
+    }
+
     /// The lateral spring's force on the tip at deflection `d` (m): linear, and
     /// [`END_STOP_FACTOR`] times stiffer beyond the travel.
     #[inline]
@@ -541,8 +547,7 @@ impl FingerModel {
         let pen = (e - zt).max(0.0);
         0.5 * self.m * (vx * vx + vz * vz)
             + 0.5 * self.big_m * vzb * vzb
-            + 0.5 * self.kx * (xt - arm_x).powi(2)
-            + self.end_stop_energy((xt - arm_x).abs() - self.travel)
+            + self.lateral_energy(xt - arm_x)
             + 0.5 * self.kz * (zt - zb).powi(2)
             + 0.5 * self.kc * pen * pen
             + G * (self.m * zt + self.big_m * zb)
