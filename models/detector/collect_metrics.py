@@ -23,7 +23,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(HERE, "metrics.json"))
     a = ap.parse_args()
     out = {"training": {}, "pycocotools_val": {}}
-    for run in sorted(glob.glob(os.path.join(a.runs, "seg*", "summary.json"))):
+    for run in sorted(glob.glob(os.path.join(a.runs, "*", "summary.json"))):
         out["training"][os.path.basename(os.path.dirname(run))] = load(run)
     for size in (320, 256, 416):
         for name in ("crackforest", "uav75", "quaywall", "val_all"):

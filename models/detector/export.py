@@ -1,4 +1,4 @@
-"""Export a trained CrackSeg checkpoint to fixed-size ONNX files (one per input size) and check them with onnxruntime."""
+"""Export a trained crack-map checkpoint (EffSeg or CrackSeg) to fixed-size ONNX files (one per input size) and check them with onnxruntime."""
 from __future__ import annotations
 
 import argparse
@@ -11,12 +11,13 @@ import torch
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from model import OUTPUT_STRIDE, CrackSeg  # noqa: E402
+from model import OUTPUT_STRIDE, build  # noqa: E402
 
 
 def export(ckpt: str, sizes, out_dir: str):
-    model = CrackSeg().eval()
-    model.load_state_dict(torch.load(ckpt, map_location="cpu")["model"])
+    ck = torch.load(ckpt, map_location="cpu")
+    model = build(ck.get("arch", "crackseg")).eval()
+    model.load_state_dict(ck["model"])
     import onnx
     import onnxruntime as ort
     paths = []
@@ -47,7 +48,7 @@ def export(ckpt: str, sizes, out_dir: str):
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
-    ap.add_argument("--ckpt", default=os.path.join(HERE, "runs", "seg2", "best.pt"))
+    ap.add_argument("--ckpt", default=os.path.join(HERE, "runs", "eff", "best.pt"))
     ap.add_argument("--sizes", type=int, nargs="+", default=[320, 256, 416])
     ap.add_argument("--out", default=HERE)
     a = ap.parse_args()

@@ -84,3 +84,117 @@ class CrackSeg(nn.Module):
     def forward(self, x):
         """Export path: [1,3,S,S] -> crack_map [1,1,S/2,S/2] in [0,1]."""
         return torch.sigmoid(self.logits(x))
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# EffSeg: the ImageNet-pretrained EfficientNet-Lite0 encoder (trimmed at stride 16) under a light FPN decoder.
+# ---------------------------------------------------------------------------------------------------------------
+
+# EfficientNet-Lite0's MBConv blocks 0..8 (the stages kept: the first block of the 112-channel stage ends it; blocks
+# 9..15 and the head are dropped for speed): (in, out, expand, kernel, stride).
+LITE0_BLOCKS = [
+    (32, 16, 1, 3, 1),
+    (16, 24, 6, 3, 2), (24, 24, 6, 3, 1),
+    (24, 40, 6, 5, 2), (40, 40, 6, 5, 1),
+    (40, 80, 6, 3, 2), (80, 80, 6, 3, 1), (80, 80, 6, 3, 1),
+    (80, 112, 6, 5, 1),
+]
+LITE0_TAPS = {0: 16, 2: 24, 4: 40, 8: 112}   # block index -> channels of the feature tapped after it
+# EfficientNet-Lite's own input normalisation: (255 x - 127) / 128 on 0..255 RGB.
+LITE_MEAN = 127.0 / 255.0
+LITE_STD = 128.0 / 255.0
+
+
+class MBConv(nn.Module):
+    """EfficientNet-Lite's inverted residual (no squeeze-excite, ReLU6), with EfficientNet-PyTorch's key names."""
+
+    def __init__(self, cin, cout, expand, k, stride):
+        super().__init__()
+        mid = cin * expand
+        self.has_expand = expand != 1
+        if self.has_expand:
+            self._expand_conv = nn.Conv2d(cin, mid, 1, bias=False)
+            self._bn0 = nn.BatchNorm2d(mid, eps=1e-3, momentum=0.01)
+        self._depthwise_conv = nn.Conv2d(mid, mid, k, stride, k // 2, groups=mid, bias=False)
+        self._bn1 = nn.BatchNorm2d(mid, eps=1e-3, momentum=0.01)
+        self._project_conv = nn.Conv2d(mid, cout, 1, bias=False)
+        self._bn2 = nn.BatchNorm2d(cout, eps=1e-3, momentum=0.01)
+        self.residual = stride == 1 and cin == cout
+
+    def forward(self, x):
+        y = x
+        if self.has_expand:
+            y = F.relu6(self._bn0(self._expand_conv(y)))
+        y = F.relu6(self._bn1(self._depthwise_conv(y)))
+        y = self._bn2(self._project_conv(y))
+        return x + y if self.residual else y
+
+
+class EffSeg(nn.Module):
+    """EfficientNet-Lite0 blocks 0..8 (stride 16, 112 channels; ImageNet-pretrained) + SPPF-style context + an FPN
+    decoder with additive skips from strides 2, 4 and 8 down to stride 2. Same input/output contract as CrackSeg."""
+
+    def __init__(self, dec=(16, 24, 32, 48)):
+        super().__init__()
+        self._conv_stem = nn.Conv2d(3, 32, 3, 2, 1, bias=False)
+        self._bn0 = nn.BatchNorm2d(32, eps=1e-3, momentum=0.01)
+        self._blocks = nn.ModuleList([MBConv(*b) for b in LITE0_BLOCKS])
+        d1, d2, d3, d4 = dec
+        self.ctx = PoolContext(112)
+        self.l16 = conv(112, d4, 1)
+        self.f16 = conv(d4, d4)
+        self.u16 = conv(d4, d3, 1)
+        self.l8 = conv(40, d3, 1)
+        self.f8 = conv(d3, d3)
+        self.u8 = conv(d3, d2, 1)
+        self.l4 = conv(24, d2, 1)
+        self.f4 = conv(d2, d2)
+        self.u4 = conv(d2, d1, 1)
+        self.l2 = conv(16, d1, 1)
+        self.f2 = conv(d1, d1)
+        self.out = nn.Conv2d(d1, 1, 1)
+        nn.init.normal_(self.out.weight, std=0.01)
+        nn.init.constant_(self.out.bias, -4.0)
+
+    def load_lite0(self, path):
+        """Loads the ImageNet weights of the kept stem and blocks; returns (loaded, skipped) key counts."""
+        sd = torch.load(path, map_location="cpu", weights_only=False)
+        if isinstance(sd, dict) and "state_dict" in sd:
+            sd = sd["state_dict"]
+        own = self.state_dict()
+        take = {k: v for k, v in sd.items() if k in own and own[k].shape == v.shape}
+        missing = [k for k in own if (k.startswith("_conv_stem") or k.startswith("_bn0") or k.startswith("_blocks"))
+                   and k not in take and not k.endswith("num_batches_tracked")]
+        if missing:
+            raise ValueError(f"pretrained file {path} lacks {len(missing)} encoder tensors, e.g. {missing[:3]}")
+        self.load_state_dict(take, strict=False)
+        return len(take), len(sd) - len(take)
+
+    def encoder_parameters(self):
+        return [p for n, p in self.named_parameters() if n.startswith(("_conv_stem", "_bn0", "_blocks"))]
+
+    def logits(self, x):
+        x = (x - LITE_MEAN) / LITE_STD
+        y = F.relu6(self._bn0(self._conv_stem(x)))
+        taps = {}
+        for i, b in enumerate(self._blocks):
+            y = b(y)
+            if i in LITE0_TAPS:
+                taps[i] = y
+        z = self.f16(self.l16(self.ctx(taps[8])))
+        z = self.f8(self.l8(taps[4]) + CrackSeg.up(self.u16(z)))
+        z = self.f4(self.l4(taps[2]) + CrackSeg.up(self.u8(z)))
+        z = self.f2(self.l2(taps[0]) + CrackSeg.up(self.u4(z)))
+        return self.out(z)
+
+    def forward(self, x):
+        return torch.sigmoid(self.logits(x))
+
+
+ARCHS = {"crackseg": CrackSeg, "effseg": EffSeg}
+
+
+def build(arch: str) -> nn.Module:
+    if arch not in ARCHS:
+        raise ValueError(f"unknown architecture {arch!r}; known: {sorted(ARCHS)}")
+    return ARCHS[arch]()

@@ -1,5 +1,7 @@
-"""Train CrackSeg from scratch: real photos with masks (crackforest, uav75), quaywall's boxes (weak, box-level
-supervision) and the simulator's rendered plates with exact masks (`crackbot-lab sim detector-set`).
+"""Train the crack-map model: real photos with masks (crackforest, uav75), quaywall's boxes (weak, box-level
+supervision), the DeepCrack and CRACK500 tiles with masks (`../shared/data/cracks-tiles`) and the simulator's rendered
+plates with exact masks (`crackbot-lab sim detector-set`). `--arch effseg --pretrained FILE` starts the encoder from
+the ImageNet EfficientNet-Lite0 weights (see setup.sh); `--arch crackseg` is the earlier from-scratch network.
 
 Wall-clock budgeted: cosine LR over --minutes. The EMA weights are checkpointed; model selection uses the real val
 splits only (val_all mAP@0.5 through the box rule of contract.py), never the unseen rendered scenes.
@@ -22,10 +24,12 @@ from PIL import Image, ImageFilter
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from contract import letterbox, resize_bilinear  # noqa: E402
-from model import OUTPUT_STRIDE, CrackSeg  # noqa: E402
+from model import OUTPUT_STRIDE, build  # noqa: E402
 from contract import map_to_detections  # noqa: E402
 
 DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(HERE, "../../../shared/data/cracks")))
+TILES = os.environ.get("CRACK_TILES_DATA", os.path.normpath(os.path.join(HERE, "../../../shared/data/cracks-tiles")))
+TILE_SETS = ("deepcrack", "crack500")
 REF_SIZE = 320  # the default input: training scales are jittered around its letterbox scale
 
 
@@ -36,8 +40,9 @@ def load_rgb(path):
 class Source:
     """Images with either a dense mask (uint8 0/1, same size) or a list of boxes [x0,y0,x1,y1]."""
 
-    def __init__(self, name, items, weight):
-        self.name, self.items, self.weight = name, items, weight
+    def __init__(self, name, items, weight, native=False):
+        # native: scale around the image's own resolution (tiles are crops at camera scale), not to fill REF_SIZE
+        self.name, self.items, self.weight, self.native = name, items, weight, native
 
 
 def real_sources(split="train"):
@@ -58,6 +63,22 @@ def real_sources(split="train"):
     items = [(load_rgb(os.path.join(DATA, "quaywall", im["file_name"])), None,
               np.array(boxes.get(im["id"], []), dtype=np.float32).reshape(-1, 4)) for im in d["images"]]
     out.append(Source("quaywall", items, 1.0))
+    return out
+
+
+def tile_sources(split="train"):
+    out = []
+    for ds in TILE_SETS:
+        root = os.path.join(TILES, ds)
+        if not os.path.isdir(root):
+            raise FileNotFoundError(f"crack tiles not found at {root} (set CRACK_TILES_DATA)")
+        d = json.load(open(os.path.join(root, f"{split}.json")))
+        items = []
+        for im in d["images"]:
+            img = load_rgb(os.path.join(root, im["file_name"]))
+            m = (np.asarray(Image.open(os.path.join(root, im["mask_file"])).convert("L")) > 127).astype(np.uint8)
+            items.append((img, m, None))
+        out.append(Source(ds, items, 1.0, native=True))
     return out
 
 
@@ -82,7 +103,8 @@ def sample(src, rng, crop):
     valid f32 [c/2,c/2], boxes in target cells (weak) or None)."""
     img, mask, boxes = src.items[rng.integers(len(src.items))]
     h, w = img.shape[:2]
-    s = REF_SIZE / max(w, h) * math.exp(rng.uniform(math.log(0.7), math.log(1.45)))
+    base = 1.0 if src.native else REF_SIZE / max(w, h)
+    s = base * math.exp(rng.uniform(math.log(0.7), math.log(1.45)))
     nw, nh = max(1, int(w * s + 0.5)), max(1, int(h * s + 0.5))
     im = resize_bilinear(img, nw, nh) / 255.0
     if mask is not None:
@@ -160,6 +182,8 @@ class Stream(torch.utils.data.IterableDataset):
         info = torch.utils.data.get_worker_info()
         wid = info.id if info else 0
         srcs = {s.name: s for s in real_sources("train")}
+        if any(n in self.mix for n in TILE_SETS):
+            srcs.update({s.name: s for s in tile_sources("train")})
         if self.sim_root:
             srcs["sim"] = sim_source(self.sim_root)
         names = [n for n in self.mix if n in srcs]
@@ -246,6 +270,7 @@ def val_metrics(model, size=REF_SIZE):
     from pycocotools.cocoeval import COCOeval
     import contextlib
     import io
+    was_training = model.training
     model.eval()
     gt = json.load(open(os.path.join(DATA, "val_all.json")))
     res = []
@@ -264,6 +289,7 @@ def val_metrics(model, size=REF_SIZE):
         d = c.loadRes(res)
         e = COCOeval(c, d, "bbox")
         e.evaluate(); e.accumulate(); e.summarize()
+    model.train(was_training)
     return {"mAP": float(e.stats[0]), "mAP50": float(e.stats[1]), "AR100": float(e.stats[8])}
 
 
@@ -281,18 +307,33 @@ def main():
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--max-iters", type=int, default=0)
     ap.add_argument("--init", default=None)
+    ap.add_argument("--arch", default="effseg", help="effseg (pretrained encoder) or crackseg (from scratch)")
+    ap.add_argument("--pretrained", default="", help="EfficientNet-Lite0 ImageNet weights (.pth) for effseg")
+    ap.add_argument("--encoder-lr", type=float, default=0.5, help="encoder learning rate as a fraction of --lr")
+    ap.add_argument("--no-tiles", action="store_true", help="leave the DeepCrack/CRACK500 tiles out")
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
     os.makedirs(a.out, exist_ok=True)
-    mix = {"crackforest": 0.25, "uav75": 0.25, "quaywall": 0.2, "sim": 0.3}
-    model = CrackSeg()
+    if a.no_tiles:
+        mix = {"crackforest": 0.25, "uav75": 0.25, "quaywall": 0.2, "sim": 0.3}
+    else:
+        mix = {"crackforest": 0.13, "uav75": 0.13, "quaywall": 0.12, "deepcrack": 0.18, "crack500": 0.16,
+               "sim": 0.28}
+    model = build(a.arch)
     if a.init:
         model.load_state_dict(torch.load(a.init, map_location="cpu")["model"])
+    elif a.pretrained:
+        loaded, skipped = model.load_lite0(a.pretrained)
+        print(f"pretrained: {loaded} tensors from {a.pretrained} ({skipped} not used)", flush=True)
     nparams = sum(p.numel() for p in model.parameters())
     print(f"params: {nparams}", flush=True)
     ema = EMA(model)
-    opt = torch.optim.AdamW(model.parameters(), lr=a.lr, weight_decay=1e-4)
+    enc = set(id(p) for p in getattr(model, "encoder_parameters", lambda: [])())
+    groups = [{"params": [p for p in model.parameters() if id(p) in enc], "scale": a.encoder_lr},
+              {"params": [p for p in model.parameters() if id(p) not in enc], "scale": 1.0}]
+    groups = [g for g in groups if g["params"]]
+    opt = torch.optim.AdamW(groups, lr=a.lr, weight_decay=1e-4)
     ds = Stream(a.sim, a.batch, a.crop, a.seed, mix)
     dl = torch.utils.data.DataLoader(ds, batch_size=None, num_workers=a.workers, persistent_workers=a.workers > 0,
                                      prefetch_factor=4 if a.workers else None,
@@ -308,7 +349,7 @@ def main():
         prog = min(1.0, el / budget)
         lr = a.lr * min(1.0, (it + 1) / 100) * (0.02 + 0.98 * 0.5 * (1 + math.cos(math.pi * prog)))
         for g in opt.param_groups:
-            g["lr"] = lr
+            g["lr"] = lr * g["scale"]
         model.train()
         loss = seg_loss(model.logits(x), t, v, weaks)
         opt.zero_grad(set_to_none=True)
@@ -327,7 +368,7 @@ def main():
             m = val_metrics(ema.m)
             last_eval = time.time()
             rec = {"it": it, "t": round(el, 1), "eval_s": round(last_eval - te, 1), "val_all": m}
-            ck = {"model": ema.m.state_dict(), "it": it, "t": el, "metrics": m, "params": nparams}
+            ck = {"model": ema.m.state_dict(), "arch": a.arch, "it": it, "t": el, "metrics": m, "params": nparams}
             if (m["mAP50"], m["AR100"]) > (best["mAP50"], best.get("AR100", -1)):
                 best = dict(m, it=it, t=round(el, 1))
                 torch.save(ck, os.path.join(a.out, "best.pt"))
@@ -339,7 +380,8 @@ def main():
             break
     summary = {"iterations": it, "wall_s": round(time.time() - t0, 1), "batch": a.batch, "crop": a.crop,
                "images_seen": it * a.batch, "best": best, "params": nparams, "minutes_budget": a.minutes,
-               "lr": a.lr, "seed": a.seed, "mix": mix, "sim": a.sim, "threads": a.threads}
+               "lr": a.lr, "seed": a.seed, "mix": mix, "sim": a.sim, "threads": a.threads, "arch": a.arch,
+               "pretrained": os.path.basename(a.pretrained) if a.pretrained else None, "encoder_lr": a.encoder_lr}
     json.dump(summary, open(os.path.join(a.out, "summary.json"), "w"), indent=1)
     print("summary:", json.dumps(summary), flush=True)
 
