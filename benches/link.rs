@@ -199,6 +199,7 @@ fn round_trip(c: &mut Criterion) {
             z_mm: 20.0,
         },
         speed_mm_s: 30.0,
+        valid_until_us: u64::MAX,
     });
     for signed in [false, true] {
         let security = || {

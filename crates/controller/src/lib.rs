@@ -1,6 +1,8 @@
 //! The simulated manipulator controller: what answers the robot over the link when there is no
 //! arm.
 //!
+//! * [`command`]: every value a command carries, checked once (finite, in range, in time)
+//!   into a [`command::Checked`] before anything moves; refusals name the field.
 //! * [`world`]: the arm and the finger over a scene (`crackbot-sim`), stepped one sensor sample
 //!   at a time, refusing any motion outside its workspace or speed limits whoever asks.
 //! * [`sensor`]: the simulated sensor behind the real firmware code, streaming 400 Hz frames into
@@ -11,10 +13,12 @@
 //! The binary `crackbot-sim-controller` runs it as its own process; the mission library starts
 //! it in-process for the no-argument mission.
 
+pub mod command;
 pub mod sensor;
 pub mod server;
 pub mod world;
 
+pub use command::{check, Checked, CommandError};
 pub use sensor::{Shared, SharedWorld, SimSensor};
 pub use server::{ControllerError, Faults, SensorStall, ServerConfig, ServerReport, SimController};
 pub use world::{Limits, Mode, Refusal, Tick, World};

@@ -21,6 +21,7 @@ use crackbot_link::{
 use crackbot_sim::Scene;
 use serde::Serialize;
 
+use crate::command::check;
 use crate::sensor::{lock, Shared, SharedWorld, SimSensor};
 use crate::world::{Mode, Refusal, World};
 use crate::ControllerClock;
@@ -326,53 +327,40 @@ fn serve(
             last_heard = Instant::now();
             let outcome = {
                 let mut s = lock(shared);
-                match r.message {
-                    Message::Heartbeat => None,
-                    Message::Stop => {
-                        s.world.stop();
-                        None
-                    }
-                    Message::MoveTo(m) => Some(s.world.move_to(
-                        [f64::from(m.pose.x_mm), f64::from(m.pose.y_mm)],
-                        f64::from(m.pose.z_mm),
-                        f64::from(m.speed_mm_s),
-                    )),
-                    Message::Slide(sl) => {
-                        let res = s.world.slide(
-                            sl.id,
-                            [f64::from(sl.start.x_mm), f64::from(sl.start.y_mm)],
-                            [f64::from(sl.end.x_mm), f64::from(sl.end.y_mm)],
-                            f64::from(sl.speed_mm_s),
-                        );
-                        if res.is_ok() {
-                            slides_started += 1;
-                            if config
-                                .faults
-                                .stall
-                                .is_some_and(|st| st.slide == slides_started)
-                            {
-                                stall_pending = Some(sl.id);
-                            }
-                            if config.faults.restart_during_slide == Some(slides_started) {
-                                restart_pending = Some(sl.id);
-                            }
-                        }
-                        Some(res)
-                    }
-                    _ => Some(Err(Refusal::Invalid(format!(
-                        "the controller does not take {} messages",
-                        r.message.name()
-                    )))),
-                }
+                let now_us = config.clock.at_tick(s.world.tick_count());
+                let limits = *s.world.limits();
+                check(&r.message, &limits, now_us).map(|c| s.world.apply(c))
             };
-            match outcome {
-                Some(Err(refusal)) => {
+            let refusal = match outcome {
+                Ok(Ok(Some(id))) => {
+                    slides_started += 1;
+                    if config
+                        .faults
+                        .stall
+                        .is_some_and(|st| st.slide == slides_started)
+                    {
+                        stall_pending = Some(id);
+                    }
+                    if config.faults.restart_during_slide == Some(slides_started) {
+                        restart_pending = Some(id);
+                    }
+                    None
+                }
+                Ok(Ok(None)) => None,
+                Ok(Err(refusal)) => Some(ErrorReport::new(
+                    r.seq,
+                    refusal_code(&refusal),
+                    &refusal.to_string(),
+                )),
+                Err(e) => Some(e.report(r.seq)),
+            };
+            match refusal {
+                Some(e) => {
                     report.refused += 1;
-                    tracing::info!("refused: {refusal}");
-                    let e = ErrorReport::new(r.seq, refusal_code(&refusal), &refusal.to_string());
+                    tracing::info!("refused: {}", e.text);
                     ep.send_reliable(&Message::Error(e)).ok();
                 }
-                _ => report.accepted += 1,
+                None => report.accepted += 1,
             }
         }
         if Instant::now() < next_state {

@@ -14,6 +14,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
+use crate::command::Checked;
+
 /// Height of the finger above the plate while it travels between slides, mm.
 pub const TRAVEL_HEIGHT_MM: f64 = 5.0;
 
@@ -342,6 +344,21 @@ impl World {
         let speed = self.travel_speed.min(self.limits.max_travel_speed_mm_s);
         self.start_move(start, TRAVEL_HEIGHT_MM, speed, Some(pending));
         Ok(())
+    }
+
+    /// Runs a command checked by [`crate::command::check`]; `Some(id)`: slide `id` started.
+    pub fn apply(&mut self, command: Checked) -> Result<Option<u32>, Refusal> {
+        match command {
+            Checked::Heartbeat => Ok(None),
+            Checked::Stop => {
+                self.stop();
+                Ok(None)
+            }
+            Checked::Move(m) => self.move_to(m.to, m.z_mm, m.speed_mm_s).map(|()| None),
+            Checked::Slide(s) => self
+                .slide(s.id, s.start, s.end, s.speed_mm_s)
+                .map(|()| Some(s.id)),
+        }
     }
 
     /// Stops where it is; the next command starts from here.

@@ -32,7 +32,7 @@ MAX_JUMP = 1024
 
 # The message definitions, byte for byte the text whose SHA-256 the packets carry.
 SCHEMA = """\
-crackbot-link schema 1
+crackbot-link schema 2
 Message = enum {
   0 Heartbeat
   1 MoveTo(MoveTo)
@@ -42,8 +42,8 @@ Message = enum {
   5 Error(ErrorReport)
   6 Done { slide_id: u32 }
 }
-MoveTo = struct { pose: Pose, speed_mm_s: f32 }
-Slide = struct { id: u32, start: Point2, end: Point2, speed_mm_s: f32, contact: Contact }
+MoveTo = struct { pose: Pose, speed_mm_s: f32, valid_until_us: u64 }
+Slide = struct { id: u32, start: Point2, end: Point2, speed_mm_s: f32, contact: Contact, valid_until_us: u64 }
 State = struct { controller_time_us: u64, pose: Pose, velocity: Velocity, mode: Mode, slide_progress: f32 }
 ErrorReport = struct { seq: u32, code: ErrorCode, text: string<=64 }
 Pose = struct { x_mm: f32, y_mm: f32, z_mm: f32 }
@@ -51,7 +51,7 @@ Point2 = struct { x_mm: f32, y_mm: f32 }
 Velocity = struct { x_mm_s: f32, y_mm_s: f32, z_mm_s: f32 }
 Contact = enum { 0 DepthMm(f32), 1 ForceN(f32) }
 Mode = enum { 0 Idle, 1 Moving, 2 Sliding { id: u32 }, 3 Stopped, 4 Fault { code: u16 } }
-ErrorCode = enum { 0 OutsideWorkspace, 1 OverSpeedLimit, 2 InvalidCommand, 3 Busy, 4 Faulted, 5 Unsupported, 6 Other }
+ErrorCode = enum { 0 OutsideWorkspace, 1 OverSpeedLimit, 2 InvalidCommand, 3 Busy, 4 Faulted, 5 Unsupported, 6 Other, 7 Expired }
 """
 SCHEMA_HASH = hashlib.sha256(SCHEMA.encode()).digest()[:8]
 
@@ -67,9 +67,9 @@ TYPES = {
         ("Error", "ErrorReport"),
         ("Done", [("slide_id", "u32")]),
     ]),
-    "MoveTo": ("struct", [("pose", "Pose"), ("speed_mm_s", "f32")]),
+    "MoveTo": ("struct", [("pose", "Pose"), ("speed_mm_s", "f32"), ("valid_until_us", "u64")]),
     "Slide": ("struct", [("id", "u32"), ("start", "Point2"), ("end", "Point2"),
-                         ("speed_mm_s", "f32"), ("contact", "Contact")]),
+                         ("speed_mm_s", "f32"), ("contact", "Contact"), ("valid_until_us", "u64")]),
     "State": ("struct", [("controller_time_us", "u64"), ("pose", "Pose"),
                          ("velocity", "Velocity"), ("mode", "Mode"), ("slide_progress", "f32")]),
     "ErrorReport": ("struct", [("seq", "u32"), ("code", "ErrorCode"), ("text", "string64")]),
@@ -81,7 +81,7 @@ TYPES = {
                       ("Stopped", None), ("Fault", [("code", "u16")])]),
     "ErrorCode": ("enum", [(n, None) for n in ["OutsideWorkspace", "OverSpeedLimit",
                                                "InvalidCommand", "Busy", "Faulted",
-                                               "Unsupported", "Other"]]),
+                                               "Unsupported", "Other", "Expired"]]),
 }
 UINT_BITS = {"u16": 16, "u32": 32, "u64": 64}
 
@@ -195,18 +195,20 @@ def main():
     messages = [
         ("heartbeat", "Heartbeat"),
         ("stop", "Stop"),
-        ("move to", {"MoveTo": {"pose": pose, "speed_mm_s": 50.0}}),
+        ("move to", {"MoveTo": {"pose": pose, "speed_mm_s": 50.0, "valid_until_us": 1_500_000}}),
         ("move to, zeros and a negative zero",
-         {"MoveTo": {"pose": {"x_mm": 0.0, "y_mm": -0.0, "z_mm": 0.0}, "speed_mm_s": 0.0}}),
+         {"MoveTo": {"pose": {"x_mm": 0.0, "y_mm": -0.0, "z_mm": 0.0}, "speed_mm_s": 0.0,
+                    "valid_until_us": 0}}),
         ("slide at a depth", {"Slide": {
             "id": 7, "start": {"x_mm": 10.0, "y_mm": 20.0}, "end": {"x_mm": 110.0, "y_mm": 20.0},
-            "speed_mm_s": 5.0, "contact": {"DepthMm": 0.5}}}),
+            "speed_mm_s": 5.0, "contact": {"DepthMm": 0.5}, "valid_until_us": 127}}),
         ("slide at a force, id at a varint boundary", {"Slide": {
             "id": 128, "start": {"x_mm": -1.5, "y_mm": 3.25}, "end": {"x_mm": 2.0, "y_mm": -7.75},
-            "speed_mm_s": 12.5, "contact": {"ForceN": 1.25}}}),
+            "speed_mm_s": 12.5, "contact": {"ForceN": 1.25}, "valid_until_us": 128}}),
         ("slide with the largest id", {"Slide": {
             "id": 0xFFFFFFFF, "start": {"x_mm": 0.0, "y_mm": 0.0}, "end": {"x_mm": 1.0, "y_mm": 1.0},
-            "speed_mm_s": 1.0, "contact": {"DepthMm": 0.0}}}),
+            "speed_mm_s": 1.0, "contact": {"DepthMm": 0.0},
+            "valid_until_us": 0xFFFFFFFFFFFFFFFF}}),
         ("state, idle", {"State": {
             "controller_time_us": 0, "pose": pose,
             "velocity": {"x_mm_s": 0.0, "y_mm_s": 0.0, "z_mm_s": 0.0},
@@ -237,6 +239,7 @@ def main():
         ("error codes 3", {"Error": {"seq": 1, "code": "Busy", "text": "sliding"}}),
         ("error codes 4", {"Error": {"seq": 1, "code": "Faulted", "text": "axis 2"}}),
         ("error codes 5", {"Error": {"seq": 1, "code": "Unsupported", "text": "?"}}),
+        ("error codes 7", {"Error": {"seq": 9, "code": "Expired", "text": "valid_until_us"}}),
         ("done", {"Done": {"slide_id": 7}}),
     ]
 

@@ -32,7 +32,9 @@
 //!     config,
 //! )?;
 //! let pose = Pose { x_mm: 120.0, y_mm: 40.0, z_mm: 10.0 };
-//! let seq = link.send_reliable(&Message::MoveTo(MoveTo { pose, speed_mm_s: 50.0 }))?;
+//! let controller_now_us = 0; // the newest State's controller_time_us (plus its age)
+//! let valid_until_us = controller_now_us + 1_000_000; // not to start more than 1 s late
+//! let seq = link.send_reliable(&Message::MoveTo(MoveTo { pose, speed_mm_s: 50.0, valid_until_us }))?;
 //! while let Some(r) = link.recv(Duration::from_millis(20))? {
 //!     match r.message {
 //!         Message::State(s) => println!("{:?} at {} µs", s.pose, s.controller_time_us),

@@ -15,7 +15,7 @@ pub type ErrorText = heapless::String<ERROR_TEXT_MAX>;
 /// `golden/generate.py` (an independent encoder written from this text) catch a type changed
 /// without it.
 pub const SCHEMA: &str = "\
-crackbot-link schema 1
+crackbot-link schema 2
 Message = enum {
   0 Heartbeat
   1 MoveTo(MoveTo)
@@ -25,8 +25,8 @@ Message = enum {
   5 Error(ErrorReport)
   6 Done { slide_id: u32 }
 }
-MoveTo = struct { pose: Pose, speed_mm_s: f32 }
-Slide = struct { id: u32, start: Point2, end: Point2, speed_mm_s: f32, contact: Contact }
+MoveTo = struct { pose: Pose, speed_mm_s: f32, valid_until_us: u64 }
+Slide = struct { id: u32, start: Point2, end: Point2, speed_mm_s: f32, contact: Contact, valid_until_us: u64 }
 State = struct { controller_time_us: u64, pose: Pose, velocity: Velocity, mode: Mode, slide_progress: f32 }
 ErrorReport = struct { seq: u32, code: ErrorCode, text: string<=64 }
 Pose = struct { x_mm: f32, y_mm: f32, z_mm: f32 }
@@ -34,11 +34,11 @@ Point2 = struct { x_mm: f32, y_mm: f32 }
 Velocity = struct { x_mm_s: f32, y_mm_s: f32, z_mm_s: f32 }
 Contact = enum { 0 DepthMm(f32), 1 ForceN(f32) }
 Mode = enum { 0 Idle, 1 Moving, 2 Sliding { id: u32 }, 3 Stopped, 4 Fault { code: u16 } }
-ErrorCode = enum { 0 OutsideWorkspace, 1 OverSpeedLimit, 2 InvalidCommand, 3 Busy, 4 Faulted, 5 Unsupported, 6 Other }
+ErrorCode = enum { 0 OutsideWorkspace, 1 OverSpeedLimit, 2 InvalidCommand, 3 Busy, 4 Faulted, 5 Unsupported, 6 Other, 7 Expired }
 ";
 
 /// First 8 bytes of SHA-256([`SCHEMA`]) (checked by a unit test and by the golden vectors).
-pub const SCHEMA_HASH: [u8; 8] = [0x59, 0x42, 0x78, 0x56, 0x1e, 0x2a, 0x01, 0x43];
+pub const SCHEMA_HASH: [u8; 8] = [0x6e, 0x48, 0x02, 0x0f, 0x29, 0x79, 0x25, 0x94];
 
 /// A position of the finger tip in the surface frame, millimetres.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -78,6 +78,10 @@ pub struct MoveTo {
     pub pose: Pose,
     /// Speed limit of the move, mm/s.
     pub speed_mm_s: f32,
+    /// The controller's clock ([`State::controller_time_us`]) after which the move must not
+    /// start: a command held back on the network is refused ([`ErrorCode::Expired`]) rather
+    /// than run late. The host takes the newest state's time plus its allowed age.
+    pub valid_until_us: u64,
 }
 
 /// How hard the finger presses while sliding.
@@ -103,6 +107,9 @@ pub struct Slide {
     pub speed_mm_s: f32,
     /// Contact depth or force.
     pub contact: Contact,
+    /// The controller's clock after which the slide must not start (as
+    /// [`MoveTo::valid_until_us`]).
+    pub valid_until_us: u64,
 }
 
 /// What the controller is doing.
@@ -161,6 +168,8 @@ pub enum ErrorCode {
     Unsupported,
     /// Anything else (see the text).
     Other,
+    /// The command arrived after its `valid_until_us` (held back or delayed): not run.
+    Expired,
 }
 
 /// Controller → host: a command was refused or failed.

@@ -96,6 +96,27 @@ impl ReplayWindow {
             }
         }
     }
+
+    /// Records the sequence number `seq` of a reliable message (a window over sequence numbers:
+    /// no jump limit). Returns `Some(Verdict::Fresh)` when it is new (recorded), `None` when it
+    /// was already recorded (a retry of a delivered message), and `Some(Verdict::TooOld)` when
+    /// it lies a whole window or more below the highest one: the window then restarts at
+    /// `seq`. A live peer never sends that (its packets inside the counter window are at most
+    /// [`WINDOW`] − 1 messages apart), so the window's state is wrong, not the message: one
+    /// wrong sequence number (a faulty peer's `u32::MAX`) must not silence the peer for ever.
+    pub fn record_sequence(&mut self, seq: u64) -> Option<Verdict> {
+        match self.check(seq, u64::MAX) {
+            Verdict::Fresh => {
+                self.accept(seq);
+                Some(Verdict::Fresh)
+            }
+            Verdict::TooOld => {
+                *self = Self { top: seq, seen: 1 };
+                Some(Verdict::TooOld)
+            }
+            Verdict::Replay | Verdict::TooFarAhead => None,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -110,6 +110,15 @@ pub struct LinkStats {
     pub rejected_unsynced: u64,
     /// Challenge responses to no outstanding challenge.
     pub rejected_stale_response: u64,
+    /// Packets of epoch 0 (reserved: no sender uses it).
+    pub rejected_zero_epoch: u64,
+    /// Authentic `Stop`s delivered although a window would have dropped them (replayed, old,
+    /// far ahead, of an epoch we are not synchronised to, or a duplicate): a stop always runs.
+    pub stops_outside_windows: u64,
+    /// Reliable messages whose sequence number lay more than the window below the highest one
+    /// delivered (only a peer with broken state sends them): delivered, and the sequence
+    /// window restarted at them, so a wrong sequence number never silences the peer.
+    pub sequence_resyncs: u64,
 }
 
 impl LinkStats {
@@ -126,6 +135,7 @@ impl LinkStats {
             + self.rejected_future
             + self.rejected_unsynced
             + self.rejected_stale_response
+            + self.rejected_zero_epoch
     }
 }
 
@@ -155,6 +165,8 @@ pub enum Reject {
     Unsynced,
     /// Response to no outstanding challenge.
     StaleResponse,
+    /// Epoch 0, which no sender uses.
+    ZeroEpoch,
 }
 
 impl fmt::Display for Reject {
@@ -171,6 +183,7 @@ impl fmt::Display for Reject {
             Reject::TooFarAhead => f.write_str("counter too far ahead"),
             Reject::Unsynced => f.write_str("epoch not synchronised"),
             Reject::StaleResponse => f.write_str("stale challenge response"),
+            Reject::ZeroEpoch => f.write_str("epoch 0 (reserved)"),
         }
     }
 }
@@ -263,7 +276,6 @@ struct PeerState {
 #[derive(Clone, Copy, Debug)]
 struct Outstanding {
     counter: u64,
-    sent_ms: u64,
 }
 
 /// One end of a link: our epoch, counter and sequence numbers, the peer's replay state, and the
@@ -277,6 +289,9 @@ pub struct LinkCore {
     peer: Option<PeerState>,
     wants_challenge: bool,
     challenge: Option<Outstanding>,
+    /// When the last challenge left (answered or not): challenges are at least
+    /// [`CoreConfig::challenge_interval_ms`] apart, whatever the peer does.
+    last_challenge_ms: Option<u64>,
     stats: LinkStats,
 }
 
@@ -316,6 +331,7 @@ impl LinkCore {
             peer: None,
             wants_challenge: true,
             challenge: None,
+            last_challenge_ms: None,
             stats: LinkStats::default(),
         })
     }
@@ -418,23 +434,23 @@ impl LinkCore {
 
     /// Writes a challenge into `out` when one is needed (not synchronised, or the peer's
     /// authentic packets came from another epoch or too far ahead) and none was sent in the
-    /// last [`CoreConfig::challenge_interval_ms`]. Call it after each [`LinkCore::receive`] and
-    /// periodically; `now_ms` is any monotonic clock in ms.
+    /// last [`CoreConfig::challenge_interval_ms`] (answered or not: a flood of replayed
+    /// old-epoch packets gets at most one challenge per interval). Call it after each
+    /// [`LinkCore::receive`] and periodically; `now_ms` is any monotonic clock in ms.
     pub fn poll_challenge(&mut self, now_ms: u64, out: &mut [u8]) -> Option<usize> {
         if !self.wants_challenge {
             return None;
         }
-        if let Some(o) = self.challenge {
-            if now_ms.saturating_sub(o.sent_ms) < self.config.challenge_interval_ms {
-                return None;
-            }
+        if self
+            .last_challenge_ms
+            .is_some_and(|t| now_ms.saturating_sub(t) < self.config.challenge_interval_ms)
+        {
+            return None;
         }
         let counter = self.counter.checked_add(1)?;
         let len = self.encode_control(&Body::Challenge, 0, out)?;
-        self.challenge = Some(Outstanding {
-            counter,
-            sent_ms: now_ms,
-        });
+        self.challenge = Some(Outstanding { counter });
+        self.last_challenge_ms = Some(now_ms);
         self.stats.challenges_sent += 1;
         Some(len)
     }
@@ -453,6 +469,7 @@ impl LinkCore {
             Reject::TooFarAhead => s.rejected_future += 1,
             Reject::Unsynced => s.rejected_unsynced += 1,
             Reject::StaleResponse => s.rejected_stale_response += 1,
+            Reject::ZeroEpoch => s.rejected_zero_epoch += 1,
         }
         Incoming {
             event: Event::Rejected(r),
@@ -474,35 +491,27 @@ impl LinkCore {
     /// configured peer address, never to the datagram's source. Call
     /// [`LinkCore::poll_challenge`] afterwards.
     ///
-    /// Order of the checks: layout; schema, link and sender; signed or not; the replay window
-    /// (read only, so a replay costs no HMAC); the tag; synchronisation and jump limit; the
-    /// payload; then the window is updated. Nothing that fails a check changes any state.
+    /// Order of the checks: layout; schema, link, sender and epoch; signed or not; the replay
+    /// window (read only, so a replay costs no HMAC); the tag; synchronisation and jump limit;
+    /// the payload; then the window is updated. Nothing that fails a check changes any state.
+    /// An authentic `Stop` is the exception to the windows: it is delivered whatever they say
+    /// (see [`Self::receive_stop`]).
     pub fn receive(&mut self, datagram: &[u8], reply: &mut [u8]) -> Incoming {
         self.stats.received += 1;
         let p = match wire::parse(datagram) {
             Ok(p) => p,
             Err(e) => return self.reject(Reject::Malformed(e)),
         };
+        if let Err(r) = self.check_addressing(&p) {
+            return self.reject(r);
+        }
         let h = p.header;
-        if h.schema != SCHEMA_HASH {
-            return self.reject(Reject::Schema);
-        }
-        if h.link_id != self.config.link_id {
-            return self.reject(Reject::WrongLink);
-        }
-        if h.sender != self.config.peer_node {
-            return self.reject(Reject::WrongSender);
-        }
-        match (&self.signer, p.signed) {
-            (Some(_), false) => return self.reject(Reject::Unsigned),
-            (None, true) => return self.reject(Reject::UnexpectedTag),
-            _ => {}
-        }
+        let stop = p.kind == Kind::Data && p.payload == STOP_PAYLOAD;
         let verdict = match p.kind {
             Kind::Data | Kind::Ack => self.verdict(&h),
             Kind::Challenge | Kind::Response => None,
         };
-        if matches!(verdict, Some(Verdict::Replay | Verdict::TooOld)) {
+        if !stop && matches!(verdict, Some(Verdict::Replay | Verdict::TooOld)) {
             return self.reject(Reject::Replay);
         }
         if let Some(s) = &self.signer {
@@ -512,121 +521,200 @@ impl LinkCore {
         }
         // Authentic from here on.
         match p.kind {
-            Kind::Challenge => {
-                if self.peer.is_none() {
-                    self.wants_challenge = true;
+            Kind::Challenge => self.receive_challenge(&h, reply),
+            Kind::Response => self.receive_response(&p),
+            Kind::Data if stop => self.receive_stop(h, verdict, reply),
+            Kind::Data | Kind::Ack => self.receive_data_or_ack(&p, verdict, reply),
+        }
+    }
+
+    /// Steps 2–5 of the receive order: schema, link, sender, epoch 0, signed or not.
+    fn check_addressing(&self, p: &wire::Parsed<'_>) -> Result<(), Reject> {
+        let h = &p.header;
+        if h.schema != SCHEMA_HASH {
+            return Err(Reject::Schema);
+        }
+        if h.link_id != self.config.link_id {
+            return Err(Reject::WrongLink);
+        }
+        if h.sender != self.config.peer_node {
+            return Err(Reject::WrongSender);
+        }
+        if h.epoch == 0 {
+            return Err(Reject::ZeroEpoch);
+        }
+        match (&self.signer, p.signed) {
+            (Some(_), false) => Err(Reject::Unsigned),
+            (None, true) => Err(Reject::UnexpectedTag),
+            _ => Ok(()),
+        }
+    }
+
+    fn receive_challenge(&mut self, h: &Header, reply: &mut [u8]) -> Incoming {
+        if self.peer.is_none() {
+            self.wants_challenge = true;
+        }
+        let echo = Body::Response {
+            epoch: h.epoch,
+            counter: h.counter,
+        };
+        let len = self.encode_control(&echo, 0, reply);
+        if len.is_some() {
+            self.stats.challenge_responses_sent += 1;
+        }
+        Incoming {
+            event: Event::Challenged,
+            reply: len,
+        }
+    }
+
+    fn receive_response(&mut self, p: &wire::Parsed<'_>) -> Incoming {
+        let h = p.header;
+        let Ok(Body::Response { epoch, counter }) = p.body() else {
+            return self.reject(Reject::Malformed(DecodeError::BadControl));
+        };
+        match self.challenge {
+            Some(o) if epoch == self.epoch && counter == o.counter => {}
+            _ => return self.reject(Reject::StaleResponse),
+        }
+        self.challenge = None;
+        self.wants_challenge = false;
+        match &mut self.peer {
+            Some(ps) if ps.epoch == h.epoch => {
+                // Same epoch: only ever forward (a counter above the window top was
+                // never accepted, so the counters between stay acceptable once).
+                if ps.window.check(h.counter, u64::MAX) == Verdict::Fresh {
+                    ps.window.accept(h.counter);
                 }
-                let echo = Body::Response {
+            }
+            _ => {
+                self.peer = Some(PeerState {
                     epoch: h.epoch,
-                    counter: h.counter,
-                };
-                let len = self.encode_control(&echo, 0, reply);
-                if len.is_some() {
-                    self.stats.challenge_responses_sent += 1;
-                }
-                Incoming {
-                    event: Event::Challenged,
-                    reply: len,
-                }
+                    window: ReplayWindow::starting_at(h.counter),
+                    reliable: ReplayWindow::new(),
+                });
             }
-            Kind::Response => {
-                let Ok(Body::Response { epoch, counter }) = p.body() else {
-                    return self.reject(Reject::Malformed(DecodeError::BadControl));
-                };
-                match self.challenge {
-                    Some(o) if epoch == self.epoch && counter == o.counter => {}
-                    _ => return self.reject(Reject::StaleResponse),
-                }
-                self.challenge = None;
-                self.wants_challenge = false;
-                match &mut self.peer {
-                    Some(ps) if ps.epoch == h.epoch => {
-                        // Same epoch: only ever forward (a counter above the window top was
-                        // never accepted, so the counters between stay acceptable once).
-                        if ps.window.check(h.counter, u64::MAX) == Verdict::Fresh {
-                            ps.window.accept(h.counter);
-                        }
-                    }
-                    _ => {
-                        self.peer = Some(PeerState {
-                            epoch: h.epoch,
-                            window: ReplayWindow::starting_at(h.counter),
-                            reliable: ReplayWindow::new(),
-                        });
-                    }
-                }
-                self.stats.resyncs += 1;
-                Incoming {
-                    event: Event::Synced {
-                        epoch: h.epoch,
-                        counter: h.counter,
-                    },
-                    reply: None,
-                }
-            }
-            Kind::Data | Kind::Ack => {
-                match verdict {
-                    None => {
-                        self.wants_challenge = true;
-                        return self.reject(Reject::Unsynced);
-                    }
-                    Some(Verdict::TooFarAhead) => {
-                        self.wants_challenge = true;
-                        return self.reject(Reject::TooFarAhead);
-                    }
-                    _ => {}
-                }
-                let message = match p.kind {
-                    Kind::Data => match p.body() {
-                        Ok(Body::Data(m)) => Some(m),
-                        Ok(_) => None,
-                        Err(e) => return self.reject(Reject::Malformed(e)),
-                    },
-                    _ => None,
-                };
-                let Some(peer) = self.peer.as_mut() else {
-                    return self.reject(Reject::Unsynced);
-                };
+        }
+        self.stats.resyncs += 1;
+        Incoming {
+            event: Event::Synced {
+                epoch: h.epoch,
+                counter: h.counter,
+            },
+            reply: None,
+        }
+    }
+
+    /// An authentic `Stop`: delivered (and acknowledged when asked) whatever the replay window,
+    /// the synchronisation and the sequence window say. Stopping twice is harmless and a
+    /// replayed stop can do no more than a dropped packet can (stop the arm), while a stop
+    /// dropped by a window whose state a faulty peer corrupted would leave the arm moving. Only
+    /// a fresh counter of the synchronised epoch moves the windows, as for any packet.
+    fn receive_stop(&mut self, h: Header, verdict: Option<Verdict>, reply: &mut [u8]) -> Incoming {
+        let in_windows = match (self.peer.as_mut(), verdict) {
+            (Some(peer), Some(Verdict::Fresh)) => {
                 peer.window.accept(h.counter);
-                let Some(message) = message else {
-                    self.stats.acks_received += 1;
-                    return Incoming {
-                        event: Event::Acked { seq: h.seq },
-                        reply: None,
-                    };
-                };
-                if !h.ack_requested {
-                    self.stats.delivered += 1;
-                    return Incoming {
-                        event: Event::Message { header: h, message },
-                        reply: None,
-                    };
-                }
-                let fresh = peer.reliable.check(u64::from(h.seq), u64::MAX) == Verdict::Fresh;
-                if fresh {
-                    peer.reliable.accept(u64::from(h.seq));
-                }
-                let ack = self.encode_control(&Body::Ack, h.seq, reply);
-                if ack.is_some() {
-                    self.stats.acks_sent += 1;
-                }
-                if fresh {
-                    self.stats.delivered += 1;
-                    Incoming {
-                        event: Event::Message { header: h, message },
-                        reply: ack,
-                    }
-                } else {
-                    self.stats.duplicates += 1;
-                    Incoming {
-                        event: Event::Duplicate { seq: h.seq },
-                        reply: ack,
-                    }
-                }
+                !h.ack_requested || peer.reliable.record_sequence(u64::from(h.seq)).is_some()
+            }
+            (_, Some(Verdict::Replay | Verdict::TooOld)) => false,
+            _ => {
+                // Unsynchronised or far ahead: as for any packet, resynchronise.
+                self.wants_challenge = true;
+                false
+            }
+        };
+        if !in_windows {
+            self.stats.stops_outside_windows += 1;
+        }
+        let ack = if h.ack_requested {
+            self.encode_control(&Body::Ack, h.seq, reply)
+        } else {
+            None
+        };
+        if ack.is_some() {
+            self.stats.acks_sent += 1;
+        }
+        self.stats.delivered += 1;
+        Incoming {
+            event: Event::Message {
+                header: h,
+                message: Message::Stop,
+            },
+            reply: ack,
+        }
+    }
+
+    fn receive_data_or_ack(
+        &mut self,
+        p: &wire::Parsed<'_>,
+        verdict: Option<Verdict>,
+        reply: &mut [u8],
+    ) -> Incoming {
+        let h = p.header;
+        match verdict {
+            None => {
+                self.wants_challenge = true;
+                return self.reject(Reject::Unsynced);
+            }
+            Some(Verdict::TooFarAhead) => {
+                self.wants_challenge = true;
+                return self.reject(Reject::TooFarAhead);
+            }
+            _ => {}
+        }
+        let message = match p.kind {
+            Kind::Data => match p.body() {
+                Ok(Body::Data(m)) => Some(m),
+                Ok(_) => None,
+                Err(e) => return self.reject(Reject::Malformed(e)),
+            },
+            _ => None,
+        };
+        let Some(peer) = self.peer.as_mut() else {
+            return self.reject(Reject::Unsynced);
+        };
+        peer.window.accept(h.counter);
+        let Some(message) = message else {
+            self.stats.acks_received += 1;
+            return Incoming {
+                event: Event::Acked { seq: h.seq },
+                reply: None,
+            };
+        };
+        if !h.ack_requested {
+            self.stats.delivered += 1;
+            return Incoming {
+                event: Event::Message { header: h, message },
+                reply: None,
+            };
+        }
+        let recorded = peer.reliable.record_sequence(u64::from(h.seq));
+        if recorded == Some(Verdict::TooOld) {
+            self.stats.sequence_resyncs += 1;
+        }
+        let fresh = recorded.is_some();
+        let ack = self.encode_control(&Body::Ack, h.seq, reply);
+        if ack.is_some() {
+            self.stats.acks_sent += 1;
+        }
+        if fresh {
+            self.stats.delivered += 1;
+            Incoming {
+                event: Event::Message { header: h, message },
+                reply: ack,
+            }
+        } else {
+            self.stats.duplicates += 1;
+            Incoming {
+                event: Event::Duplicate { seq: h.seq },
+                reply: ack,
             }
         }
     }
 }
+
+/// The payload of a `Stop` message (its variant index, nothing else).
+const STOP_PAYLOAD: &[u8] = &[3];
 
 #[cfg(test)]
 mod tests {

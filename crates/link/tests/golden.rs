@@ -244,8 +244,9 @@ fn the_documented_examples_hold() {
                     z_mm: 3.0,
                 },
                 speed_mm_s: 20.0,
+                valid_until_us: 300,
             }),
-            "01 0000803f 00000040 00004040 0000a041",
+            "01 0000803f 00000040 00004040 0000a041 ac02",
         ),
     ];
     for (m, hex_bytes) in cases {
@@ -260,7 +261,7 @@ fn the_documented_examples_hold() {
         .expect("ack vector");
     assert!(ack.wire.starts_with(
         concat!(
-            "434c010101020100 594278561e2a0143",
+            "434c010101020100 6e48020f29792594",
             "090000004d00000000000000",
             "2a0000000000"
         )

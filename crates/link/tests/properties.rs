@@ -47,6 +47,7 @@ fn code() -> impl Strategy<Value = ErrorCode> {
         Just(ErrorCode::Faulted),
         Just(ErrorCode::Unsupported),
         Just(ErrorCode::Other),
+        Just(ErrorCode::Expired),
     ]
 }
 
@@ -54,18 +55,24 @@ fn message() -> impl Strategy<Value = Message> {
     prop_oneof![
         Just(Message::Heartbeat),
         Just(Message::Stop),
-        (pose(), f32s())
-            .prop_map(|(pose, speed_mm_s)| Message::MoveTo(MoveTo { pose, speed_mm_s })),
+        (pose(), f32s(), any::<u64>()).prop_map(|(pose, speed_mm_s, valid_until_us)| {
+            Message::MoveTo(MoveTo {
+                pose,
+                speed_mm_s,
+                valid_until_us,
+            })
+        }),
         (
             any::<u32>(),
             point(),
             point(),
             f32s(),
             f32s(),
-            any::<bool>()
+            any::<bool>(),
+            any::<u64>()
         )
             .prop_map(
-                |(id, start, end, speed_mm_s, c, depth)| Message::Slide(Slide {
+                |(id, start, end, speed_mm_s, c, depth, valid_until_us)| Message::Slide(Slide {
                     id,
                     start,
                     end,
@@ -75,6 +82,7 @@ fn message() -> impl Strategy<Value = Message> {
                     } else {
                         Contact::ForceN(c)
                     },
+                    valid_until_us,
                 })
             ),
         (any::<u64>(), pose(), pose(), mode(), f32s()).prop_map(|(t, p, v, mode, progress)| {

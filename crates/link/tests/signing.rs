@@ -21,6 +21,7 @@ fn move_to(x: f32) -> Message {
             z_mm: 3.0,
         },
         speed_mm_s: 20.0,
+        valid_until_us: 1_000_000,
     })
 }
 

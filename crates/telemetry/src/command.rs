@@ -27,7 +27,10 @@
 //!
 //! The state changes only after every check has passed. [`Command::EmergencyStop`] is accepted
 //! from anyone, signed or not (safety before availability: any station that can see a robot can
-//! halt its arm); everything else needs the key.
+//! halt its arm); everything else needs the key. A signed [`Command::Stop`] skips steps 4 and 5
+//! (it runs even when replayed, late, from an older epoch or far ahead of the window, without
+//! moving the window): a stop must never be lost to a window's state, and a replayed one can do
+//! no more than stop the mission.
 //!
 //! Not protected: confidentiality (telemetry and commands travel in clear; run Zenoh over TLS or
 //! a VPN where that matters), denial of service (a flood of queries, or of emergency stops),
@@ -277,6 +280,31 @@ impl CommandGuard {
         if !signer.verify(&signed_bytes(body), tag) {
             return Err(Refusal::BadTag);
         }
+        match self.check_fresh(&request, now_unix_ms) {
+            Ok(state) => {
+                self.stations.insert(request.station, state);
+                Ok(request.command)
+            }
+            // A signed stop runs whatever the clocks and windows say (it is still signed):
+            // stopping twice is harmless, and a stop refused by a station's corrupted window or
+            // a skewed clock would leave the mission running.
+            Err(
+                Refusal::NotFresh(_)
+                | Refusal::OldEpoch
+                | Refusal::Replay(_)
+                | Refusal::TooFarAhead(_),
+            ) if request.command == Command::Stop => Ok(Command::Stop),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Steps 4 and 5: the send time, the station's epoch and its counter window. Returns the
+    /// station's state with the counter accepted (stored by the caller).
+    fn check_fresh(
+        &self,
+        request: &CommandRequest,
+        now_unix_ms: u64,
+    ) -> Result<StationState, Refusal> {
         let skew = request.sent_unix_ms as i64 - now_unix_ms as i64;
         if skew.unsigned_abs() > FRESHNESS_MS || request.sent_unix_ms < self.started_unix_ms {
             return Err(Refusal::NotFresh(skew));
@@ -295,8 +323,7 @@ impl CommandGuard {
             Verdict::TooFarAhead => return Err(Refusal::TooFarAhead(request.counter)),
         }
         state.window.accept(request.counter);
-        self.stations.insert(request.station, state);
-        Ok(request.command)
+        Ok(state)
     }
 }
 
@@ -332,8 +359,8 @@ mod tests {
     fn reordered_commands_are_each_accepted_once() {
         let mut station = CommandSigner::new(Some(&key(7)));
         let mut robot = CommandGuard::new("r1", Some(&key(7)));
-        let a = station.encode("r1", Command::Stop);
-        let b = station.encode("r1", Command::Stop);
+        let a = station.encode("r1", start());
+        let b = station.encode("r1", start());
         assert!(robot.check(&b, unix_ms()).is_ok());
         assert!(robot.check(&a, unix_ms()).is_ok());
         assert!(robot.check(&a, unix_ms()).is_err());
@@ -423,7 +450,7 @@ mod tests {
         let mut first = CommandSigner::new(Some(&k));
         std::thread::sleep(std::time::Duration::from_millis(3));
         let mut robot = CommandGuard::new("r1", Some(&k));
-        let old = first.encode("r1", Command::Stop);
+        let old = first.encode("r1", start());
         let mut second = CommandSigner {
             station: first.station,
             epoch_unix_ms: first.epoch_unix_ms + 1,
@@ -434,6 +461,41 @@ mod tests {
             .check(&second.encode("r1", Command::Stop), unix_ms())
             .is_ok());
         assert_eq!(robot.check(&old, unix_ms()), Err(Refusal::OldEpoch));
+    }
+
+    /// A signed stop runs whatever the windows and clocks say, without moving them; unsigned
+    /// or wrongly signed, it is refused like any command.
+    #[test]
+    fn a_signed_stop_runs_when_replayed_late_old_or_far_ahead() {
+        let k = key(7);
+        let mut station = CommandSigner::new(Some(&k));
+        let mut robot = CommandGuard::new("r1", Some(&k));
+        let stop = station.encode("r1", Command::Stop);
+        let now = unix_ms();
+        assert_eq!(robot.check(&stop, now), Ok(Command::Stop));
+        // Replayed, an hour late, from the future.
+        assert_eq!(robot.check(&stop, now), Ok(Command::Stop));
+        assert_eq!(robot.check(&stop, now + 3_600_000), Ok(Command::Stop));
+        // Far ahead of the window: a station whose counter state broke.
+        let mut jumped = CommandSigner {
+            station: station.station,
+            epoch_unix_ms: station.epoch_unix_ms,
+            counter: 1_000_000,
+            signer: Some(Signer::new(&k)),
+        };
+        assert_eq!(
+            robot.check(&jumped.encode("r1", Command::Stop), now),
+            Ok(Command::Stop)
+        );
+        // Nothing moved: the station's next start is still accepted, its replay still not.
+        let next = station.encode("r1", start());
+        assert_eq!(robot.check(&next, now), Ok(start()));
+        assert!(matches!(robot.check(&next, now), Err(Refusal::Replay(_))));
+        let mut stranger = CommandSigner::new(Some(&key(8)));
+        assert_eq!(
+            robot.check(&stranger.encode("r1", Command::Stop), now),
+            Err(Refusal::BadTag)
+        );
     }
 
     #[test]

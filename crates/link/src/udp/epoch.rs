@@ -1,5 +1,6 @@
 //! The persisted epoch: a new one at every start, written to disk before the first packet.
 
+use std::format;
 use std::fs;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
@@ -7,6 +8,9 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 /// Largest clock-derived floor of a new epoch (leaves 2^28 starts of room above it).
 const CLOCK_FLOOR_MAX: u32 = 0xF000_0000;
+/// A start without an epoch file adds a random offset in `1..RANDOM_SPAN` to the clock's
+/// floor (2^27: two such starts within one second repeat an epoch once in 1.3·10^8).
+const RANDOM_SPAN: u32 = 1 << 27;
 
 /// Why the epoch file could not give a new epoch.
 #[derive(Debug, thiserror::Error)]
@@ -44,8 +48,12 @@ pub enum EpochError {
 
 /// The file that makes each start of an endpoint use a new epoch. It holds one line,
 /// `crackbot-link epoch <n>`, the last epoch used. [`EpochFile::advance`] reads it, takes
-/// `max(n + 1, seconds since 1970)` (so that a lost file still gives a new epoch while the
-/// clock is right), and writes the new value durably (temporary file, `fsync`, rename,
+/// `max(n + 1, seconds since 1970)`, and writes the new value durably. Without a file (the
+/// first start, or the file lost) it takes the seconds since 1970 plus a random offset in
+/// `1..2^27` from the operating system's random source, so that two starts within one second
+/// whose file was lost in between do not repeat an epoch (the clock alone would: issue 57,
+/// "an epoch reused"); the offset only moves the epoch ahead of the clock, which never makes
+/// an older epoch come back. It writes the new value durably (temporary file, `fsync`, rename,
 /// `fsync` of the folder) before returning it, so no packet of the new epoch leaves before the
 /// epoch is on disk. One endpoint per file: two processes sharing one would reuse epochs.
 #[derive(Clone, Debug)]
@@ -87,10 +95,7 @@ impl EpochFile {
 
     /// Takes the next epoch and writes it durably.
     pub fn advance(&self) -> Result<u32, EpochError> {
-        let last = self.last()?.unwrap_or(0);
-        let next = last.checked_add(1).ok_or_else(|| EpochError::Exhausted {
-            path: self.path.clone(),
-        })?;
+        let last = self.last()?;
         let now = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .map(|d| d.as_secs())
@@ -98,7 +103,21 @@ impl EpochFile {
         let floor = u32::try_from(now)
             .unwrap_or(CLOCK_FLOOR_MAX)
             .min(CLOCK_FLOOR_MAX);
-        let epoch = next.max(floor);
+        let epoch = match last {
+            Some(n) => n
+                .checked_add(1)
+                .ok_or_else(|| EpochError::Exhausted {
+                    path: self.path.clone(),
+                })?
+                .max(floor),
+            None => {
+                let offset = random_u32().map_err(|source| EpochError::Io {
+                    path: self.path.clone(),
+                    source,
+                })? % (RANDOM_SPAN - 1);
+                floor + 1 + offset
+            }
+        };
         self.write(epoch).map_err(|source| EpochError::Io {
             path: self.path.clone(),
             source,
@@ -132,5 +151,42 @@ impl EpochFile {
             fs::File::open(dir)?.sync_all()?;
         }
         Ok(())
+    }
+}
+
+/// Four bytes from the operating system's random source.
+fn random_u32() -> io::Result<u32> {
+    use std::io::Read;
+    let mut b = [0u8; 4];
+    fs::File::open("/dev/urandom")
+        .and_then(|mut f| f.read_exact(&mut b))
+        .map_err(|e| io::Error::new(e.kind(), format!("no random source for a new epoch: {e}")))?;
+    Ok(u32::from_le_bytes(b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn starts_without_a_file_within_one_second_take_different_epochs() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let file = EpochFile::new(dir.path().join("e.epoch"));
+        let mut seen = std::collections::HashSet::new();
+        for _ in 0..50 {
+            let e = file.advance().expect("epoch");
+            std::fs::remove_file(file.path()).expect("lose the file");
+            assert!(seen.insert(e), "epoch {e} repeated");
+        }
+    }
+
+    #[test]
+    fn with_the_file_each_start_takes_the_next_epoch() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let file = EpochFile::new(dir.path().join("e.epoch"));
+        let a = file.advance().expect("epoch");
+        let b = file.advance().expect("epoch");
+        assert!(b > a, "{b} after {a}");
+        assert_eq!(file.last().expect("read"), Some(b));
     }
 }

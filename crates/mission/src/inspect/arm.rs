@@ -2,6 +2,10 @@
 
 use super::*;
 
+/// Longest a move or slide command may take to reach the controller and start (its
+/// `valid_until_us`; the link's retries take at most 250 ms).
+pub(super) const COMMAND_MAX_AGE: Duration = Duration::from_millis(1000);
+
 /// One arm state (its controller time maps to the host's clock through the fit).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct ArmSample {
@@ -63,6 +67,24 @@ impl Arm {
 
     pub(super) fn command(&mut self, m: &Message) -> Result<u32, MissionError> {
         self.ep.send_reliable(m).map_err(link_err)
+    }
+
+    /// The `valid_until_us` of a command sent now: the controller's clock as the newest state
+    /// gave it, advanced by the time since that state arrived, plus [`COMMAND_MAX_AGE`]. A
+    /// command the network holds back longer is refused by the controller (`Expired`), not run
+    /// late. Before any state, the controller's clock is unknown: no command can be sent.
+    pub(super) fn deadline_us(&self) -> Result<u64, MissionError> {
+        let (Some(s), Some(at)) = (self.states.back(), self.last_state_at) else {
+            return Err(MissionError::ControllerUnreachable {
+                addr: self.ep.peer_addr().to_string(),
+            });
+        };
+        let since = u64::try_from(at.elapsed().as_micros()).unwrap_or(u64::MAX);
+        let max_age = u64::try_from(COMMAND_MAX_AGE.as_micros()).unwrap_or(u64::MAX);
+        Ok(s.state
+            .controller_time_us
+            .saturating_add(since)
+            .saturating_add(max_age))
     }
 
     /// Where the arm last said it was (the origin before any state came).

@@ -252,6 +252,7 @@ impl<'a> Rig<'a> {
             },
             speed_mm_s: speed as f32,
             contact: Contact::DepthMm(1.0),
+            valid_until_us: self.arm.deadline_us()?,
         }))?;
         let here = self.arm.here();
         let travel =
@@ -383,6 +384,7 @@ impl Rig<'_> {
                 z_mm: z as f32,
             },
             speed_mm_s: speed as f32,
+            valid_until_us: self.arm.deadline_us()?,
         }))?;
         let here = self.arm.here();
         let dist = (to[0] - here[0]).hypot(to[1] - here[1]);
