@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Every figure of MODEL_CARD.md by crackbot's own (Rust) evaluator, release build, one ONNX Runtime thread:
 #   bash models/detector/evaluate.sh            # writes models/detector/out/rust/*.json and the trade-off tables
-# The val splits of the photos; unseen rendered scenes of two families (seeds 900000.. with the training family's
+# The val splits of the photos and of the DeepCrack/CRACK500 tiles; unseen rendered scenes of two families (seeds 900000.. with the training family's
 # parameters, 950000.. with eval/unseen-layout-b.toml), never rendered for training; 8 frames of the built-in
 # default scene; the edge baseline on the same sets; mAP@0.5 vs input size vs ms at 1 and 2 threads.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 ROOT="$(cd "$HERE/../.." && pwd)"
 C="${CRACKS_DATA:-$(cd "$ROOT/../shared/data/cracks" && pwd)}"
+TILES="${CRACK_TILES_DATA:-$(cd "$ROOT/../shared/data/cracks-tiles" && pwd)}"
 OUT="$HERE/out/rust"
 mkdir -p "$OUT"
 (cd "$ROOT" && cargo build --release --quiet -p crackbot-cli -p crackbot-lab)
@@ -24,6 +25,9 @@ for det in onnx classical; do
     "$L" eval-detector --coco "$C/$ds/val.json" --detector $det --json > "$OUT/${det}_$ds.json"
   done
   "$L" eval-detector --coco "$C/val_all.json" --detector $det --json > "$OUT/${det}_val_all.json"
+  for ds in deepcrack crack500; do
+    "$L" eval-detector --coco "$TILES/$ds/val.json" --detector $det --json > "$OUT/${det}_tiles_$ds.json"
+  done
   for s in unseen-a unseen-b; do
     "$L" eval-detector --coco "$SIM/$s/annotations.json" --detector $det --json > "$OUT/${det}_$s.json"
   done
@@ -38,13 +42,17 @@ done
 python3 - "$OUT" <<'PY'
 import json, sys, glob, os
 out = sys.argv[1]
-print(f"{'set':34s} {'mAP':>6s} {'mAP50':>6s} {'AR100':>6s} {'ODS2':>6s} {'ODS5':>6s} {'found':>9s} {'decoys':>7s}")
+print(f"{'set':34s} {'mAP':>6s} {'mAP50':>6s} {'AR100':>6s} {'ODS2':>6s} {'ODS5':>6s} {'found':>9s} {'decoys':>7s} {'1 piece':>9s} {'split':>5s} {'joined':>6s}")
 for p in sorted(glob.glob(os.path.join(out, "*.json"))):
     r = json.load(open(p))
     pix = {x["tolerance_px"]: x["ods"]["f1"] for x in r.get("pixel", [])}
     sc = r.get("scene")
     found = f"{sc['found']}/{sc['cracks']}" if sc else ""
     dec = f"{sc['decoys_proposed']}/{sc['decoys']}" if sc else ""
+    pc = (sc or {}).get("pieces")
+    one = f"{pc['one_piece']}/{pc['cracks']}" if pc else ""
+    split = str(pc["in_pieces"]) if pc else ""
+    joined = str(pc["joined"]) if pc else ""
     f = lambda v: f"{100*v:6.1f}" if v is not None else "     -"
-    print(f"{os.path.basename(p)[:-5]:34s} {f(r['map'])} {f(r['map50'])} {f(r['ar100'])} {f(pix.get(2.0))} {f(pix.get(5.0))} {found:>9s} {dec:>7s}")
+    print(f"{os.path.basename(p)[:-5]:34s} {f(r['map'])} {f(r['map50'])} {f(r['ar100'])} {f(pix.get(2.0))} {f(pix.get(5.0))} {found:>9s} {dec:>7s} {one:>9s} {split:>5s} {joined:>6s}")
 PY

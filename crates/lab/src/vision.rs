@@ -139,6 +139,20 @@ pub fn eval_detector(args: EvalDetectorArgs) -> Result<()> {
                 b.above_mm, b.found, b.cracks
             );
         }
+        if let Some(p) = &s.pieces {
+            println!(
+                "  pieces to touch: {}/{} cracks in one piece ({:.1}%), {} in two or more, {} joined into another's, {} missed; {} pieces, {} on decoys, {} on neither",
+                p.one_piece,
+                p.cracks,
+                100.0 * p.one_piece_rate,
+                p.in_pieces,
+                p.joined,
+                p.missed,
+                p.pieces,
+                p.on_decoys,
+                p.on_nothing
+            );
+        }
     }
     Ok(())
 }

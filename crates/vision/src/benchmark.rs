@@ -1,6 +1,7 @@
 //! A detector benchmarked on a COCO ground truth: its detections, their COCO metrics and the
 //! median time of one `detect` call; the `crackbot eval-detector` report.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -9,7 +10,7 @@ use serde::Serialize;
 use crate::coco::{
     detect_dataset_with_maps, evaluate, CocoDataset, CocoImage, CocoMetrics, CocoResult, Progress,
 };
-use crate::crack_map::CrackMap;
+use crate::crack_map::{CrackMap, CrackPiece};
 use crate::pixel::{PixelEvaluator, PixelMetrics};
 use crate::preprocess::PostprocessParams;
 use crate::scene_recall::{scene_recall, SceneRecall, SceneTruth};
@@ -179,8 +180,16 @@ impl Benchmark {
             .map(|&t| PixelEvaluator::new(t))
             .collect::<Result<_, _>>()?;
         let root = &self.root;
-        let on_map = |image: &CocoImage, map: &CrackMap| -> Result<(), VisionError> {
-            let Some(mask_file) = &image.mask_file else {
+        let threshold = PostprocessParams::default().score_threshold;
+        let mut pieces: HashMap<u64, Vec<CrackPiece>> = HashMap::new();
+        let on_frame = |image: &CocoImage,
+                        detections: &[crate::Detection],
+                        map: Option<&CrackMap>|
+         -> Result<(), VisionError> {
+            let counted = detections.iter().filter(|d| d.score >= threshold);
+            let own = counted.filter_map(|d| d.shape.as_ref()).flat_map(|s| s.pieces.iter().cloned());
+            pieces.entry(image.id).or_default().extend(own);
+            let (Some(mask_file), Some(map)) = (&image.mask_file, map) else {
                 return Ok(());
             };
             let truth = read_mask(&root.join(mask_file), image.width, image.height)?;
@@ -196,7 +205,7 @@ impl Benchmark {
             &self.root,
             self.category,
             progress,
-            on_map,
+            on_frame,
         )?;
         let metrics = evaluate(&self.gt, &results)?;
         let scene = match &self.scene_truth {
@@ -204,7 +213,8 @@ impl Benchmark {
                 &self.gt,
                 truth,
                 &results,
-                PostprocessParams::default().score_threshold,
+                threshold,
+                (!pieces.values().all(Vec::is_empty)).then_some(&pieces),
             )?),
             None => None,
         };

@@ -34,6 +34,7 @@ pub mod homography;
 pub mod model;
 #[cfg(feature = "onnx")]
 pub mod onnx;
+pub mod pieces;
 pub mod pixel;
 pub mod preprocess;
 pub mod scene_recall;

@@ -9,12 +9,16 @@
 //! all. A decoy is *proposed* by the same test. Decoys are flat to the touch: rejecting them is
 //! the tactile check's job, so proposing one is not an error, only work for the finger.
 
+use std::collections::HashMap;
+
 use serde::Serialize;
 
 pub use crackbot_imaging::scene_truth::{FeatureTruth, FrameTruth, SceneTruth};
 
 use crate::boxes::BoundingBox;
 use crate::coco::{CocoDataset, CocoResult};
+use crate::crack_map::CrackPiece;
+use crate::pieces::PieceCounts;
 use crate::VisionError;
 
 /// Fraction of a crack's visible centre line a box must hold to find it.
@@ -76,6 +80,9 @@ pub struct SceneRecall {
     pub detections: usize,
     /// The cracks missed.
     pub missed: Vec<MissedCrack>,
+    /// How the pieces the robot would touch fall on the cracks (detectors with a crack map).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pieces: Option<PieceCounts>,
 }
 
 /// Whether detection box `det` finds the feature `f`.
@@ -119,12 +126,15 @@ fn finds(det: &BoundingBox, f: &FeatureTruth) -> (bool, bool) {
 
 /// Scores `results` (detections as COCO results, e.g. of a [`crate::benchmark::Benchmark`]
 /// run) against `truth` for the frames of `gt`, counting detections scoring at least
-/// `score_threshold`. Errors when a frame of `gt` has no entry in `truth`.
+/// `score_threshold`; with `pieces` (image id → the pieces of those detections) also how the
+/// pieces fall on the cracks ([`PieceCounts`]). Errors when a frame of `gt` has no entry in
+/// `truth`.
 pub fn scene_recall(
     gt: &CocoDataset,
     truth: &SceneTruth,
     results: &[CocoResult],
     score_threshold: f32,
+    pieces: Option<&HashMap<u64, Vec<CrackPiece>>>,
 ) -> Result<SceneRecall, VisionError> {
     let mut bins: Vec<WidthRecall> = WIDTH_BINS_MM
         .iter()
@@ -156,6 +166,7 @@ pub fn scene_recall(
         other_detections: 0,
         detections: 0,
         missed: Vec::new(),
+        pieces: pieces.map(|_| PieceCounts::default()),
     };
     for image in &gt.images {
         let frame = truth
@@ -178,7 +189,8 @@ pub fn scene_recall(
             .collect();
         out.detections += dets.len();
         let mut useful = vec![false; dets.len()];
-        for f in &frame.boxes {
+        let mut held = vec![false; frame.boxes.len()];
+        for (i, f) in frame.boxes.iter().enumerate() {
             let is_crack = f.kind == "crack";
             if !(is_crack || f.kind == "decoy") {
                 continue;
@@ -193,6 +205,7 @@ pub fn scene_recall(
                     by_iou |= iou;
                 }
             }
+            held[i] = found;
             if is_crack {
                 out.cracks += 1;
                 out.found += usize::from(found);
@@ -217,6 +230,10 @@ pub fn scene_recall(
             }
         }
         out.other_detections += useful.iter().filter(|u| !**u).count();
+        if let (Some(counts), Some(pieces)) = (out.pieces.as_mut(), pieces) {
+            let own = pieces.get(&image.id).map(Vec::as_slice).unwrap_or(&[]);
+            counts.add_frame(frame, own, &held);
+        }
     }
     if out.cracks > 0 {
         out.recall = out.found as f64 / out.cracks as f64;
@@ -323,7 +340,7 @@ mod tests {
             result([0.0, 90.0, 5.0, 5.0], 0.6),
             result([5.0, 80.0, 10.0, 2.0], 0.1), // below the threshold: does not count
         ];
-        let r = scene_recall(&gt, &truth, &results, 0.25).unwrap();
+        let r = scene_recall(&gt, &truth, &results, 0.25, None).unwrap();
         assert_eq!((r.cracks, r.found, r.found_by_iou), (3, 2, 1));
         assert!((r.recall - 2.0 / 3.0).abs() < 1e-12);
         assert_eq!((r.decoys, r.decoys_proposed), (1, 1));
@@ -336,6 +353,6 @@ mod tests {
             description: String::new(),
             images: vec![],
         };
-        assert!(scene_recall(&gt, &missing, &results, 0.25).is_err());
+        assert!(scene_recall(&gt, &missing, &results, 0.25, None).is_err());
     }
 }

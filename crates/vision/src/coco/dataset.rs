@@ -29,19 +29,20 @@ pub fn detect_dataset<D: Detector + ?Sized>(
     category_id: u64,
     progress: impl FnMut(&Progress<'_>),
 ) -> Result<Vec<CocoResult>, VisionError> {
-    detect_dataset_with_maps(detector, gt, image_root, category_id, progress, |_, _| {
+    detect_dataset_with_maps(detector, gt, image_root, category_id, progress, |_, _, _| {
         Ok(())
     })
 }
 
-/// [`detect_dataset`], handing each image's crack map (detectors that predict one) to `on_map`.
+/// [`detect_dataset`], handing each image's detections and crack map (detectors that predict
+/// one) to `on_frame`.
 pub fn detect_dataset_with_maps<D: Detector + ?Sized>(
     detector: &mut D,
     gt: &CocoDataset,
     image_root: &Path,
     category_id: u64,
     mut progress: impl FnMut(&Progress<'_>),
-    mut on_map: impl FnMut(&CocoImage, &CrackMap) -> Result<(), VisionError>,
+    mut on_frame: impl FnMut(&CocoImage, &[crate::Detection], Option<&CrackMap>) -> Result<(), VisionError>,
 ) -> Result<Vec<CocoResult>, VisionError> {
     let total = gt.images.len();
     let mut results = Vec::new();
@@ -67,9 +68,7 @@ pub fn detect_dataset_with_maps<D: Detector + ?Sized>(
             });
         }
         let (detections, map) = detector.detect_with_map(&rgb)?;
-        if let Some(map) = &map {
-            on_map(image, map)?;
-        }
+        on_frame(image, &detections, map.as_ref())?;
         for d in detections {
             if !d.bbox.is_finite() || !d.score.is_finite() {
                 continue;
