@@ -307,15 +307,16 @@ def main():
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--max-iters", type=int, default=0)
     ap.add_argument("--init", default=None)
-    ap.add_argument("--arch", default="effseg", help="effseg (pretrained encoder) or crackseg (from scratch)")
+    ap.add_argument("--arch", default="crackseg", help="crackseg (from scratch, the shipped default) or effseg "
+                    "(the pretrained EfficientNet-Lite0 encoder; train_effseg.sh)")
     ap.add_argument("--pretrained", default="", help="EfficientNet-Lite0 ImageNet weights (.pth) for effseg")
     ap.add_argument("--encoder-lr", type=float, default=0.5, help="encoder learning rate as a fraction of --lr")
-    ap.add_argument("--no-tiles", action="store_true", help="leave the DeepCrack/CRACK500 tiles out")
+    ap.add_argument("--tiles", action="store_true", help="add the DeepCrack/CRACK500 train tiles to the mix")
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
     os.makedirs(a.out, exist_ok=True)
-    if a.no_tiles:
+    if not a.tiles:
         mix = {"crackforest": 0.25, "uav75": 0.25, "quaywall": 0.2, "sim": 0.3}
     else:
         mix = {"crackforest": 0.13, "uav75": 0.13, "quaywall": 0.12, "deepcrack": 0.18, "crack500": 0.16,

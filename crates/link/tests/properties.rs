@@ -71,8 +71,8 @@ fn message() -> impl Strategy<Value = Message> {
             any::<bool>(),
             any::<u64>()
         )
-            .prop_map(
-                |(id, start, end, speed_mm_s, c, depth, valid_until_us)| Message::Slide(Slide {
+            .prop_map(|(id, start, end, speed_mm_s, c, depth, valid_until_us)| {
+                Message::Slide(Slide {
                     id,
                     start,
                     end,
@@ -84,7 +84,7 @@ fn message() -> impl Strategy<Value = Message> {
                     },
                     valid_until_us,
                 })
-            ),
+            }),
         (any::<u64>(), pose(), pose(), mode(), f32s()).prop_map(|(t, p, v, mode, progress)| {
             Message::State(State {
                 controller_time_us: t,

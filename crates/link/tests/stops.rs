@@ -80,12 +80,7 @@ enum Step {
 }
 
 fn step() -> impl Strategy<Value = Step> {
-    let counter = prop_oneof![
-        0u64..3000,
-        Just(u64::MAX),
-        Just(u64::MAX - 1),
-        any::<u64>()
-    ];
+    let counter = prop_oneof![0u64..3000, Just(u64::MAX), Just(u64::MAX - 1), any::<u64>()];
     let seq = prop_oneof![0u32..300, Just(u32::MAX), any::<u32>()];
     prop_oneof![
         3 => (any::<bool>(), prop::bool::weighted(0.1))
@@ -117,7 +112,9 @@ fn run(steps: &[Step], forger: &Key, key: &Key) -> (Event, Option<usize>) {
         let datagram = match s {
             Step::HostSends { reliable, stop } => {
                 let m = if *stop { Message::Stop } else { move_to(1.0) };
-                let sent = host.encode_message(&m, *reliable, &mut buf).expect("encode");
+                let sent = host
+                    .encode_message(&m, *reliable, &mut buf)
+                    .expect("encode");
                 buf[..sent.len].to_vec()
             }
             Step::Forged {
@@ -129,11 +126,7 @@ fn run(steps: &[Step], forger: &Key, key: &Key) -> (Event, Option<usize>) {
             } => {
                 let epoch = (i64::from(host.epoch()) + epoch_delta).clamp(0, i64::from(u32::MAX));
                 let m = if *stop { Message::Stop } else { move_to(2.0) };
-                forge_header(
-                    Some(forger),
-                    header(epoch as u32, *counter, *seq, *ack),
-                    m,
-                )
+                forge_header(Some(forger), header(epoch as u32, *counter, *seq, *ack), m)
             }
             Step::Replay(i) if !recorded.is_empty() => recorded[i.index(recorded.len())].clone(),
             Step::Flipped(i, bit) if !recorded.is_empty() => {
@@ -238,7 +231,13 @@ fn a_replayed_or_unsynchronised_stop_still_stops_and_a_replayed_move_does_not_mo
     ));
     // Unsigned or forged with another key: never.
     rig.inject(&forge(None, rig.host.epoch(), 1 << 40, 1, Message::Stop));
-    rig.inject(&forge(Some(&other_key()), rig.host.epoch(), 1 << 40, 1, Message::Stop));
+    rig.inject(&forge(
+        Some(&other_key()),
+        rig.host.epoch(),
+        1 << 40,
+        1,
+        Message::Stop,
+    ));
     assert!(rig
         .controller
         .wait_until(WAIT, |_, s| s.stops_outside_windows >= 2
@@ -325,7 +324,10 @@ fn restarts_within_one_second_without_the_epoch_file_refuse_the_recorded_exchang
     rig.host.send_reliable(&move_to(7.0)).expect("move");
     assert!(rig.controller.wait_until(WAIT, |d, _| d.len() == 1));
     let recorded = rig.tap.captured();
-    assert!(recorded.len() >= 2, "the response and the move were recorded");
+    assert!(
+        recorded.len() >= 2,
+        "the response and the move were recorded"
+    );
     // The real host goes away; only the recording is left.
     rig.tap.set_forward(false);
     let file = rig.dir.path("controller.epoch");

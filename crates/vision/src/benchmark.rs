@@ -187,7 +187,9 @@ impl Benchmark {
                         map: Option<&CrackMap>|
          -> Result<(), VisionError> {
             let counted = detections.iter().filter(|d| d.score >= threshold);
-            let own = counted.filter_map(|d| d.shape.as_ref()).flat_map(|s| s.pieces.iter().cloned());
+            let own = counted
+                .filter_map(|d| d.shape.as_ref())
+                .flat_map(|s| s.pieces.iter().cloned());
             pieces.entry(image.id).or_default().extend(own);
             let (Some(mask_file), Some(map)) = (&image.mask_file, map) else {
                 return Ok(());

@@ -1,6 +1,8 @@
 //! The Rust inference path (letterbox → ONNX Runtime → crack map → boxes by the dataset rule)
 //! against the Python model's own outputs, saved next to the model at export time (`models/detector/reference/`, written by
-//! `models/detector/make_reference.py` with onnxruntime in Python), and bad model files.
+//! `models/detector/make_reference.py` with onnxruntime in Python), for the shipped default
+//! (`models/detector/`, CrackSeg) and the pretrained-encoder alternative (`models/detector/effseg/`),
+//! and bad model files.
 #![cfg(feature = "onnx")]
 
 use std::path::{Path, PathBuf};
@@ -14,9 +16,14 @@ fn models() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/detector")
 }
 
-fn reference() -> Value {
+/// The folders of the shipped models, each with its `reference/`.
+fn model_folders() -> [PathBuf; 2] {
+    [models(), models().join("effseg")]
+}
+
+fn reference(folder: &Path) -> Value {
     let text =
-        std::fs::read_to_string(models().join("reference/reference.json")).expect("reference.json");
+        std::fs::read_to_string(folder.join("reference/reference.json")).expect("reference.json");
     serde_json::from_str(&text).expect("JSON")
 }
 
@@ -30,10 +37,16 @@ fn close(a: f64, b: f64, rel: f64, abs: f64) -> bool {
 
 #[test]
 fn crack_maps_match_python_on_the_synthetic_input_at_every_size() {
-    let r = reference();
+    for folder in model_folders() {
+        synthetic_input_matches(&folder);
+    }
+}
+
+fn synthetic_input_matches(folder: &Path) {
+    let r = reference(folder);
     for s in r["synthetic"].as_array().expect("synthetic") {
         let size = s["S"].as_u64().expect("S") as usize;
-        let model = models().join(s["model"].as_str().expect("model"));
+        let model = folder.join(s["model"].as_str().expect("model"));
         let mut d = OnnxDetector::load(&model, PostprocessParams::default(), 1).expect("load");
         assert_eq!(d.input_size(), size);
         assert_eq!(d.output(), ModelOutput::CrackMap);
@@ -70,9 +83,15 @@ fn crack_maps_match_python_on_the_synthetic_input_at_every_size() {
 
 #[test]
 fn crack_maps_and_detections_match_python_on_real_photos() {
-    let r = reference();
+    for folder in model_folders() {
+        real_photos_match(&folder);
+    }
+}
+
+fn real_photos_match(folder: &Path) {
+    let r = reference(folder);
     let mut d = OnnxDetector::load(
-        &models().join("crack-detector-320.onnx"),
+        &folder.join("crack-detector-320.onnx"),
         PostprocessParams {
             score_threshold: 0.0,
             ..PostprocessParams::default()
@@ -82,7 +101,7 @@ fn crack_maps_and_detections_match_python_on_real_photos() {
     .expect("load");
     let mut compared = 0;
     for im in r["images"].as_array().expect("images") {
-        let file = models()
+        let file = folder
             .join("reference")
             .join(im["file"].as_str().expect("file"));
         let rgb = image::open(&file).expect("png").to_rgb8();

