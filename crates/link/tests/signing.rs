@@ -9,21 +9,7 @@ use std::time::Duration;
 
 use common::*;
 use crackbot_link::wire::{Header, FLAG_SIGNED, HEADER_LEN};
-use crackbot_link::{
-    EpochFile, LinkConfig, LinkEndpoint, LinkError, Message, MoveTo, Pose, Security, TAG_LEN,
-};
-
-fn move_to(x: f32) -> Message {
-    Message::MoveTo(MoveTo {
-        pose: Pose {
-            x_mm: x,
-            y_mm: 2.0,
-            z_mm: 3.0,
-        },
-        speed_mm_s: 20.0,
-        valid_until_us: 1_000_000,
-    })
-}
+use crackbot_link::{EpochFile, LinkConfig, LinkEndpoint, LinkError, Message, Security, TAG_LEN};
 
 /// MAVLink: a replayed packet accepted because the receiver's timestamp state was never
 /// advanced. Here every accepted counter is recorded; replays inside the window and below it

@@ -8,23 +8,9 @@ mod common;
 use std::time::{Duration, Instant};
 
 use common::*;
-use crackbot_link::wire::{Header, MAX_DATAGRAM};
-use crackbot_link::{
-    CoreConfig, Event, Key, LinkCore, Message, MoveTo, Pose, Signer, NODE_HOST, SCHEMA_HASH,
-};
+use crackbot_link::wire::MAX_DATAGRAM;
+use crackbot_link::{CoreConfig, Event, Key, LinkCore, Message, Signer};
 use proptest::prelude::*;
-
-fn move_to(x: f32) -> Message {
-    Message::MoveTo(MoveTo {
-        pose: Pose {
-            x_mm: x,
-            y_mm: 2.0,
-            z_mm: 3.0,
-        },
-        speed_mm_s: 20.0,
-        valid_until_us: 1_000_000,
-    })
-}
 
 fn cores(key: &Key) -> (LinkCore, LinkCore) {
     let h = LinkCore::new(CoreConfig::host(1), Some(Signer::new(key)), 1000).expect("host");
@@ -41,18 +27,6 @@ fn challenge(x: &mut LinkCore, y: &mut LinkCore, now: u64) {
         if let Some(m) = y.receive(&buf[..n], &mut reply).reply {
             x.receive(&reply[..m], &mut sink);
         }
-    }
-}
-
-fn header(epoch: u32, counter: u64, seq: u32, ack: bool) -> Header {
-    Header {
-        ack_requested: ack,
-        sender: NODE_HOST,
-        link_id: 1,
-        schema: SCHEMA_HASH,
-        epoch,
-        counter,
-        seq,
     }
 }
 
@@ -126,7 +100,11 @@ fn run(steps: &[Step], forger: &Key, key: &Key) -> (Event, Option<usize>) {
             } => {
                 let epoch = (i64::from(host.epoch()) + epoch_delta).clamp(0, i64::from(u32::MAX));
                 let m = if *stop { Message::Stop } else { move_to(2.0) };
-                forge_header(Some(forger), header(epoch as u32, *counter, *seq, *ack), m)
+                forge_header(
+                    Some(forger),
+                    host_header(epoch as u32, *counter, *seq, *ack),
+                    m,
+                )
             }
             Step::Replay(i) if !recorded.is_empty() => recorded[i.index(recorded.len())].clone(),
             Step::Flipped(i, bit) if !recorded.is_empty() => {
@@ -186,7 +164,7 @@ fn a_sequence_number_at_the_end_silences_nothing() {
     let (epoch, c) = (rig.host.epoch(), rig.host.counter());
     rig.inject(&forge_header(
         Some(&k),
-        header(epoch, c + 1, u32::MAX, true),
+        host_header(epoch, c + 1, u32::MAX, true),
         Message::Heartbeat,
     ));
     assert!(rig.controller.wait_until(WAIT, |d, _| d.len() == 1));
@@ -226,7 +204,7 @@ fn a_replayed_or_unsynchronised_stop_still_stops_and_a_replayed_move_does_not_mo
     let k = key();
     rig.inject(&forge_header(
         Some(&k),
-        header(rig.host.epoch().wrapping_add(7), 3, 1, true),
+        host_header(rig.host.epoch().wrapping_add(7), 3, 1, true),
         Message::Stop,
     ));
     // Unsigned or forged with another key: never.
@@ -262,7 +240,11 @@ fn a_flood_of_old_epoch_packets_gets_at_most_one_challenge_per_interval() {
     let (mut host, mut ctrl) = cores(&key);
     challenge(&mut host, &mut ctrl, 0);
     challenge(&mut ctrl, &mut host, 0);
-    let old = forge_header(Some(&key), header(999, 5, 1, false), Message::Heartbeat);
+    let old = forge_header(
+        Some(&key),
+        host_header(999, 5, 1, false),
+        Message::Heartbeat,
+    );
     let mut buf = [0u8; MAX_DATAGRAM];
     let mut reply = [0u8; MAX_DATAGRAM];
     let mut sink = [0u8; MAX_DATAGRAM];

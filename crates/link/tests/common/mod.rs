@@ -382,22 +382,36 @@ pub fn pump(ep: &mut LinkEndpoint, d: Duration) -> Vec<Received> {
     }
 }
 
+/// The header the host would write (sender host, link 1, our schema).
+pub fn host_header(epoch: u32, counter: u64, seq: u32, ack_requested: bool) -> Header {
+    Header {
+        ack_requested,
+        sender: NODE_HOST,
+        link_id: 1,
+        schema: SCHEMA_HASH,
+        epoch,
+        counter,
+        seq,
+    }
+}
+
+/// A `MoveTo` to `x`.
+pub fn move_to(x: f32) -> Message {
+    Message::MoveTo(crackbot_link::MoveTo {
+        pose: crackbot_link::Pose {
+            x_mm: x,
+            y_mm: 2.0,
+            z_mm: 3.0,
+        },
+        speed_mm_s: 20.0,
+        valid_until_us: 1_000_000,
+    })
+}
+
 /// Encodes a packet as the host would (sender host, link 1, our schema), signed with `key` or
 /// unsigned.
 pub fn forge(key: Option<&Key>, epoch: u32, counter: u64, seq: u32, message: Message) -> Vec<u8> {
-    forge_header(
-        key,
-        Header {
-            ack_requested: false,
-            sender: NODE_HOST,
-            link_id: 1,
-            schema: SCHEMA_HASH,
-            epoch,
-            counter,
-            seq,
-        },
-        message,
-    )
+    forge_header(key, host_header(epoch, counter, seq, false), message)
 }
 
 pub fn forge_header(key: Option<&Key>, header: Header, message: Message) -> Vec<u8> {
