@@ -36,6 +36,16 @@ pub enum MissionError {
     /// A setting is out of range; the message names it.
     #[error("{0}")]
     Invalid(String),
+    /// A mission setting is out of range.
+    #[error("the setting {field} = {value} is outside {allowed}")]
+    Setting {
+        /// The setting's name in [`InspectConfig`].
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it may be.
+        allowed: &'static str,
+    },
     /// The sensor link failed.
     #[error(transparent)]
     Acquisition(#[from] crackbot_acquisition::AcquisitionError),

@@ -1,6 +1,12 @@
 //! The arm, through the link: commands, the state stream on the host's clock, positions at any instant.
 
-use super::*;
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+use crackbot_link::{LinkEndpoint, Message, State};
+
+use crate::sync::ClockSync;
+use crate::MissionError;
 
 /// Longest a move or slide command may take to reach the controller and start (its
 /// `valid_until_us`; the link's retries take at most 250 ms).

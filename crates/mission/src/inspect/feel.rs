@@ -4,7 +4,16 @@
 //! ([`super::passes::classify`]); this one uses the arm's latest state, is only shown, and
 //! never decides anything.
 
-use super::*;
+use std::time::{Duration, Instant};
+
+use crackbot_tactile::model::TactileModel;
+use crackbot_tactile::online::OnlineClassifier;
+use serde::Serialize;
+
+use super::arm::pose;
+use super::passes::{along, unit};
+use super::sensor::TimedSample;
+use crate::MissionError;
 use crackbot_tactile::online::RunningVerdict;
 
 /// How often a running verdict is shown.

@@ -1,6 +1,13 @@
 //! Perception: a frame (rendered, or a camera file), the detector, candidates in surface mm.
 
-use super::*;
+use std::path::Path;
+
+use crackbot_planner::Candidate;
+
+use super::config::{CandidateSource, InspectConfig, InspectMode};
+use super::pieces::CrackTrace;
+use super::report::FrameInfo;
+use crate::MissionError;
 
 /// What the camera gave: candidates in the scene's frame (rendered or grabbed, detected, mapped
 /// to mm) with their detector scores; the detector's crack map seen from the plate, when it
@@ -151,6 +158,7 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError
     })
 }
 
+/// An I/O error on `path`, naming it.
 pub(crate) fn io_err(path: &Path, e: std::io::Error) -> MissionError {
     MissionError::Invalid(format!("{}: {e}", path.display()))
 }

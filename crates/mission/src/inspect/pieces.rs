@@ -21,7 +21,9 @@ use crackbot_planner::geometry::connected_groups;
 use crackbot_sim::surface::distance_to_polyline;
 use crackbot_vision::crack_map::{CrackMap, MAP_THRESHOLD};
 
-use super::{Candidate, ReportedCrack};
+use crackbot_planner::Candidate;
+
+use super::report::ReportedCrack;
 
 /// Longest stretch of the line between two crossings that may run off the crack map for the
 /// two pieces to be one crack, mm (see `traced_between`): two map cells. On the trial scenes

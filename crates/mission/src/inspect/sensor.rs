@@ -1,6 +1,11 @@
 //! The sensor stream on the host's clock.
 
-use super::*;
+use std::time::Instant;
+
+use crackbot_acquisition::{PortConfig, SensorStream, TryNext};
+
+use crate::sync::ClockSync;
+use crate::MissionError;
 
 /// One sensor sample on the host's clock.
 #[derive(Debug, Clone, Copy)]

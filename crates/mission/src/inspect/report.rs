@@ -1,0 +1,317 @@
+//! What a mission tells its front ends while it runs ([`Progress`]) and what it leaves
+//! ([`InspectReport`], saved as `report.json`).
+
+use crackbot_planner::{Candidate, Plan};
+use serde::Serialize;
+
+use super::config::InspectMode;
+use super::feel::Feeling;
+use crate::sync::ClockFit;
+
+/// Progress of a mission, for a front end to show.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "stage", rename_all = "snake_case")]
+pub enum Progress {
+    /// Setting up (controller, sensor, models).
+    Starting,
+    /// The camera frame the mission looks at (saved beside the report).
+    Frame(FrameInfo),
+    /// Candidates found in the frame.
+    Perceived {
+        /// How many.
+        candidates: usize,
+        /// Each, in surface mm (with the detector's score).
+        detections: Vec<Candidate>,
+    },
+    /// The plan is made.
+    Planned {
+        /// Slides to do.
+        slides: usize,
+        /// The planner's time estimate, s.
+        estimated_s: f64,
+        /// The plan.
+        plan: Plan,
+    },
+    /// Sensor samples as they arrive (every 25 ms or so, whether the finger is down or not).
+    Samples {
+        /// The new samples, oldest first.
+        samples: Vec<LiveSample>,
+    },
+    /// The sensor stream's and the link's counters (every 0.5 s).
+    Health(StreamHealth),
+    /// What the finger feels so far in the stroke under way (every 0.1 s while it is down):
+    /// shown only, the pass's verdict comes with [`Progress::Slid`].
+    Feeling(Feeling),
+    /// A slide pass is done: judged, or left unjudged (no class; its doubt says why, and its
+    /// candidate is stroked again beside it).
+    Slid {
+        /// Slides done.
+        done: usize,
+        /// Of how many.
+        of: usize,
+        /// Its verdict's class name.
+        class: String,
+        /// The pass and its verdict.
+        pass: Box<PassRecord>,
+    },
+}
+
+/// The camera frame a mission looked at.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrameInfo {
+    /// Where it is saved (PNG).
+    pub path: String,
+    /// Width, px.
+    pub width: u32,
+    /// Height, px.
+    pub height: u32,
+    /// Surface mm → image pixels, a homography (row-major), to draw candidates and slides on
+    /// the frame.
+    pub surface_to_image: [[f64; 3]; 3],
+}
+
+/// How the sensor stream and the link to the controller are doing.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StreamHealth {
+    /// Sensor samples per second over the last interval (400 nominal).
+    pub sample_rate_hz: f64,
+    /// Sensor frames decoded so far.
+    pub frames: u64,
+    /// Sensor frames rejected by their CRC.
+    pub crc_errors: u64,
+    /// Gaps in the sensor's sequence numbers (runs of lost frames) and the frames lost in them.
+    pub gaps: u64,
+    /// Frames lost in those gaps.
+    pub missing_frames: u64,
+    /// Link datagrams sent to the controller.
+    pub link_sent: u64,
+    /// Link retries (commands not acknowledged in time).
+    pub link_retries: u64,
+    /// Link packets refused (bad tag, replay, unsigned, other link).
+    pub link_rejected: u64,
+    /// Age of the controller's last state, ms (its stream runs at 100 Hz: this is the link's
+    /// latency plus at most 10 ms; it grows without bound when the link is lost).
+    pub state_age_ms: Option<f64>,
+}
+
+/// One sensor sample as it arrived.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LiveSample {
+    /// Time since the mission's link started, s (the host's clock, from the board's through
+    /// the clock fit).
+    pub t_s: f64,
+    /// D1, D2, D3, P, counts.
+    pub raw: [u16; 4],
+}
+
+/// What the finger found for one slide pass.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PassRecord {
+    /// Slide number (link id).
+    pub id: u32,
+    /// Candidate it checked, if any.
+    pub candidate: Option<u64>,
+    /// Start and end, mm on the plate.
+    pub start_mm: [f64; 2],
+    /// End, mm.
+    pub end_mm: [f64; 2],
+    /// Samples classified.
+    pub samples: usize,
+    /// The recognition verdict (class name), `None` when the slide was too short.
+    pub class: Option<String>,
+    /// Its vote, 0–1.
+    pub confidence: f64,
+    /// The width model's class, mm.
+    pub width_mm: Option<f64>,
+    /// The doubt, if any (unknown surface, low confidence).
+    pub doubt: Option<String>,
+    /// The crack the proximity channel's dip locates on this pass: centre along the pass (mm
+    /// from its start), width (mm) and the dip's clarity (0–1).
+    pub dip: Option<Dip>,
+    /// The recording of this pass.
+    pub recording: String,
+    /// Attempts needed (a stalled sensor or a restarted controller make a second).
+    pub attempts: u32,
+}
+
+/// A crack located along a pass by the proximity channel's dip ([`crackbot_tactile::localise`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Dip {
+    /// Centre, mm along the pass from its start.
+    pub centre_mm: f64,
+    /// Width, mm.
+    pub width_mm: f64,
+    /// Clarity of the dip, 0–1.
+    pub confidence: f64,
+}
+
+/// A crack the mission reports.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReportedCrack {
+    /// The candidate (detection) it came from, if any.
+    pub candidate: Option<u64>,
+    /// Where, mm on the plate (the crack's crossing of the slide; the detection's centre in
+    /// vision mode).
+    pub position_mm: [f64; 2],
+    /// Along the slide, where the crack starts and ends, mm on the plate (tactile evidence).
+    pub extent_mm: Option<[[f64; 2]; 2]>,
+    /// `crack`.
+    pub class: String,
+    /// Width, mm (the width model's class; `None` in vision mode).
+    pub width_mm: Option<f64>,
+    /// Posterior standard deviation of the width, mm.
+    pub width_std_mm: Option<f64>,
+    /// Confidence 0–1: the tactile vote (the detector's score in vision mode).
+    pub confidence: f64,
+    /// Evidence: `vision`, `tactile` or both, with the slide ids.
+    pub evidence: Evidence,
+}
+
+/// What a report entry rests on.
+#[derive(Debug, Clone, Serialize)]
+pub struct Evidence {
+    /// The detector's score, when the camera saw it.
+    pub detector_score: Option<f64>,
+    /// The slides that felt it.
+    pub slides: Vec<u32>,
+    /// Recognition votes per class (summed over the slides).
+    pub votes: Vec<f64>,
+    /// Doubts raised.
+    pub doubts: Vec<String>,
+    /// The print check's ratio (the dip's share of the signal raised over in contact; about 1
+    /// for a print), when the candidate was passed over raised: the mean of `print_ratios`, or
+    /// where the first was in doubt, the mean over the passes of each one's print and floor
+    /// ratios.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_ratio: Option<f64>,
+    /// The print check's ratio of each raised pass, in order: one, or two to
+    /// [`PRINT_CHECK_PASSES_IN_DOUBT`](super::PRINT_CHECK_PASSES_IN_DOUBT) where the first was within [`PRINT_RATIO_DOUBT`](super::PRINT_RATIO_DOUBT) of the
+    /// threshold ([`PRINT_RATIO_SETTLED`](super::PRINT_RATIO_SETTLED)).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub print_ratios: Vec<f64>,
+    /// Where the first print ratio was in doubt, each pass's floor ratio
+    /// ([`floor_ratio`](crackbot_tactile::print_check::floor_ratio); `None` where it gave none), in the order of
+    /// `print_ratios`; empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub floor_ratios: Vec<Option<f64>>,
+    /// Other confirmed candidates reported as pieces of this crack (their slides are in
+    /// `slides`; see [`PIECE_GAP_MM`](super::PIECE_GAP_MM) and [`PIECE_TRACE_GAP_MM`](super::PIECE_TRACE_GAP_MM)).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pieces: Vec<u64>,
+}
+
+/// A candidate the finger rejected.
+#[derive(Debug, Clone, Serialize)]
+pub struct RejectedCandidate {
+    /// The candidate.
+    pub candidate: u64,
+    /// Its centre, mm.
+    pub position_mm: [f64; 2],
+    /// What the finger felt instead (`no crack`, `bump`, `wavy`, or `unknown`).
+    pub felt: String,
+    /// The detector's score.
+    pub detector_score: f64,
+    /// The slides.
+    pub slides: Vec<u32>,
+    /// The print check's ratio, when the candidate was passed over raised.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_ratio: Option<f64>,
+    /// The print check's ratio of each raised pass, as [`Evidence::print_ratios`].
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub print_ratios: Vec<f64>,
+    /// Each raised pass's floor ratio where the first was in doubt, as
+    /// [`Evidence::floor_ratios`].
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub floor_ratios: Vec<Option<f64>>,
+    /// Recognition votes per class (summed over the slides), as a confirmed crack's evidence
+    /// has them: how close the finger came to calling it a crack.
+    pub votes: Vec<f64>,
+}
+
+/// Wall time per stage, s.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct StageTimes {
+    /// Start-up: controller, sensor, models.
+    pub setup_s: f64,
+    /// Frame and detection.
+    pub perceive_s: f64,
+    /// Planning.
+    pub plan_s: f64,
+    /// Moving and sliding (the exploration).
+    pub explore_s: f64,
+}
+
+/// The mission's report.
+#[derive(Debug, Clone, Serialize)]
+pub struct InspectReport {
+    /// The mode.
+    pub mode: InspectMode,
+    /// The scene's name.
+    pub scene: String,
+    /// Confirmed cracks.
+    pub cracks: Vec<ReportedCrack>,
+    /// Candidates the finger rejected.
+    pub rejected: Vec<RejectedCandidate>,
+    /// Candidates from the camera.
+    pub candidates: Vec<Candidate>,
+    /// The camera frame (saved as `frame.png`) and its surface → pixel homography, when the
+    /// mission looked.
+    pub frame: Option<FrameInfo>,
+    /// Every slide pass.
+    pub passes: Vec<PassRecord>,
+    /// The plan.
+    pub plan: Option<Plan>,
+    /// Wall time, s.
+    pub elapsed_s: f64,
+    /// Exploration time in the robot's time (wall time × speed-up), s: what the papers report.
+    pub exploration_s: f64,
+    /// Wall time per stage.
+    pub stages: StageTimes,
+    /// Sensor clock → host clock fit.
+    pub sensor_clock: Option<ClockFit>,
+    /// Controller clock → host clock fit.
+    pub controller_clock: Option<ClockFit>,
+    /// Link counters (host side).
+    pub link: LinkCounters,
+    /// The report's folder.
+    pub out_dir: String,
+}
+
+/// The host's link counters.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct LinkCounters {
+    /// Packets sent.
+    pub sent: u64,
+    /// Retries of unacknowledged commands.
+    pub retries: u64,
+    /// Packets refused (bad tag, replay, unsigned, other link…).
+    pub rejected: u64,
+    /// Duplicates dropped.
+    pub duplicates: u64,
+}
+
+/// How an unjudged pass's doubt begins (a stroke whose ends read unlike each other).
+pub const NOT_JUDGED: &str = "not judged";
+
+/// Announces a finished pass to front ends (`done` of `of` slides) and keeps it in the report.
+/// Its class is shown as "not judged" where its stroke was left unjudged, "–" where it has none.
+pub(super) fn keep_pass(
+    progress: &mut dyn FnMut(&Progress),
+    report: &mut InspectReport,
+    done: usize,
+    of: usize,
+    rec: PassRecord,
+) {
+    let class = match (&rec.class, &rec.doubt) {
+        (Some(c), _) => c.clone(),
+        (None, Some(d)) if d.starts_with(NOT_JUDGED) => NOT_JUDGED.into(),
+        (None, _) => "–".into(),
+    };
+    progress(&Progress::Slid {
+        done,
+        of,
+        class,
+        pass: Box::new(rec.clone()),
+    });
+    report.passes.push(rec);
+}
