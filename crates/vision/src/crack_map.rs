@@ -503,6 +503,7 @@ fn split_at_corners(branch: Branch) -> Vec<Branch> {
 /// The cracks of one component (cells `(row, column)`), where the finger should touch each (see
 /// the [module docs](self)); `max_gap` cells is the longest gap the dilation joined; `to_img`
 /// image pixels per cell.
+#[allow(clippy::too_many_lines, reason = "the map-to-pieces walk; its failure cases (joined cracks) are under study in issue 56, split it with that fix")]
 fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPiece> {
     let Some(r0) = cells.iter().map(|c| c.0).min() else {
         return Vec::new();
