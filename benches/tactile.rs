@@ -87,7 +87,10 @@ impl<'a> Stream<'a> {
     }
 }
 
-#[allow(clippy::too_many_lines, reason = "one criterion group per stage, set up in order")]
+#[allow(
+    clippy::too_many_lines,
+    reason = "one criterion group per stage, set up in order"
+)]
 fn bench(c: &mut Criterion) {
     if std::env::var_os("CRACKBOT_BENCH_FOREST").is_some() {
         eprintln!("CRACKBOT_BENCH_FOREST is set: only the onnx_runtime group runs, on that forest");

@@ -93,7 +93,10 @@ fn phase(f: &Fleet, robot: &str) -> Option<Phase> {
 }
 
 #[test]
-#[allow(clippy::too_many_lines, reason = "one scenario test that reads top to bottom")]
+#[allow(
+    clippy::too_many_lines,
+    reason = "one scenario test that reads top to bottom"
+)]
 fn two_robots_and_stations_watch_command_and_lose_them_over_zenoh() {
     let dir = tempfile::tempdir().unwrap();
     let key = key_file(&dir.path().join("fleet.key"), "5a");

@@ -56,6 +56,10 @@ const LAYERS: &[(&str, &[&str])] = &[
     ),
     ("fleet: telemetry over Zenoh", &["crackbot-telemetry"]),
     (
+        "research: the paper's experiments as whole missions, their scoring and tables",
+        &["crackbot-research"],
+    ),
+    (
         "front ends: binaries, the operator app and cross-crate tests",
         &[
             "crackbot-cli",
@@ -326,6 +330,10 @@ fn the_robot_path_builds_without_research_gui_or_fleet_crates() {
                     "{name} compiles {heavy} in its default build (put it behind a feature)"
                 ));
             }
+        }
+        // Trial scoring, scene geometry and the experiment tables are the research crate's.
+        if tree.contains("crackbot-research") {
+            problems.push(format!("{name} compiles crackbot-research"));
         }
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));

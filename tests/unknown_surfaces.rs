@@ -46,7 +46,10 @@ impl Rates {
 }
 
 #[test]
-#[allow(clippy::too_many_lines, reason = "one scenario test that reads top to bottom")]
+#[allow(
+    clippy::too_many_lines,
+    reason = "one scenario test that reads top to bottom"
+)]
 fn unlike_surfaces_and_broken_channels_come_out_unknown() -> Result<(), Box<dyn std::error::Error>>
 {
     let dir = crackbot_datasets::require(crackbot_datasets::TACTILE_TYPE);

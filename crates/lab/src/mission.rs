@@ -1,14 +1,14 @@
 //! `crackbot-lab mission trials|exploration`: the visual-tactile paper's online experiments in
-//! simulation, each a series of whole missions (`crackbot_mission::experiments`).
+//! simulation, each a series of whole missions (`crackbot_research`).
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
-use crackbot_mission::experiments::{
+use crackbot_mission::inspect::InspectConfig;
+use crackbot_research::{
     detection_trials, exploration_markdown, exploration_times, ExperimentConfig,
 };
-use crackbot_mission::inspect::InspectConfig;
 use crackbot_sim::Scene;
 
 /// The experiments.
@@ -212,7 +212,7 @@ pub fn run(cmd: MissionCommand) -> Result<()> {
             let b = base(&a.common)?;
             let mut scene = Scene::load_or_default(a.scene.as_deref())?;
             if a.common.printed_cracks {
-                scene = crackbot_mission::experiments::as_printed(&scene);
+                scene = crackbot_research::as_printed(&scene);
             }
             let rows = exploration_times(&b, &scene, &a.gamma, |r| {
                 eprintln!("{:?} γ {:?}: {:.1} s", r.mode, r.gamma, r.exploration_s);

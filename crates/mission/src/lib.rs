@@ -7,7 +7,6 @@
 //!
 //! * [`inspect`]: the inspection mission (tactile, vision or fused) over the authenticated link,
 //!   with the simulated controller started in-process on a simulated scene.
-//! * [`experiments`]: the visual-tactile paper's online experiments in simulation.
 //! * [`sync`]: passive clock synchronisation of the sensor's and the controller's clocks.
 //! * [`demo`]: the acquisition demo on a simulated scene: the simulated finger slides across a
 //!   crack, the real sensor firmware samples it on this host and streams 400 Hz frames into a new
@@ -19,7 +18,6 @@
 //! detection in camera frames is `crackbot-vision`'s.
 
 pub mod demo;
-pub mod experiments;
 pub mod inspect;
 pub mod sync;
 

@@ -64,7 +64,7 @@ fn fast_mission_in(scene: &Scene, dir: &std::path::Path) -> InspectReport {
 
 /// Trial scene `seed` with the authors' printed crack profile.
 fn trial_scene(seed: u64) -> Scene {
-    use crackbot_mission::experiments::{as_printed, trial_params};
+    use crackbot_research::{as_printed, trial_params};
     as_printed(&crackbot_sim::random_scene(&trial_params(), seed).unwrap())
 }
 
@@ -464,7 +464,7 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
 
 #[test]
 fn printed_decoys_are_rejected_by_the_raised_pass_and_cracks_kept() {
-    use crackbot_mission::experiments::finger_budget;
+    use crackbot_research::finger_budget;
     use crackbot_tactile::print_check::PRINT_RATIO;
     // A trial scene (seed 1000, one of those the check's threshold was chosen on): two cracks of
     // the authors' printed profile and two printed decoys, all proposed by the detector.
@@ -576,7 +576,7 @@ fn a_raised_pass_stops_over_a_screw_head_and_the_candidate_on_it_is_rejected() {
 
 #[test]
 fn a_stroke_that_ends_off_the_sound_surface_is_made_again_beside_it() {
-    use crackbot_mission::experiments::score;
+    use crackbot_research::score;
     // Trial scene 9246: the detector takes a 3.7 mm high screw head for a crack. The stroke
     // across that candidate starts on the head (its ends read about 730 and 310 counts, where
     // the sound surface reads about 310 and the dark level is 285), so it cannot tell a crack
@@ -795,8 +795,8 @@ fn a_ratio_in_doubt_is_measured_again_and_both_estimates_decide() {
 
 #[test]
 fn a_narrow_print_in_doubt_is_judged_by_its_floor_ratio_too() {
-    use crackbot_mission::experiments::score;
     use crackbot_mission::inspect::PRINT_CHECK_PASSES_IN_DOUBT;
+    use crackbot_research::score;
     use crackbot_tactile::print_check::PRINT_RATIO;
     // Trial scene 9843: a printed decoy 1.16 mm wide whose four raised passes' print ratios
     // averaged 0.875 at real time, and it was reported as a crack. Its floor ratios read about
@@ -939,7 +939,7 @@ fn a_print_whose_stroke_ends_on_a_darker_line_is_judged_by_its_own_dip() {
 
 #[test]
 fn a_stroke_across_two_cracks_reports_its_candidate_where_its_own_dip_is() {
-    use crackbot_mission::experiments::score;
+    use crackbot_research::score;
     // Trial scene 9570: the stroke across a 0.76 mm crack's candidate also runs into a 3.6 mm
     // crack 4.9 mm away. Its proximity channel dips over both, back to the surface between
     // them, and the localiser's one dip spanning both (8.5 mm wide) put the report between the

@@ -426,6 +426,41 @@ pub fn random_scene(params: &RandomSceneParams, seed: u64) -> Result<Scene, SimE
     Ok(scene)
 }
 
+/// The scenes of the detection trials: real crack appearance 0.5–5 mm wide, 1–3 cracks, 1–2
+/// printed decoys, screws and bumps, random camera pose.
+pub fn trial_params() -> RandomSceneParams {
+    RandomSceneParams {
+        cracks: [1, 3],
+        crack_width_mm: [0.5, 5.0],
+        decoys: [1, 2],
+        screws: [0, 2],
+        bumps: [0, 1],
+        wavy: [0, 0],
+        ..RandomSceneParams::default()
+    }
+}
+
+/// `scene` with every crack given the cross-section of the authors' printed plates (depth and wall
+/// angle as fitted to their recordings, `crate::plates::calibrated_samples`): the
+/// profile the deployed tactile models know. Random scenes otherwise draw V-grooves whose depth
+/// follows their width, which the models never felt (see `crates/research/EXPERIMENTS.md`).
+pub fn as_printed(scene: &Scene) -> Scene {
+    let s = crate::plates::calibrated_samples();
+    let mut out = scene.clone();
+    for f in &mut out.features {
+        if let Feature::Crack {
+            depth_mm,
+            wall_angle_deg,
+            ..
+        } = f
+        {
+            *depth_mm = s.crack_depth_mm;
+            *wall_angle_deg = s.crack_wall_angle_deg;
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]

@@ -93,7 +93,7 @@ pub struct SlideSim {
 /// `a_thin_print_darkens_the_fibre_alike_at_every_height_and_sampling`; 25 points still stepped
 /// by 8 %). On the simulated trial scenes 12780–12899 (real time) the print ratios of printed
 /// lines of 0.5–0.7 mm went from 0.87 / 0.95 at their 5th percentile / median to 0.90 / 0.97,
-/// cracks' did not move (`crates/mission/EXPERIMENTS.md`, "The simulated fibre's spot without
+/// cracks' did not move (`crates/research/EXPERIMENTS.md`, "The simulated fibre's spot without
 /// steps"). Cost: the finger's stepping takes 2.2 times as long (`benches/sim.rs`,
 /// `sim_finger_slide/sdirk2_x1_default`, one core: 3.19 → 6.93 ms per 8.3 s slide, still about
 /// 1 200 times real time); missions, paced by the arm's real time, did not change.

@@ -102,7 +102,10 @@ struct Real {
     rec: Recording,
 }
 
-#[allow(clippy::too_many_lines, reason = "a research probe (to leave the library's examples with issue 58)")]
+#[allow(
+    clippy::too_many_lines,
+    reason = "a research probe (to leave the library's examples with issue 58)"
+)]
 fn real(data: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
     let mut all = Vec::new();
     for (folder, width_experiment) in [("type", false), ("width", true)] {

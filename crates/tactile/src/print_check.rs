@@ -24,7 +24,7 @@
 //! towards "print" where the raised dip is only a few counts deep, as the minimum of noisy
 //! samples lies below the true floor) and [`area_ratio`] (the dips' areas: blur-proof, but in
 //! contact the finger's stick-slip stretches the dip along the arm's position). Figures:
-//! `crates/mission/EXPERIMENTS.md`, "Prints told by two heights".
+//! `crates/research/EXPERIMENTS.md`, "Prints told by two heights".
 //!
 //! # What it needs and does not do
 //!
@@ -58,7 +58,7 @@ const EDGE_SHARE: f64 = 0.1;
 /// passes of 4852 candidates over a crack or a print (simulated trials 9000–10499, real time,
 /// `examples/replay_ratios.rs`) with the robot's rule for ratios in doubt, cracks read as prints
 /// 33 → 27 (17 → 11 beside a screw or bump) and prints read as cracks 38 → 37; chosen on seeds
-/// 9000–9779 among 3, 4, 5, 6 and 8 mm (`crates/mission/EXPERIMENTS.md`, "A local baseline
+/// 9000–9779 among 3, 4, 5, 6 and 8 mm (`crates/research/EXPERIMENTS.md`, "A local baseline
 /// for the print check").
 pub const LEVEL_REACH_MM: f64 = 5.0;
 /// Fewest samples a pass needs.
@@ -451,7 +451,7 @@ pub struct PrintRatios {
 /// looks ahead, so it can reach a line or shadow beside the one judged: its deepest point
 /// there set the floor ratio of a 0.77 mm crack beside a 3.5 mm print to 1.15–1.17 on two of
 /// four passes, and the crack was rejected as a print (trial 11998;
-/// `crates/mission/EXPERIMENTS.md`, "The raised dip where the fit puts it"). Where the fit
+/// `crates/research/EXPERIMENTS.md`, "The raised dip where the fit puts it"). Where the fit
 /// finds no overlap, the deepest point stands; so it does where the contact dip has reached
 /// the dark level ([`SATURATED_SHARE`]): a flat-bottomed contact dip lines up loosely with a
 /// rounded raised one, and searched where the fit put it, the raised floors of wide cracks
@@ -521,7 +521,7 @@ pub fn floor_ratio(
 
 /// Above this [`print_ratio`] a dip is a print's, not a crack's (chosen on simulated trial
 /// scenes 1000–1029, where cracks came out at 0.56–0.87 but for one at 1.06 and decoys at
-/// 0.90 or more but for one at 0.84; `crates/mission/EXPERIMENTS.md`, "Prints told by two
+/// 0.90 or more but for one at 0.84; `crates/research/EXPERIMENTS.md`, "Prints told by two
 /// heights").
 pub const PRINT_RATIO: f64 = 0.88;
 

@@ -89,7 +89,7 @@ pub const SPUR_CELLS: usize = 3;
 /// three or four pieces. On the rendered trial scenes 8000–8359 (one frame each): candidates on a
 /// crack that already had one 66 → 24, other candidates 615 → 585, cracks left without a
 /// candidate 30 → 35 (thick cracks side by side or crossing, merged with their neighbour); with
-/// 6 cells 27, 586 and 35 (`crates/mission/EXPERIMENTS.md`, "Crossings thinned to two junctions").
+/// 6 cells 27, 586 and 35 (`crates/research/EXPERIMENTS.md`, "Crossings thinned to two junctions").
 pub const BRIDGE_CELLS: usize = 10;
 /// Pieces shorter than this (map cells) are not touched on their own.
 pub const MIN_PIECE_CELLS: usize = 4;
@@ -503,7 +503,10 @@ fn split_at_corners(branch: Branch) -> Vec<Branch> {
 /// The cracks of one component (cells `(row, column)`), where the finger should touch each (see
 /// the [module docs](self)); `max_gap` cells is the longest gap the dilation joined; `to_img`
 /// image pixels per cell.
-#[allow(clippy::too_many_lines, reason = "the map-to-pieces walk; its failure cases (joined cracks) are under study in issue 56, split it with that fix")]
+#[allow(
+    clippy::too_many_lines,
+    reason = "the map-to-pieces walk; its failure cases (joined cracks) are under study in issue 56, split it with that fix"
+)]
 fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPiece> {
     let Some(r0) = cells.iter().map(|c| c.0).min() else {
         return Vec::new();

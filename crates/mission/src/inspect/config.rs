@@ -211,7 +211,7 @@ pub const MIN_DIP_COUNTS: f64 = 40.0;
 /// [`WEAK_NO_CRACK_CONFIDENCE`]). The dips told them apart: over cracks their confidence was
 /// 0.64–0.82 (13 of 14 passes at speed-up 8, seeds 8000–8359; 11 of 11 at real time,
 /// 8360–8431), over prints mostly below 0.6 (26 of 33 and 15 of 16), and what passes goes on to
-/// the print check (`crates/mission/EXPERIMENTS.md`, 'A doubted "no crack" over a deep dip goes
+/// the print check (`crates/research/EXPERIMENTS.md`, 'A doubted "no crack" over a deep dip goes
 /// to the print check').
 pub const DOUBTED_DIP_CONFIDENCE: f64 = 0.6;
 

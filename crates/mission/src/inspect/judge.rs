@@ -18,7 +18,7 @@ use crate::MissionError;
 /// as weak "no crack" votes. On the trials 10620–10739 (real time, looked at) every "no crack"
 /// verdict over a dip of confidence ≥ 0.6 had a confidence of 0.33–0.53: 25 over cracks (two of
 /// them 0.50 and 0.52, over 0.6 and 0.68 mm cracks that the mission then lost), 9 over printed
-/// decoys, 1 over sound surface (`crates/mission/EXPERIMENTS.md`, "The recognition model that
+/// decoys, 1 over sound surface (`crates/research/EXPERIMENTS.md`, "The recognition model that
 /// knows the simulated finger").
 pub const WEAK_NO_CRACK_CONFIDENCE: f64 = 0.6;
 

@@ -166,7 +166,7 @@ pub(crate) fn io_err(path: &Path, e: std::io::Error) -> MissionError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiments::{as_printed, trial_params};
+    use crackbot_sim::random_scene::{as_printed, trial_params};
     use crackbot_sim::surface::distance_to_polyline;
 
     #[test]

@@ -29,7 +29,7 @@ use super::report::ReportedCrack;
 /// two pieces to be one crack, mm (see `traced_between`): two map cells. On the trial scenes
 /// 4000–5119 (`examples/trace_pairs.rs`) the lines between crossings of one crack ran off the
 /// map by 0–2.0 mm, those between two cracks along both pieces by 3.5 mm and more, but for
-/// cracks that touch or cross (`crates/mission/EXPERIMENTS.md`, "Pieces joined where the crack
+/// cracks that touch or cross (`crates/research/EXPERIMENTS.md`, "Pieces joined where the crack
 /// map runs between their crossings").
 pub const PIECE_TRACE_GAP_MM: f64 = 2.0;
 /// A point of the plate is on the crack map when a crack cell lies within this distance, mm.

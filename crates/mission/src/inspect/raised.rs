@@ -21,7 +21,7 @@ use crate::MissionError;
 /// to 1.2 mm rose at most 12 counts above their level, passes over screw heads 258–466 counts
 /// (heads 2.2–3.6 mm tall, which the finger 2 mm up would strike; the simulator does not model
 /// that collision). For the fitted fibre, 40 counts is something about 1.1 mm tall under it
-/// (`crates/mission/EXPERIMENTS.md`, "Raised passes stop over what stands under them"). The
+/// (`crates/research/EXPERIMENTS.md`, "Raised passes stop over what stands under them"). The
 /// level is the pass's own first 20 samples: a head already in view at the pass's start raises
 /// it, and the pass is then stopped later than it should be.
 pub const RAISED_PASS_GUARD_COUNTS: f64 = 40.0;
@@ -48,7 +48,7 @@ pub const RAISED_PASS_CLEAR_MM: f64 = 2.5;
 /// read: four cracks and a print set right, four prints beside bumps and a crack set wrong (the
 /// dip over the flank's sloping level misread 2.3–2.9 mm up); the crack and two of the prints
 /// had first passes that read a crack, as did the print set right, and are now left to them
-/// (`crates/mission/EXPERIMENTS.md`, "The raised pass as high above the surface as the check
+/// (`crates/research/EXPERIMENTS.md`, "The raised pass as high above the surface as the check
 /// needs").
 pub const SURFACE_RISE_TOLERANCE_MM: f64 = 0.3;
 /// The most a raised pass made again is raised above the print check's height, mm (a
@@ -95,7 +95,7 @@ pub fn surface_rise_mm(
 /// 2010 candidates over a crack or a print (looked-at trial runs 9300–9899, real time), the
 /// print ratio put 35 on the wrong side of the threshold, the mean with the floor ratio where
 /// the first ratio was in doubt 24 (12 right that were wrong, 1 wrong that was right;
-/// `crates/mission/EXPERIMENTS.md`, "Two estimates of a ratio in doubt").
+/// `crates/research/EXPERIMENTS.md`, "Two estimates of a ratio in doubt").
 pub const PRINT_RATIO_DOUBT: f64 = 0.08;
 /// Most raised passes in all over a candidate whose first print ratio is in doubt
 /// ([`PRINT_RATIO_DOUBT`]): an even number, as many each way.
@@ -106,7 +106,7 @@ pub const PRINT_CHECK_PASSES_IN_DOUBT: usize = 4;
 /// five trial runs at real time (seeds 9540–10019, 9900–10019 twice), stopping after two where
 /// they lay 0.03–0.06 from the threshold judged every candidate as four passes did (8 on the
 /// wrong side either way); at 0.05, 305 of them stopped after two
-/// (`crates/mission/EXPERIMENTS.md`, "Two estimates of a ratio in doubt").
+/// (`crates/research/EXPERIMENTS.md`, "Two estimates of a ratio in doubt").
 pub const PRINT_RATIO_SETTLED: f64 = 0.05;
 
 /// How far the print check's raised pass runs past each end of the candidate's stroke, mm (the

@@ -240,7 +240,10 @@ fn evaluate_img(
 /// `COCOeval(gt, dt, "bbox").evaluate(); accumulate(); summarize()` does (see the module docs).
 ///
 /// Errors when a result is for an image not in `gt`, or has a non-finite value or a negative size.
-#[allow(clippy::too_many_lines, reason = "mirrors pycocotools' evaluate/accumulate/summarize line by line, so the two can be compared")]
+#[allow(
+    clippy::too_many_lines,
+    reason = "mirrors pycocotools' evaluate/accumulate/summarize line by line, so the two can be compared"
+)]
 pub fn evaluate(gt: &CocoDataset, results: &[CocoResult]) -> Result<CocoMetrics, VisionError> {
     validate_results(results, gt, Path::new(""))?;
     let thresholds = iou_thresholds();

@@ -6,7 +6,7 @@ median and the 2 % / 98 % quantiles of D1, D2 and P. Surface-type and width plat
 
     crackbot tactile convert ../shared/data/tactile/type --out real
     crackbot sim dataset --experiment recognition --seed 23 --out sim23
-    python3 scripts/plate_levels.py real sim23 [DIR ...]
+    python3 crates/research/scripts/plate_levels.py real sim23 [DIR ...]
 
 Used in `crates/sim/docs/calibration.md` ("6–7.4 mm adopted for recognition") to find which
 plate the simulated finger reads unlike the real one.

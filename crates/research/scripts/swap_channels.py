@@ -6,7 +6,7 @@ only).
 
     crackbot sim dataset --experiment width --seed 7 --out sim-w7
     crackbot tactile convert ../shared/data/tactile/width --out real-width
-    python3 scripts/swap_channels.py sim-w7 real-width hybrid-p --channels p
+    python3 crates/research/scripts/swap_channels.py sim-w7 real-width hybrid-p --channels p
     crackbot tactile eval --model models/tactile/width.ctm --test hybrid-p --json
 
 Simulated recording `STEM_complete_R` (e.g. `crack_mm2`, `crack_bump`) takes its channels from

@@ -2,8 +2,8 @@
 //! trial: `{"seed": S, "surface_to_image": H, "pieces": [[x, y, length, ax, ay, bx, by], …]}`
 //! (the frame's homography from the trial's report; touch point, centre-line length and the ends
 //! of its axis, image pixels), for
-//! `scripts/piece_coverage.py` (which cracks of each scene have a piece to touch):
-//! `cargo run --release -p crackbot-mission --example dump_pieces -- [--detector MODEL.onnx]
+//! `crates/research/scripts/piece_coverage.py` (which cracks of each scene have a piece to touch):
+//! `cargo run --release -p crackbot-research --example dump_pieces -- [--detector MODEL.onnx]
 //! TRIALS_DIR... > pieces.jsonl` (default: the committed detector).
 
 use std::path::Path;

@@ -4,7 +4,7 @@
 its width of its centre line. Also counts the pieces and those on no crack or print.
 
     cargo run --release -p crackbot-mission --example dump_pieces -- RUN... > pieces.jsonl
-    python3 scripts/piece_coverage.py SCENES pieces.jsonl [--against OLD.jsonl]
+    python3 crates/research/scripts/piece_coverage.py SCENES pieces.jsonl [--against OLD.jsonl]
 
 RUN is a `mission trials --out` folder; SCENES holds its `scene-<seed>.json`
 (`examples/trial_scenes`). With `--against` (a dump of another build on the same frames), lists

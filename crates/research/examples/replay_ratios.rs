@@ -2,8 +2,8 @@
 //! raised, its print ratio and floor ratio on every raised pass, computed again from the trial's
 //! recordings by `crackbot_tactile::print_check` (no arm, no simulator). For judging a new rule
 //! on runs already made:
-//! `cargo run --release -p crackbot-mission --example replay_ratios -- TRIALS_DIR...`, then
-//! join with the scenes' truth (`scripts/trial_errors.py`'s matching).
+//! `cargo run --release -p crackbot-research --example replay_ratios -- TRIALS_DIR...`, then
+//! join with the scenes' truth (`crates/research/scripts/trial_errors.py`'s matching).
 //!
 //! One line per candidate: `SEED CANDIDATE DECIDED REPORTED PRINT_1,…,PRINT_N FLOOR_1,…,FLOOR_N`
 //! (`DECIDED` is `confirmed` or `rejected`; `REPORTED` the report's own ratio; `-` where a pass
@@ -18,10 +18,10 @@
 
 use std::path::Path;
 
-use crackbot_mission::experiments::trial_params;
 use crackbot_mission::inspect::{
     own_dip, surface_rise_mm, MIN_DIP_COUNTS, PRINT_CHECK_HEIGHT_MM, PRINT_CHECK_OVERRUN_MM,
 };
+use crackbot_research::trial_params;
 use crackbot_tactile::localise::{localise, LocaliseConfig};
 use crackbot_tactile::print_check::print_ratios;
 use serde_json::Value;
@@ -64,7 +64,10 @@ fn fmt(v: &[Option<f64>]) -> String {
         .join(",")
 }
 
-#[allow(clippy::too_many_lines, reason = "a research probe (to leave the library's examples with issue 58)")]
+#[allow(
+    clippy::too_many_lines,
+    reason = "a research probe (to leave the library's examples with issue 58)"
+)]
 fn main() -> Result<(), Error> {
     for dir in std::env::args().skip(1) {
         for SavedTrial {

@@ -4,7 +4,7 @@
 //! angle between the line and the two pieces' directions; the longest stretch off the crack map
 //! for each reach, mm; the shortest path over the crack map's pixels from one crossing to
 //! the other, mm, -1 where none). For tuning `crackbot_mission::inspect::PIECE_TRACE_GAP_MM`:
-//! `cargo run --release -p crackbot-mission --example trace_pairs -- TRIALS_DIR...`.
+//! `cargo run --release -p crackbot-research --example trace_pairs -- TRIALS_DIR...`.
 
 use std::path::Path;
 

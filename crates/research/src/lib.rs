@@ -1,4 +1,7 @@
-//! The online experiments of the visual-tactile paper, in simulation (Markdown + JSON tables):
+//! The research side of crackbot: the online experiments of the visual-tactile paper in
+//! simulation (Markdown + JSON tables), the trial scenes' scoring against their truth and the
+//! geometry it needs. `crackbot-lab` runs them; the robot never links this crate.
+//!
 //!
 //! * [`detection_trials`]: correct detections over trials on random scenes (real crack
 //!   appearance 0.5–5 mm, printed decoys, bumps, screws, random camera pose), vision only against
@@ -35,53 +38,24 @@
 //! fused figure between scenes whose lines keep [`APART_MM`] from every other feature
 //! ([`clearance_mm`]) and the rest, so a reader sees which kind of scene the errors come from.
 
+#![allow(
+    clippy::result_large_err,
+    reason = "the missions' own error (crackbot_mission::MissionError) is returned as it is"
+)]
+
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
+pub use crackbot_sim::random_scene::{as_printed, trial_params};
 use crackbot_sim::surface::distance_to_polyline;
 use crackbot_sim::{random_scene, Feature, RandomSceneParams, Scene};
 use serde::Serialize;
 
-use crate::inspect::{run_inspection, InspectConfig, InspectMode, InspectReport};
-use crate::MissionError;
+use crackbot_mission::inspect::{run_inspection, InspectConfig, InspectMode, InspectReport};
+use crackbot_mission::MissionError;
 
 /// A report within this distance of a true crack's centre line (plus half its width) matches it, mm.
 pub const MATCH_MM: f64 = 5.0;
-
-/// The scenes of the detection trials: real crack appearance 0.5–5 mm wide, 1–3 cracks, 1–2
-/// printed decoys, screws and bumps, random camera pose.
-pub fn trial_params() -> RandomSceneParams {
-    RandomSceneParams {
-        cracks: [1, 3],
-        crack_width_mm: [0.5, 5.0],
-        decoys: [1, 2],
-        screws: [0, 2],
-        bumps: [0, 1],
-        wavy: [0, 0],
-        ..RandomSceneParams::default()
-    }
-}
-
-/// `scene` with every crack given the cross-section of the authors' printed plates (depth and wall
-/// angle as fitted to their recordings, `crackbot_sim::plates::calibrated_samples`): the
-/// profile the deployed tactile models know. Random scenes otherwise draw V-grooves whose depth
-/// follows their width, which the models never felt (see `EXPERIMENTS.md`).
-pub fn as_printed(scene: &Scene) -> Scene {
-    let s = crackbot_sim::plates::calibrated_samples();
-    let mut out = scene.clone();
-    for f in &mut out.features {
-        if let Feature::Crack {
-            depth_mm,
-            wall_angle_deg,
-            ..
-        } = f
-        {
-            *depth_mm = s.crack_depth_mm;
-            *wall_angle_deg = s.crack_wall_angle_deg;
-        }
-    }
-    out
-}
 
 /// How one mission scored against its scene's truth.
 #[derive(Debug, Clone, Default, Serialize)]
@@ -245,7 +219,7 @@ fn in_rectangle(min: [f64; 2], max: [f64; 2], p: [f64; 2]) -> bool {
 
 /// Lines kept at least this far, edge to edge, from every other feature of their scene stand
 /// apart, mm: the paper's plates, a crack or a print alone under the finger. A stroke reaches
-/// [`crate::inspect::TOUCH_MARGIN_MM`] plus the finger's reach (2.4 mm) beyond the edge of the line
+/// [`crackbot_mission::inspect::TOUCH_MARGIN_MM`] plus the finger's reach (2.4 mm) beyond the edge of the line
 /// it crosses, so a feature beyond that cannot share its stroke; the crack map's detections join
 /// lines within about twice its dilation (0.02 of the frame, 4 mm on the trial plates). 5 mm is
 /// the first, rounded up; the trials split their score at it ([`ClearanceSplit`]).
@@ -842,7 +816,8 @@ fn run_retried(
         if again && dir.exists() {
             let failed = base.out_dir.join(format!("{name}-failed"));
             let _ = std::fs::remove_dir_all(&failed);
-            std::fs::rename(&dir, &failed).map_err(|e| crate::inspect::io_err(&dir, e))?;
+            std::fs::rename(&dir, &failed)
+                .map_err(|e| MissionError::Invalid(format!("{}: {e}", dir.display())))?;
         }
         run(base, scene, mode, &name)
     })
@@ -998,7 +973,7 @@ pub fn exploration_markdown(rows: &[ExplorationRow]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::inspect::{Evidence, PassRecord, ReportedCrack};
+    use crackbot_mission::inspect::{Evidence, PassRecord, ReportedCrack};
 
     /// A table of no trials with these means and finger budget.
     fn empty_report(vision_correct: f64, fused_correct: f64, finger: FingerBudget) -> TrialsReport {

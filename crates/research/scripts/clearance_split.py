@@ -4,7 +4,7 @@ other features (standard library only): the same split as `ClearanceSplit` in
 `crates/mission/src/experiments.rs`, for runs saved before the trials printed it, or at other
 distances.
 
-    python3 scripts/clearance_split.py D SCENES RUN [SCENES RUN ...]
+    python3 crates/research/scripts/clearance_split.py D SCENES RUN [SCENES RUN ...]
 
 SCENES: the trials' scenes (`cargo run --release -p crackbot-mission --example trial_scenes --
 SEED 120 SCENES --printed-cracks`); RUN: the `--out` folder of `crackbot-lab mission trials`

@@ -1,8 +1,8 @@
 //! Writes the detection trials' scenes as JSON (one file per seed), for looking at what each
-//! report of a trial landed on: `cargo run --release -p crackbot-mission --example trial_scenes --
+//! report of a trial landed on: `cargo run --release -p crackbot-research --example trial_scenes --
 //! FIRST_SEED N OUT_DIR [--printed-cracks]`.
 
-use crackbot_mission::experiments::{as_printed, trial_params};
+use crackbot_research::{as_printed, trial_params};
 use crackbot_sim::random_scene::random_scene;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

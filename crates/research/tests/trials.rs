@@ -1,8 +1,8 @@
 //! The detection trials, two at a time: every trial scored once, listed by seed.
 
-use crackbot_mission::experiments::{detection_trials, ExperimentConfig};
 use crackbot_mission::inspect::InspectConfig;
 use crackbot_mission::MissionError;
+use crackbot_research::{detection_trials, ExperimentConfig};
 use crackbot_sim::Scene;
 
 fn base(dir: &std::path::Path, jobs: usize) -> ExperimentConfig {

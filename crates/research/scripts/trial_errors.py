@@ -5,7 +5,7 @@ against its scene's truth (standard library only).
     cargo run --release -p crackbot-mission --example trial_scenes -- 9000 120 SCENES --printed-cracks
     cargo run --release -p crackbot-lab -- mission trials --trials 120 --seed 9000 \\
         --printed-cracks --speedup 1 --jobs 2 --out RUN
-    python3 scripts/trial_errors.py SCENES RUN [RUN ...]
+    python3 crates/research/scripts/trial_errors.py SCENES RUN [RUN ...]
 
 For each touched candidate: what its judged stroke crossed (cracks and printed decoys, mm along
 the stroke, with their widths), screws and bumps within 4.5 mm of the stroke (distance from
@@ -20,7 +20,7 @@ fused score as the trials count it (the mean over trials of correct / (reports +
 next to what it would be on the same strokes with a finger that is never wrong (a crack it
 rejected found where no other report claimed it; a print, relief or bare plate it confirmed
 dropped, its crack missed where that report had claimed one): what vision and the plan allow.
-Used for `crates/mission/EXPERIMENTS.md`, seventh and twenty-fifth sessions.
+Used for `crates/research/EXPERIMENTS.md`, seventh and twenty-fifth sessions.
 
 With `PASSES=1` it also prints one line per judged pass over a candidate: `pass SEED CANDIDATE
 TRUTH WIDTH CLASS CONFIDENCE DOUBT DIP` (what the pass's own stroke crossed nearest its middle,
