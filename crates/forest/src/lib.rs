@@ -49,7 +49,7 @@
 //! # Performance (2-core shared VM, release; see `examples/`)
 //!
 //! * Training, 100 fully grown trees, 75k × 3 rows, 4 classes: 0.83–1.1 s on 2 threads, 1.9 s on 1
-//!   (`cargo run -p crackbot-forest --release --example train_timing`). On identical data scikit-learn
+//!   (`cargo run -p crackbot-research --release --example train_timing`). On identical data scikit-learn
 //!   1.9.1 took 5.35 s (`n_jobs=2`) and 11.45 s (`n_jobs=1`), with the same tree sizes (12.2k nodes).
 //! * Prediction, same forest (7.2k nodes per tree, 8.7 MB of nodes): single row median ≈ 5–6 µs,
 //!   `predict_batch` ≈ 0.18–0.27 M rows/s on one core (`--example predict_timing`); scikit-learn's

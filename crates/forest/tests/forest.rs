@@ -204,7 +204,7 @@ fn bad_input_is_an_error_not_a_panic() {
     assert!(RandomForest::fit(&data, &quiet(2).max_features(MaxFeatures::Fraction(2.0))).is_err());
 }
 
-/// Not a benchmark (see `examples/train_timing.rs`): guards against an accidental complexity blow-up.
+/// Not a benchmark (see crackbot-research's `examples/train_timing.rs`): guards against an accidental complexity blow-up.
 /// 10 fully grown trees on 75k × 3 rows take ~0.15 s in release and a few seconds in debug here.
 #[test]
 fn training_is_not_absurdly_slow() {

@@ -33,7 +33,7 @@
 //! | context, 6 pairs, slide vote with the paper forest | 95.5 % | **100 %** | 77.1 % | 92.6 % |
 //! | context, leave one repetition out (3 folds), slide vote with the paper forest | 96.8 % | **100 %** | **91.5 %** | **100 %** |
 //!
-//! Per pair: `cargo run --release -p crackbot-tactile --example context_protocols -- DIR`. One caveat:
+//! Per pair: `cargo run --release -p crackbot-research --example context_protocols -- DIR`. One caveat:
 //! for width trained on a single repetition, the paper forest's slide means alone (99.5 %) still
 //! beat the joint vote (92.6 %); with two training repetitions every vote is right.
 //!

@@ -21,7 +21,7 @@
 //!
 //! # Measured accuracy
 //!
-//! `CRACKBOT_DATA_DIR=/work/shared/data cargo run --release -p crackbot-tactile --example localisation` (real
+//! `CRACKBOT_DATA_DIR=/work/shared/data cargo run --release -p crackbot-research --example localisation` (real
 //! recordings `tactile/{type,width}` repetitions 1–3; simulated slides from `crackbot_sim`).
 //!
 //! Estimated on **repetition 1** (uncorrected reading, per crack plate): half the difference between the median

@@ -1,6 +1,6 @@
 //! The localiser ([`crackbot_tactile::localise`]): synthetic dips with known edges, consistency on a real
 //! recording, error on simulated slides against the truth, and refused inputs. Tolerances are the figures measured
-//! by `examples/localisation.rs` (module docs) with a margin.
+//! by crackbot-research's `examples/localisation.rs` (module docs) with a margin.
 
 use crackbot_recording::read_recording;
 use crackbot_sim::experiment::{simulate_recording, Experiment, ExperimentConfig};

@@ -3,7 +3,7 @@
 //! repetition out), window and slide accuracy of the paper pipeline, of the context pipeline, and
 //! slide accuracy when both forests vote (100 trees, seed 1).
 //!
-//! `cargo run --release -p crackbot-tactile --example context_protocols -- ../shared/data/tactile/type`
+//! `cargo run --release -p crackbot-research --example context_protocols -- ../shared/data/tactile/type`
 //! (and `…/width`); files must end in `_<repetition>.mat` or `.csv`.
 
 use std::path::PathBuf;

@@ -1,6 +1,6 @@
 //! Times forest training on synthetic data shaped like the tactile MAV windows.
 //!
-//! `cargo run -p crackbot-forest --release --example train_timing -- [rows] [trees] [threads] [spread]`
+//! `cargo run -p crackbot-research --release --example train_timing -- [rows] [trees] [threads] [spread]`
 //! (defaults: 75000 rows × 3 features, 4 classes, 100 trees, rayon's default threads, spread 60).
 
 use std::time::Instant;

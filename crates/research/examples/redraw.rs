@@ -5,8 +5,8 @@
 //! misreads are whole recordings").
 //!
 //! ```text
-//! cargo run --release -p crackbot-sim --example redraw -- SEED STEM OUT swap DONOR
-//! cargo run --release -p crackbot-sim --example redraw -- SEED STEM OUT sweep RECORDING
+//! cargo run --release -p crackbot-research --example redraw -- SEED STEM OUT swap DONOR
+//! cargo run --release -p crackbot-research --example redraw -- SEED STEM OUT sweep RECORDING
 //! ```
 //!
 //! `STEM` is the surface's file stem (`crack_pattern`: the wavy plate). `swap` writes

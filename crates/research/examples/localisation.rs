@@ -6,7 +6,7 @@
 //! * Simulated slides (`crackbot_sim::experiment::simulate_recording` over the width experiment's plates, whose
 //!   crack lies at a known place): the mean absolute error of start, end, centre and width against the truth.
 //!
-//! `cargo run --release -p crackbot-tactile --example localisation` (add `-- real` or `-- sim` for one part).
+//! `cargo run --release -p crackbot-research --example localisation` (add `-- real` or `-- sim` for one part).
 
 use std::path::PathBuf;
 

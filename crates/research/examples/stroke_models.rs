@@ -10,7 +10,7 @@
 //!
 //! Leave one repetition out on the real recordings, then real → sim on simulated datasets.
 //!
-//! `cargo run --release -p crackbot-tactile --example stroke_models -- REAL_DIR [SIM_DIR…]`
+//! `cargo run --release -p crackbot-research --example stroke_models -- REAL_DIR [SIM_DIR…]`
 //! (REAL_DIR holds `type/` and `width/`; each SIM_DIR holds `crackbot sim dataset` output of
 //! either experiment).
 

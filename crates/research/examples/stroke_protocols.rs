@@ -9,7 +9,7 @@
 //! * `slide alone`: every slide (forth and back) from a fresh classifier;
 //! * `stroke alone`: every stroke (one direction) from a fresh classifier, as a one-pass mission.
 //!
-//! `cargo run --release -p crackbot-tactile --example stroke_protocols -- MODEL DIR…`
+//! `cargo run --release -p crackbot-research --example stroke_protocols -- MODEL DIR…`
 
 use std::path::PathBuf;
 

@@ -1,6 +1,6 @@
 //! Times single-row and batch prediction of a 100-tree forest trained on synthetic MAV-like data.
 //!
-//! `cargo run -p crackbot-forest --release --example predict_timing -- [train_rows] [trees] [batch_rows]`
+//! `cargo run -p crackbot-research --release --example predict_timing -- [train_rows] [trees] [batch_rows]`
 //! (defaults: 75000, 100, 200000). Prediction runs on one core.
 
 use std::time::Instant;

@@ -18,7 +18,7 @@
 //! tested on the simulated surface-type plates of seeds 23–26.
 //!
 //! ```sh
-//! CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-tactile --example deployed_tables [recognition|width]
+//! CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-research --example deployed_tables [recognition|width]
 //! ```
 //! Data: the authors' repetitions 1–3, and simulated plates where asked.
 

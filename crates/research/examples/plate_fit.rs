@@ -2,7 +2,7 @@
 //! plate alone (and of every plate) for a grid of two of its dimensions, everything else as
 //! committed.
 //!
-//! `CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-sim --example plate_fit -- PLATE [A] [B]`
+//! `CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-research --example plate_fit -- PLATE [A] [B]`
 //! - `wave [AMPLITUDES] [PERIODS]`: the wavy plate (label 3);
 //! - `bump [RADII] [HEIGHTS]`: the bump (label 2).
 //!
