@@ -427,21 +427,19 @@ fn print_summary(r: &InspectReport) {
     );
     println!("confirmed cracks: {}", r.cracks.len());
     for c in &r.cracks {
-        let width = c.width_mm.map_or("–".to_string(), |w| {
-            format!("{w:.1} ± {:.1} mm", c.width_std_mm.unwrap_or(0.0))
-        });
+        let width = c
+            .width_mm
+            .map_or("–".to_string(), |w| match c.width_range_mm {
+                Some([lo, hi]) => format!("{w:.1} mm (vote 10–90 %: {lo:.1}–{hi:.1})"),
+                None => format!("{w:.1} mm"),
+            });
         println!(
-            "  at ({:.1}, {:.1}) mm  width {width}  confidence {:.2}  slides {:?}{}",
-            c.position_mm[0],
-            c.position_mm[1],
-            c.confidence,
-            c.evidence.slides,
-            if c.evidence.doubts.is_empty() {
-                ""
-            } else {
-                "  (doubts: see the JSON report)"
-            }
+            "  at ({:.1}, {:.1}) mm  width {width}  confidence {:.2}  slides {:?}",
+            c.position_mm[0], c.position_mm[1], c.confidence, c.evidence.slides,
         );
+        for d in &c.evidence.doubts {
+            println!("      doubt: {d}");
+        }
     }
     println!("rejected by the finger: {}", r.rejected.len());
     for c in &r.rejected {

@@ -131,7 +131,9 @@ def trial(scenes, folder, stats, errors, untouched, totals):
             xs, length = crossings(p["start_mm"], p["end_mm"], feats)
             near = nearest_middle(xs, length)
             dip = p["dip"]["confidence"] if p["dip"] else 0.0
-            doubt = (p["doubt"] or "none").split(" ")[0]
+            d = p["doubt"]
+            # A tagged object since the report's doubts became an enum; text before.
+            doubt = (d.get("kind", "?") if isinstance(d, dict) else (d or "none").split(" ")[0]) if d else "none"
             print(
                 f"pass {seed} {p['candidate']} {near[2] if near else 'nothing'} "
                 f"{near[3] if near else 0.0:.2f} {p['class'].replace(' ', '_')} "

@@ -1129,7 +1129,7 @@ mod tests {
                 extent_mm: None,
                 class: "crack".into(),
                 width_mm: None,
-                width_std_mm: None,
+                width_range_mm: None,
                 confidence: 1.0,
                 evidence: Evidence {
                     detector_score: None,

@@ -45,11 +45,43 @@ pub struct WidthEstimate {
     /// The root-mean-square distance of the vote's widths from [`Self::mm`] under the same
     /// weights (the posterior spread around the estimate), mm.
     pub std_mm: f64,
+    /// The vote's 10–90 % range, mm: the narrowest and widest class widths between which the
+    /// middle 80 % of the slide vote lies (its 10 % and 90 % quantiles over the classes' widths,
+    /// [`vote_range_mm`]); never below 0.
+    pub range_mm: [f64; 2],
     /// The width regressor's estimate: median of its window estimates, mm.
     pub regressor_mm: f64,
     /// 1.4826 × the median absolute deviation of the regressor's window estimates (a robust
     /// standard deviation), mm.
     pub regressor_spread_mm: f64,
+}
+
+/// The `q` and `1 − q` quantiles of a vote over classes whose widths are `labels` (mm): sorted
+/// by width, the first class at which the vote's cumulative share reaches `q`, and the first at
+/// which it reaches `1 − q`. Both clamped at 0; `[0, 0]` for an empty or zero vote.
+pub fn vote_range_mm(votes: &[f64], labels: &[f64], q: f64) -> [f64; 2] {
+    let mut by_width: Vec<(f64, f64)> = labels
+        .iter()
+        .zip(votes)
+        .filter(|(w, v)| w.is_finite() && v.is_finite() && **v > 0.0)
+        .map(|(w, v)| (*w, *v))
+        .collect();
+    let total: f64 = by_width.iter().map(|p| p.1).sum();
+    if by_width.is_empty() || total <= 0.0 {
+        return [0.0, 0.0];
+    }
+    by_width.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let quantile = |share: f64| {
+        let mut cum = 0.0;
+        for &(w, v) in &by_width {
+            cum += v / total;
+            if cum >= share - 1e-12 {
+                return w;
+            }
+        }
+        by_width[by_width.len() - 1].0
+    };
+    [quantile(q).max(0.0), quantile(1.0 - q).max(0.0)]
 }
 
 /// The verdict at the end of a slide.
@@ -369,6 +401,7 @@ impl<'m> OnlineClassifier<'m> {
                     mm: mode,
                     posterior_mean_mm: mean,
                     std_mm: var.sqrt(),
+                    range_mm: vote_range_mm(&votes, labels, 0.1),
                     regressor_mm: mm,
                     regressor_spread_mm: 1.4826 * mad,
                 })
@@ -441,4 +474,35 @@ pub fn classify_recording(
         out.push(online.end_slide()?);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::vote_range_mm;
+
+    #[test]
+    fn the_vote_range_spans_the_middle_eighty_percent_and_never_goes_below_zero() {
+        let labels = [0.5, 1.0, 2.0, 4.0];
+        // All of it on one class: a point.
+        assert_eq!(
+            vote_range_mm(&[0.0, 1.0, 0.0, 0.0], &labels, 0.1),
+            [1.0, 1.0]
+        );
+        // 5 % on 0.5 mm, 90 % on 1 mm, 5 % on 4 mm: the tails are left out.
+        assert_eq!(
+            vote_range_mm(&[0.05, 0.9, 0.0, 0.05], &labels, 0.1),
+            [1.0, 1.0]
+        );
+        // Split between 1 and 4 mm: the range spans both; classes need not be in order.
+        assert_eq!(vote_range_mm(&[0.5, 0.5], &[4.0, 1.0], 0.1), [1.0, 4.0]);
+        // Unnormalised votes give the same range.
+        assert_eq!(
+            vote_range_mm(&[2.0, 6.0, 2.0, 0.0], &labels, 0.1),
+            [0.5, 2.0]
+        );
+        // A negative width (a class of a corrupt model) is clamped; no vote gives nothing.
+        assert_eq!(vote_range_mm(&[1.0, 1.0], &[-1.0, 2.0], 0.1), [0.0, 2.0]);
+        assert_eq!(vote_range_mm(&[0.0, 0.0], &[1.0, 2.0], 0.1), [0.0, 0.0]);
+        assert_eq!(vote_range_mm(&[f64::NAN], &[1.0], 0.1), [0.0, 0.0]);
+    }
 }

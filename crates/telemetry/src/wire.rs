@@ -231,7 +231,7 @@ impl From<&PassRecord> for PassVerdict {
             class: p.class.clone(),
             confidence: p.confidence,
             width_mm: p.width_mm,
-            doubt: p.doubt.clone(),
+            doubt: p.doubt.as_ref().map(ToString::to_string),
             dip_mm: p.dip.map(|d| [d.centre_mm, d.width_mm]),
         }
     }

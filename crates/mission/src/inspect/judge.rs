@@ -8,6 +8,7 @@ use crackbot_tactile::print_check;
 
 use super::config::InspectConfig;
 use super::passes::Crossing;
+use super::report::{CrackDoubt, Width};
 use crate::MissionError;
 
 /// A "no crack" verdict whose confidence is below this is doubted by
@@ -86,10 +87,10 @@ pub(super) struct Felt {
     pub(super) votes: Vec<f64>,
     /// The slides (link ids) of its passes.
     pub(super) slides: Vec<u32>,
-    /// Each pass's width verdict: its class (mm) and the spread of the vote (mm).
-    pub(super) widths: Vec<(f64, f64)>,
+    /// Each pass's width verdict: its class and the vote's 10–90 % range, mm.
+    pub(super) widths: Vec<(f64, [f64; 2])>,
     /// Doubts raised, in words.
-    pub(super) doubts: Vec<String>,
+    pub(super) doubts: Vec<CrackDoubt>,
     /// Where the passes that stood for a crack crossed it.
     pub(super) crossings: Vec<Crossing>,
     /// Passes read as something other than a crack (a doubted "no crack" over a deep dip
@@ -115,8 +116,8 @@ pub(super) struct Felt {
 pub(super) struct PassReading<'a> {
     /// The recognition verdict (`None`: too short to classify).
     pub(super) verdict: Option<&'a SlideVerdict>,
-    /// The width verdict's class and spread, mm.
-    pub(super) width: Option<(f64, f64)>,
+    /// The width verdict's class and the vote's 10–90 % range, mm.
+    pub(super) width: Option<(f64, [f64; 2])>,
     /// The confidence of the pass's proximity dip (`None`: no dip).
     pub(super) dip_confidence: Option<f64>,
     /// Where the pass crossed what it felt.
@@ -192,7 +193,10 @@ impl Felt {
                 self.unknown += 1;
             }
             if let Some(d) = &v.doubt {
-                self.doubts.push(format!("{d:?}"));
+                self.doubts.push(CrackDoubt::Pass {
+                    slide: pass.slide,
+                    doubt: d.into(),
+                });
             }
             let doubted_dip = pass.on_candidate
                 && doubted_no_crack_with_dip(
@@ -207,13 +211,11 @@ impl Felt {
                 self.vetoes += 1;
             }
             if doubted_dip {
-                self.doubts.push(format!(
-                    "slide {}: read as no crack ({:.2}), doubted; its proximity dip ({:.2}) \
-                     stands for a crack",
-                    pass.slide,
-                    v.confidence,
-                    pass.dip_confidence.unwrap_or(0.0)
-                ));
+                self.doubts.push(CrackDoubt::DoubtedNoCrack {
+                    slide: pass.slide,
+                    confidence: v.confidence,
+                    dip_confidence: pass.dip_confidence.unwrap_or(0.0),
+                });
             }
         }
         if let Some(w) = pass.width {
@@ -266,8 +268,8 @@ pub(super) enum Judgement {
         position_mm: [f64; 2],
         /// Along the pass, where it starts and ends.
         extent_mm: Option<[[f64; 2]; 2]>,
-        /// Mean width class and spread, mm.
-        width_mm: Option<(f64, f64)>,
+        /// The width ([`Width`]).
+        width: Option<Width>,
     },
     /// Not a crack.
     Rejected(Rejection),
@@ -297,7 +299,7 @@ pub(super) fn judge(f: &Felt, rules: &Rules) -> (Judgement, usize, f64) {
         Judgement::Crack {
             position_mm: mean_crossing(&f.crossings),
             extent_mm: f.crossings.iter().find_map(|c| c.1),
-            width_mm: mean_width(&f.widths),
+            width: mean_width(&f.widths),
         }
     } else {
         Judgement::Rejected(if f.unknown >= f.passes {
@@ -330,16 +332,23 @@ fn mean_crossing(crossings: &[Crossing]) -> [f64; 2] {
     ]
 }
 
-/// The mean width class and the mean spread, mm.
-fn mean_width(widths: &[(f64, f64)]) -> Option<(f64, f64)> {
+/// The width of a confirmed crack: the mean of its passes' width classes, and the mean of
+/// their votes' 10–90 % ranges ([`crackbot_tactile::online::vote_range_mm`]).
+fn mean_width(widths: &[(f64, [f64; 2])]) -> Option<Width> {
     if widths.is_empty() {
         return None;
     }
     let n = widths.len() as f64;
-    Some((
-        widths.iter().map(|w| w.0).sum::<f64>() / n,
-        widths.iter().map(|w| w.1).sum::<f64>() / n,
-    ))
+    let (mut mm, mut lo, mut hi) = (0.0, 0.0, 0.0);
+    for (w, [a, b]) in widths {
+        mm += w / n;
+        lo += a / n;
+        hi += b / n;
+    }
+    Some(Width {
+        mm,
+        range_mm: [lo, hi],
+    })
 }
 
 impl Rejection {
@@ -492,7 +501,7 @@ mod tests {
             let x = 10.0 + i as f64;
             let pass = PassReading {
                 verdict: Some(&v),
-                width: Some((1.0 + i as f64, 0.5)),
+                width: Some((1.0 + i as f64, [0.5 + i as f64, 2.0 + i as f64])),
                 dip_confidence: *dip,
                 crossing: ([x, 5.0], dip.map(|_| [[x - 0.5, 5.0], [x + 0.5, 5.0]])),
                 on_candidate: true,
@@ -517,7 +526,10 @@ mod tests {
             Judgement::Crack {
                 position_mm: [10.5, 5.0],
                 extent_mm: Some([[9.5, 5.0], [10.5, 5.0]]),
-                width_mm: Some((1.5, 0.5)),
+                width: Some(Width {
+                    mm: 1.5,
+                    range_mm: [1.0, 2.5],
+                }),
             }
         );
     }
@@ -590,7 +602,9 @@ mod tests {
         let f = felt(&[(0, novel.clone(), Some(0.8))], &r);
         assert_eq!((f.crossings.len(), f.vetoes), (1, 0));
         assert!(
-            f.doubts.iter().any(|d| d.contains("stands for a crack")),
+            f.doubts
+                .iter()
+                .any(|d| matches!(d, CrackDoubt::DoubtedNoCrack { slide: 1, .. })),
             "{:?}",
             f.doubts
         );

@@ -153,7 +153,7 @@ fn vision_cracks(candidates: &[(Candidate, f64)]) -> Vec<ReportedCrack> {
             extent_mm: None,
             class: "crack".into(),
             width_mm: None,
-            width_std_mm: None,
+            width_range_mm: None,
             confidence: *score,
             evidence: Evidence {
                 detector_score: Some(*score),
@@ -223,14 +223,14 @@ fn judge_all(
             Judgement::Crack {
                 position_mm,
                 extent_mm,
-                width_mm,
+                width,
             } => cracks.push(ReportedCrack {
                 candidate: detection.map(|(c, _)| c.id),
                 position_mm,
                 extent_mm,
                 class: name,
-                width_mm: width_mm.map(|w| w.0),
-                width_std_mm: width_mm.map(|w| w.1),
+                width_mm: width.map(|w| w.mm),
+                width_range_mm: width.map(|w| w.range_mm),
                 confidence,
                 evidence: Evidence {
                     detector_score: detection.map(|d| d.1),

@@ -86,8 +86,8 @@ pub use raised::{
     RAISED_PASS_GUARD_COUNTS, SURFACE_RISE_TOLERANCE_MM,
 };
 pub use report::{
-    Dip, Evidence, FrameInfo, InspectReport, LinkCounters, LiveSample, PassRecord, Progress,
-    RejectedCandidate, ReportedCrack, StageTimes, StreamHealth, NOT_JUDGED,
+    CrackDoubt, Dip, Evidence, FrameInfo, InspectReport, LinkCounters, LiveSample, PassDoubt,
+    PassRecord, Progress, RejectedCandidate, ReportedCrack, StageTimes, StreamHealth, NOT_JUDGED,
 };
 pub use touch::{RESTROKE_ALONG_MM, RESTROKE_KEEP_MM, UNEVEN_ENDS_SHARE};
 

@@ -13,7 +13,7 @@ use super::arm::{down_at, mapped_states, pose, position_at, Arm};
 use super::config::InspectConfig;
 use super::feel::Feel;
 use super::perceive::io_err;
-use super::report::{LiveSample, Progress, StreamHealth};
+use super::report::{CrackDoubt, LiveSample, Progress, StreamHealth};
 use super::sensor::Sensor;
 use crate::MissionError;
 
@@ -717,7 +717,7 @@ pub(super) fn raised_ratio(
     strokes: &[(Vec<f64>, Vec<f64>)],
     raised: (&[f64], &[f64]),
     dark: f64,
-    doubts: &mut Vec<String>,
+    doubts: &mut Vec<CrackDoubt>,
 ) -> Option<RaisedRatio> {
     let (mut ratios, mut floors, mut levels) = (Vec::new(), Vec::new(), Vec::new());
     for (p, x) in strokes {
@@ -727,7 +727,9 @@ pub(super) fn raised_ratio(
                 floors.extend(r.floor);
                 levels.push(r.levels);
             }
-            Err(e) => doubts.push(e.to_string()),
+            Err(e) => doubts.push(CrackDoubt::UnusableStroke {
+                reason: e.to_string(),
+            }),
         }
     }
     let level = |k: usize| mean(&levels.iter().map(|l| l[k]).collect::<Vec<_>>());

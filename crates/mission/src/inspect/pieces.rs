@@ -364,7 +364,7 @@ mod tests {
             extent_mm: None,
             class: "crack".into(),
             width_mm: None,
-            width_std_mm: None,
+            width_range_mm: None,
             confidence: conf,
             evidence: Evidence {
                 detector_score: Some(0.9),

@@ -12,6 +12,7 @@ use crackbot_tactile::print_check;
 use super::config::InspectConfig;
 use super::judge::Felt;
 use super::passes::{self, judged_ratio, save_pass, unit, Obstruction, RaisedRatio, Recorded, Rig};
+use super::report::CrackDoubt;
 use crate::MissionError;
 
 /// The print check's raised pass is stopped (the arm lifts to its travel height) when the
@@ -240,13 +241,11 @@ impl Check<'_> {
         let ((hs, hx), obstruction) =
             rig.hover_and_record(from, to, h, speed, Some(RAISED_PASS_GUARD_COUNTS))?;
         if let Some(o) = obstruction {
-            f.doubts.push(format!(
-                "the raised pass was stopped {:.1} mm along its {:.1} mm: the proximity fibre \
-                 read {:.0} counts above the sound surface, something stands under the line",
-                o.at_mm,
-                (to[0] - from[0]).hypot(to[1] - from[1]),
-                o.rise_counts
-            ));
+            f.doubts.push(CrackDoubt::RaisedPassStopped {
+                at_mm: o.at_mm,
+                length_mm: (to[0] - from[0]).hypot(to[1] - from[1]),
+                rise_counts: o.rise_counts,
+            });
         }
         let d = unit(from, to);
         let path = self
@@ -280,17 +279,16 @@ impl Check<'_> {
             return Ok(None);
         };
         let height = h + rise.min(MAX_SURFACE_RISE_MM);
-        f.doubts.push(format!(
-            "the surface at the line stood {rise:.2} mm above the plate: the raised pass was \
-             made again {height:.2} mm up"
-        ));
+        f.doubts.push(CrackDoubt::SurfaceRise {
+            rise_mm: rise,
+            height_mm: height,
+        });
         let ((rs, rx), stopped, dk) = self.pass(rig, [a, b], height, "again")?;
         if let Some(o) = stopped {
-            f.doubts.push(format!(
-                "the raised pass made again was stopped {:.1} mm along: the proximity fibre \
-                 read {:.0} counts above the sound surface; the first pass's ratio stands",
-                o.at_mm, o.rise_counts
-            ));
+            f.doubts.push(CrackDoubt::RaisedAgainStopped {
+                at_mm: o.at_mm,
+                rise_counts: o.rise_counts,
+            });
             return Ok(None);
         }
         Ok(self
@@ -317,13 +315,12 @@ impl Check<'_> {
         for k in 2..=PRINT_CHECK_PASSES_IN_DOUBT {
             let ((rs, rx), stopped, dk) = self.pass(rig, [a, b], height, &k.to_string())?;
             if let Some(o) = stopped {
-                f.doubts.push(format!(
-                    "raised pass {k} was stopped {:.1} mm along: the proximity fibre read {:.0} \
-                     counts above the sound surface; the print ratio rests on {} passes",
-                    o.at_mm,
-                    o.rise_counts,
-                    ratios.len()
-                ));
+                f.doubts.push(CrackDoubt::RaisedInDoubtStopped {
+                    pass: k,
+                    at_mm: o.at_mm,
+                    rise_counts: o.rise_counts,
+                    passes: ratios.len(),
+                });
                 break;
             }
             ratios.extend(self.ratio(&rs, &rx, a, dk, &mut f.doubts));
@@ -332,12 +329,10 @@ impl Check<'_> {
                 break;
             }
         }
-        f.doubts.push(format!(
-            "the first raised pass's print ratio {first:.3} was within {PRINT_RATIO_DOUBT} of \
-             {}: the mean of {} passes' print and floor ratios decides",
-            print_check::PRINT_RATIO,
-            ratios.len(),
-        ));
+        f.doubts.push(CrackDoubt::RatioInDoubt {
+            first,
+            passes: ratios.len(),
+        });
         Ok(true)
     }
 
@@ -375,7 +370,7 @@ impl Check<'_> {
         xs: &[f64],
         start: [f64; 2],
         dir: [f64; 2],
-        doubts: &mut Vec<String>,
+        doubts: &mut Vec<CrackDoubt>,
     ) -> Option<RaisedRatio> {
         let p: Vec<f64> = samples.iter().map(|v| v[3]).collect();
         let x: Vec<f64> = xs.iter().map(|&v| self.on_axis(start, dir, v)).collect();

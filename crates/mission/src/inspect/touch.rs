@@ -16,7 +16,7 @@ use super::feel::Feel;
 use super::judge::{Felt, PassReading, Rules};
 use super::passes::{self, classify, save_pass, split_by_travel, Crossing, Rig};
 use super::raised::{print_check, Strokes};
-use super::report::{keep_pass, Dip, InspectReport, PassRecord, NOT_JUDGED};
+use super::report::{keep_pass, Dip, InspectReport, PassDoubt, PassRecord};
 use crate::MissionError;
 
 /// A candidate's stroke is made once more beside it when its two ends read this unlike each
@@ -317,10 +317,10 @@ impl<'m, 'c> Touch<'m, 'c> {
                 class: None,
                 confidence: 0.0,
                 width_mm: None,
-                doubt: Some(format!(
-                    "{NOT_JUDGED}: the stroke's ends read {e0:.0} and {e1:.0} counts, not both \
-                     the sound surface; stroked again {moved_mm:.1} mm along the candidate"
-                )),
+                doubt: Some(PassDoubt::NotJudged {
+                    end_counts: [e0, e1],
+                    moved_mm,
+                }),
                 dip: None,
                 recording: s.recording.display().to_string(),
                 attempts: s.attempts,
@@ -381,9 +381,12 @@ impl<'m, 'c> Touch<'m, 'c> {
             let slides: Vec<u32> = unit.strokes.iter().map(|s| s.id).collect();
             let reading = PassReading {
                 verdict: verdict.as_ref(),
-                width: wv
-                    .as_ref()
-                    .map(|w| (w.label, w.width.as_ref().map_or(0.0, |e| e.std_mm))),
+                width: wv.as_ref().map(|w| {
+                    (
+                        w.label,
+                        w.width.as_ref().map_or([w.label; 2], |e| e.range_mm),
+                    )
+                }),
                 dip_confidence: extent.as_ref().map(|e| e.confidence),
                 crossing,
                 on_candidate: cand.is_some(),
@@ -468,9 +471,7 @@ fn pass_record(
         class: verdict.map(|v| v.name.clone()),
         confidence: verdict.map_or(0.0, |v| v.confidence),
         width_mm: width.map(|w| w.label),
-        doubt: verdict
-            .and_then(|v| v.doubt.as_ref())
-            .map(|d| format!("{d:?}")),
+        doubt: verdict.and_then(|v| v.doubt.as_ref()).map(PassDoubt::from),
         dip: extent.as_ref().map(|e| Dip {
             centre_mm: e.centre_mm,
             width_mm: e.width_mm,
