@@ -969,29 +969,38 @@ fn a_stroke_across_two_cracks_reports_its_candidate_where_its_own_dip_is() {
 
 #[test]
 fn bad_confirmation_settings_are_refused_before_anything_starts() {
+    use crackbot_mission::MissionError;
     let dir = tempfile::tempdir().unwrap();
-    let mut c = config(dir.path());
-    c.min_dip_counts = f64::NAN;
-    let err = mission(&c).unwrap_err().to_string();
-    assert!(err.contains("min_dip_counts"), "{err}");
-    let mut c = config(dir.path());
-    c.print_check_mm = Some(0.1);
-    let err = mission(&c).unwrap_err().to_string();
-    assert!(err.contains("print check"), "{err}");
+    // The setting a mission with `change` refuses, by name.
+    let refused = |change: &dyn Fn(&mut InspectConfig)| {
+        let mut c = config(dir.path());
+        change(&mut c);
+        match mission(&c).unwrap_err() {
+            MissionError::Setting { field, value, .. } => {
+                let e = MissionError::Setting {
+                    field,
+                    value,
+                    allowed: "",
+                };
+                assert!(e.to_string().contains(field), "{e}");
+                field
+            }
+            other => panic!("{other}"),
+        }
+    };
+    assert_eq!(refused(&|c| c.min_dip_counts = f64::NAN), "min_dip_counts");
+    assert_eq!(refused(&|c| c.print_check_mm = Some(0.1)), "print_check_mm");
     for bad in [0.0, 1.5, f64::NAN] {
-        let mut c = config(dir.path());
-        c.doubted_dip_confidence = Some(bad);
-        let err = mission(&c).unwrap_err().to_string();
-        assert!(err.contains("doubted_dip_confidence"), "{err}");
+        assert_eq!(
+            refused(&|c| c.doubted_dip_confidence = Some(bad)),
+            "doubted_dip_confidence"
+        );
     }
-    let mut c = config(dir.path());
-    c.piece_gap_mm = Some(-1.0);
-    let err = mission(&c).unwrap_err().to_string();
-    assert!(err.contains("piece_gap_mm"), "{err}");
+    assert_eq!(refused(&|c| c.piece_gap_mm = Some(-1.0)), "piece_gap_mm");
     for bad in [-0.5, f64::INFINITY] {
-        let mut c = config(dir.path());
-        c.piece_trace_gap_mm = Some(bad);
-        let err = mission(&c).unwrap_err().to_string();
-        assert!(err.contains("piece_trace_gap_mm"), "{err}");
+        assert_eq!(
+            refused(&|c| c.piece_trace_gap_mm = Some(bad)),
+            "piece_trace_gap_mm"
+        );
     }
 }
