@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 
 use crackbot_mission::inspect::{run_inspection, InspectConfig, StageTimes};
 use crackbot_sim::scene::Scene;
+use crackbot_testkit::median;
 use criterion::{criterion_group, criterion_main, Criterion};
 
 /// Simulation speed-up of the benched missions.
@@ -27,15 +28,6 @@ struct Run {
     stages: StageTimes,
     total_s: f64,
     planned_s: f64,
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
 }
 
 fn bench_mission(c: &mut Criterion) {
@@ -70,7 +62,7 @@ fn bench_mission(c: &mut Criterion) {
     group.finish();
 
     let runs = runs.into_inner().expect("the runs");
-    let col = |f: &dyn Fn(&Run) -> f64| median(runs.iter().map(f).collect());
+    let col = |f: &dyn Fn(&Run) -> f64| median(&runs.iter().map(f).collect::<Vec<_>>());
     let total = col(&|r| r.total_s);
     let setup = col(&|r| r.stages.setup_s);
     let perceive = col(&|r| r.stages.perceive_s);

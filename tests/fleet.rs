@@ -4,21 +4,14 @@
 //! a robot that dies is shown as lost within 2 s.
 #![allow(clippy::unwrap_used)]
 
-use std::net::TcpListener;
 use std::process::{Child, Command as Process, Stdio};
 use std::time::{Duration, Instant};
 
 use crackbot_link::Key;
 use crackbot_telemetry::wire::Phase;
 use crackbot_telemetry::{Command, CommandReply, Fleet, Station, ZenohOptions};
+use crackbot_testkit::free_tcp_port;
 use crackbot_tests::binary;
-
-fn free_tcp_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0")
-        .and_then(|s| s.local_addr())
-        .map(|a| a.port())
-        .expect("a free TCP port")
-}
 
 /// Writes a key file of `byte` repeated (hex), mode 0600.
 fn key_file(path: &std::path::Path, byte: &str) -> Key {

@@ -40,6 +40,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "crackbot-vision",
             "crackbot-sim",
             "crackbot-planner",
+            "crackbot-testkit",
         ],
     ),
     (

@@ -2,7 +2,8 @@
 
 use std::path::{Path, PathBuf};
 
-use crackbot_recording::{read_csv, read_mat, Recording, Row};
+use crackbot_recording::{read_csv, read_mat};
+use crackbot_testkit::assert_bits_equal;
 use crackbot_tests::{crackbot, text};
 
 /// A file or folder of the authors' recordings (`../shared/data/tactile/...`); stops the test with one
@@ -13,28 +14,6 @@ fn data(rel: &str) -> PathBuf {
 
 fn utf8(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
-}
-
-fn bits(r: &Row) -> [u64; 9] {
-    [
-        r.x_mm.to_bits(),
-        r.d1.to_bits(),
-        r.d2.to_bits(),
-        r.d3.to_bits(),
-        r.p.to_bits(),
-        u64::from(r.direction),
-        u64::from(r.slide),
-        r.label.to_bits(),
-        u64::from(r.repetition),
-    ]
-}
-
-fn assert_bits_equal(a: &Recording, b: &Recording, what: &str) {
-    assert_eq!(a.len(), b.len(), "{what}");
-    assert_eq!(a.extra, b.extra, "{what}");
-    for (i, (x, y)) in a.rows.iter().zip(&b.rows).enumerate() {
-        assert_eq!(bits(x), bits(y), "{what}: row {i}");
-    }
 }
 
 #[test]

@@ -6,6 +6,7 @@ use crackbot_link::{
     Key, Message, ReplayWindow, Signer, Verdict, GOLDEN_VECTORS_JSON, MAX_PAYLOAD, SCHEMA,
     SCHEMA_HASH, TAG_LEN, WINDOW,
 };
+use crackbot_testkit::hex;
 use serde::Deserialize;
 use serde_json::Value;
 
@@ -65,13 +66,6 @@ struct Golden {
     valid: Vec<Valid>,
     invalid: Vec<Invalid>,
     replay: Vec<Sequence>,
-}
-
-fn hex(s: &str) -> Vec<u8> {
-    (0..s.len())
-        .step_by(2)
-        .map(|i| u8::from_str_radix(&s[i..i + 2], 16).expect("golden hex"))
-        .collect()
 }
 
 fn golden() -> Golden {

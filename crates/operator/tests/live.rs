@@ -19,13 +19,7 @@ use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 
 use common::step_until;
-
-fn free_tcp_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|s| s.local_addr())
-        .map(|a| a.port())
-        .unwrap()
-}
+use crackbot_testkit::free_tcp_port;
 
 fn phase(app: &OperatorApp, robot: &str) -> Option<Phase> {
     let f = app.fleet();

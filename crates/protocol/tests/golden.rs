@@ -1,6 +1,7 @@
 //! The encoder and decoder against the golden vectors of the independent Python implementation.
 
 use crackbot_protocol::{DecodeError, Decoder, Flags, Frame, GOLDEN_VECTORS_JSON, WIRE_LEN};
+use crackbot_testkit::hex;
 use serde::Deserialize;
 
 #[derive(Deserialize)]
@@ -38,13 +39,6 @@ struct Golden {
 struct Valid2 {
     frame: GoldenFrame,
     wire: String,
-}
-
-fn hex(s: &str) -> Vec<u8> {
-    (0..s.len())
-        .step_by(2)
-        .map(|i| u8::from_str_radix(&s[i..i + 2], 16).expect("golden hex"))
-        .collect()
 }
 
 fn frame(g: &GoldenFrame) -> Frame {

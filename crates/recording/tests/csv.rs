@@ -8,6 +8,7 @@ use crackbot_recording::{
     read_csv, read_csv_from, write_csv, CsvRecorder, Extra, Recording, RecordingError, Row,
     COLUMNS, EXTRA_COLUMNS,
 };
+use crackbot_testkit::assert_bits_equal;
 use proptest::prelude::*;
 
 const HEADER: &str = "x_mm,d1,d2,d3,p,direction,slide,label,repetition\n";
@@ -45,22 +46,6 @@ fn read_err(content: &str) -> (RecordingError, String) {
         "message does not name the file: {msg}"
     );
     (err, msg)
-}
-
-fn assert_bits_equal(a: &Recording, b: &Recording) {
-    assert_eq!(a, b);
-    for (x, y) in a.rows.iter().zip(&b.rows) {
-        for (u, v) in [
-            (x.x_mm, y.x_mm),
-            (x.d1, y.d1),
-            (x.d2, y.d2),
-            (x.d3, y.d3),
-            (x.p, y.p),
-            (x.label, y.label),
-        ] {
-            assert_eq!(u.to_bits(), v.to_bits(), "{u} vs {v}");
-        }
-    }
 }
 
 #[test]
@@ -590,7 +575,7 @@ proptest! {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("rt.csv");
         let back = round_trip(&path, &rec);
-        assert_bits_equal(&rec, &back);
+        assert_bits_equal(&rec, &back, "round trip");
     }
 
     #[test]
@@ -603,7 +588,7 @@ proptest! {
         }
         prop_assert_eq!(recorder.finish().unwrap(), rec.len() as u64);
         let back = read_csv(&path).unwrap();
-        assert_bits_equal(&rec, &back);
+        assert_bits_equal(&rec, &back, "round trip");
     }
 }
 

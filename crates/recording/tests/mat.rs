@@ -10,6 +10,7 @@ use crackbot_recording::{
     collect_recordings, read_csv, read_mat, read_mat_from, read_recording, write_csv, write_mat,
     write_recording, Extra, Recording, RecordingError, Row,
 };
+use crackbot_testkit::assert_bits_equal;
 use proptest::prelude::*;
 
 /// A file of the authors' recordings (`../shared/data/tactile/...`); the test stops with one clear message
@@ -92,18 +93,6 @@ fn values(r: &Row) -> [f64; 9] {
         r.label,
         f64::from(r.repetition),
     ]
-}
-
-fn assert_bits_equal(a: &Recording, b: &Recording) {
-    assert_eq!(a.len(), b.len());
-    assert_eq!(a.extra, b.extra);
-    for (i, (x, y)) in a.rows.iter().zip(&b.rows).enumerate() {
-        assert_eq!(
-            values(x).map(f64::to_bits),
-            values(y).map(f64::to_bits),
-            "row {i}"
-        );
-    }
 }
 
 #[test]
@@ -238,10 +227,10 @@ fn mat_round_trips_through_csv_and_mat_bit_for_bit() {
     let original = read_mat(&data("width/crack_mm5_complete_2.mat")).unwrap();
     let csv = dir.path().join("a.csv");
     write_recording(&csv, &original).unwrap();
-    assert_bits_equal(&read_csv(&csv).unwrap(), &original);
+    assert_bits_equal(&read_csv(&csv).unwrap(), &original, "mat");
     let mat = dir.path().join("b.MAT");
     write_recording(&mat, &original).unwrap();
-    assert_bits_equal(&read_recording(&mat).unwrap(), &original);
+    assert_bits_equal(&read_recording(&mat).unwrap(), &original, "mat");
     // Compressed like the authors' files.
     let size = std::fs::metadata(&mat).unwrap().len();
     assert!(size < 400_000, "{size} bytes");
@@ -279,7 +268,7 @@ fn extensions_pick_the_reader_and_writer() {
     let rec = small_recording(5);
     let upper = dir.path().join("r.CSV");
     write_recording(&upper, &rec).unwrap();
-    assert_bits_equal(&read_recording(&upper).unwrap(), &rec);
+    assert_bits_equal(&read_recording(&upper).unwrap(), &rec, "mat");
     for name in ["r.txt", "r", "r.mat.gz"] {
         let path = dir.path().join(name);
         std::fs::write(&path, "x").unwrap();
@@ -546,7 +535,7 @@ fn hand_written_files_read_uncompressed_compressed_and_big_endian() {
             mat.file(&[mat.compressed(&other), mat.compressed(&m)]),
         ] {
             let rec = read_mat_from(&bytes, "hand.mat").unwrap();
-            assert_bits_equal(&rec, &expected);
+            assert_bits_equal(&rec, &expected, "mat");
         }
     }
     // Integer storage of a double matrix (as MATLAB does when the values allow it), and class single.

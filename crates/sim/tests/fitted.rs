@@ -8,6 +8,7 @@ use crackbot_recording::Recording;
 use crackbot_sim::calibrate::{fit_rms, fit_speed_rms};
 use crackbot_sim::experiment::{simulate_recording, Experiment, ExperimentConfig};
 use crackbot_sim::recordings::recordings_of_repetition;
+use crackbot_testkit::median;
 
 /// Per stroke (slide and direction) of `rec`: the proximity's largest excursion above the
 /// stroke's median and the samples spent above half of it.
@@ -38,11 +39,6 @@ fn p_spikes(rec: &Recording) -> Vec<(f64, usize)> {
     out
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 #[test]
 fn bump_gives_a_short_proximity_spike() {
     let config = ExperimentConfig::paper(Experiment::Recognition, 7);
@@ -64,8 +60,8 @@ fn bump_gives_a_short_proximity_spike() {
     .unwrap();
     let spikes = p_spikes(&rec);
     assert_eq!(spikes.len(), 24);
-    let excursion = median(spikes.iter().map(|s| s.0).collect());
-    let width = median(spikes.iter().map(|s| s.1 as f64).collect());
+    let excursion = median(&spikes.iter().map(|s| s.0).collect::<Vec<_>>());
+    let width = median(&spikes.iter().map(|s| s.1 as f64).collect::<Vec<_>>());
     // The authors' bump, repetitions 1-3: excursions of 195-260 counts (medians 210-222),
     // 83-260 samples above half of it per stroke (medians 142-174). The simulator: the
     // excursion matches; the spike is still about 3 times as wide (474 samples, seed 11), so

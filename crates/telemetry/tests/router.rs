@@ -9,14 +9,8 @@ use std::time::{Duration, Instant};
 use crackbot_link::Key;
 use crackbot_telemetry::wire::{Phase, Telemetry};
 use crackbot_telemetry::{Command, CommandReply, RobotNode, Station, ZenohOptions};
+use crackbot_testkit::free_tcp_port;
 use zenoh::Wait;
-
-fn free_tcp_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|s| s.local_addr())
-        .map(|a| a.port())
-        .unwrap()
-}
 
 #[test]
 fn a_robot_and_a_station_meet_through_a_router() {
