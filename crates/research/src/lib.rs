@@ -1133,13 +1133,7 @@ mod tests {
                 confidence: 1.0,
                 evidence: Evidence {
                     detector_score: None,
-                    slides: Vec::new(),
-                    votes: Vec::new(),
-                    doubts: Vec::new(),
-                    height_ratio: None,
-                    print_ratios: Vec::new(),
-                    floor_ratios: Vec::new(),
-                    pieces: Vec::new(),
+                    ..Evidence::default()
                 },
             });
         }

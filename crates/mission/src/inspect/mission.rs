@@ -157,13 +157,7 @@ fn vision_cracks(candidates: &[(Candidate, f64)]) -> Vec<ReportedCrack> {
             confidence: *score,
             evidence: Evidence {
                 detector_score: Some(*score),
-                slides: Vec::new(),
-                votes: Vec::new(),
-                doubts: Vec::new(),
-                height_ratio: None,
-                print_ratios: Vec::new(),
-                floor_ratios: Vec::new(),
-                pieces: Vec::new(),
+                ..Evidence::default()
             },
         })
         .collect()

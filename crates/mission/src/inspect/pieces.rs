@@ -369,12 +369,7 @@ mod tests {
             evidence: Evidence {
                 detector_score: Some(0.9),
                 slides: vec![id as u32],
-                votes: Vec::new(),
-                doubts: Vec::new(),
-                height_ratio: None,
-                print_ratios: Vec::new(),
-                floor_ratios: Vec::new(),
-                pieces: Vec::new(),
+                ..Evidence::default()
             },
         }
     }

@@ -172,7 +172,7 @@ pub struct ReportedCrack {
 }
 
 /// What a report entry rests on.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct Evidence {
     /// The detector's score, when the camera saw it.
     pub detector_score: Option<f64>,
