@@ -111,10 +111,11 @@ pub async fn run_demo(
     on_sample: impl FnMut(&Sample),
 ) -> Result<DemoReport, MissionError> {
     if !(config.seconds.is_finite() && config.seconds > 0.0) {
-        return Err(MissionError::Invalid(format!(
-            "the demo must last a positive number of seconds, got {}",
-            config.seconds
-        )));
+        return Err(MissionError::Setting {
+            field: "seconds",
+            value: config.seconds,
+            allowed: "a positive number of seconds",
+        });
     }
     let rate = f64::from(SAMPLE_RATE_HZ);
     let emulator_config = EmulatorConfig {
@@ -208,7 +209,7 @@ mod tests {
             .block_on(run_demo(&config, std::future::pending(), |_| {}, |_| {}))
             .unwrap_err();
         assert!(
-            err.to_string().contains("positive number of seconds"),
+            matches!(err, MissionError::Setting { field: "seconds", value, .. } if value == -1.0),
             "{err}"
         );
         config.seconds = 1.0;

@@ -34,6 +34,45 @@ pub enum MissionError {
     /// A setting is out of range; the message names it.
     #[error("{0}")]
     Invalid(String),
+    /// A file or folder could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// Which.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
+    /// A mission on hardware lacks an input it needs.
+    #[error("a {mode} mission needs {what}")]
+    Missing {
+        /// The mission's mode.
+        mode: &'static str,
+        /// What, and the flag that gives it.
+        what: &'static str,
+    },
+    /// The camera gave no frame.
+    #[error("camera: {0}")]
+    Camera(#[from] crackbot_vision::camera::CameraError),
+    /// The camera's pixel → surface mapping cannot be inverted.
+    #[error("the camera's homography is singular")]
+    SingularHomography,
+    /// The camera frame could not be saved.
+    #[error("{}: {source}", path.display())]
+    Image {
+        /// Where.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        source: image::ImageError,
+    },
+    /// The report could not be written as JSON.
+    #[error("the report: {0}")]
+    Report(#[from] serde_json::Error),
+    /// A deployed model lacks a class the mission needs.
+    #[error("the recognition model has no `{class}` class")]
+    MissingClass {
+        /// The class.
+        class: &'static str,
+    },
     /// A mission setting is out of range.
     #[error("the setting {field} = {value} is outside {allowed}")]
     Setting {

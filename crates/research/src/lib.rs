@@ -666,9 +666,11 @@ pub fn detection_trials(
     mut progress: impl FnMut(u64, &Trial),
 ) -> Result<TrialsReport, MissionError> {
     if base.jobs == 0 {
-        return Err(MissionError::Invalid(
-            "trials run at once (jobs) must be at least 1, got 0".into(),
-        ));
+        return Err(MissionError::Setting {
+            field: "jobs",
+            value: 0.0,
+            allowed: "at least 1 trial at once",
+        });
     }
     let params = trial_params();
     let mut trials: Vec<Trial> = Vec::new();
@@ -816,8 +818,10 @@ fn run_retried(
         if again && dir.exists() {
             let failed = base.out_dir.join(format!("{name}-failed"));
             let _ = std::fs::remove_dir_all(&failed);
-            std::fs::rename(&dir, &failed)
-                .map_err(|e| MissionError::Invalid(format!("{}: {e}", dir.display())))?;
+            std::fs::rename(&dir, &failed).map_err(|source| MissionError::Io {
+                path: dir.clone(),
+                source,
+            })?;
         }
         run(base, scene, mode, &name)
     })
@@ -1029,9 +1033,13 @@ mod tests {
         let mut n = 0;
         let bad = retry_once(9, InspectMode::Fused, &mut retried, |_| -> Result<(), _> {
             n += 1;
-            Err(MissionError::Invalid("speedup must be > 0".into()))
+            Err(MissionError::Setting {
+                field: "speedup",
+                value: 0.0,
+                allowed: "> 0",
+            })
         });
-        assert!(matches!(bad, Err(MissionError::Invalid(_))));
+        assert!(matches!(bad, Err(MissionError::Setting { .. })));
         assert_eq!((n, retried.len()), (1, 2));
         // The table lists what was run again.
         let mut t = empty_report(0.0, 0.0, FingerBudget::default());

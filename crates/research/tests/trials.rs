@@ -51,7 +51,7 @@ fn trials_run_two_at_a_time_are_each_scored_once_and_listed_by_seed() {
 fn no_jobs_is_refused_before_any_mission() {
     let dir = tempfile::tempdir().unwrap();
     let e = detection_trials(&base(dir.path(), 0), 1000, 1, |_, _| {}).unwrap_err();
-    assert!(matches!(e, MissionError::Invalid(_)));
+    assert!(matches!(e, MissionError::Setting { field: "jobs", .. }));
     assert!(e.to_string().contains("jobs"), "{e}");
     assert!(std::fs::read_dir(dir.path()).unwrap().next().is_none());
 }

@@ -149,9 +149,10 @@ pub(super) struct Rules {
 impl Rules {
     /// The rules of a mission with `config` and a recognition model of `classes`.
     pub(super) fn new(classes: &[String], config: &InspectConfig) -> Result<Rules, MissionError> {
-        let crack_class = classes.iter().position(|c| c == "crack").ok_or_else(|| {
-            MissionError::Invalid("the recognition model has no `crack` class".into())
-        })?;
+        let crack_class = classes
+            .iter()
+            .position(|c| c == "crack")
+            .ok_or(MissionError::MissingClass { class: "crack" })?;
         Ok(Rules {
             crack_class,
             no_crack_class: classes.iter().position(|c| c == "no crack"),
@@ -647,6 +648,9 @@ mod tests {
         let r = Rules::new(&classes, &config).unwrap();
         assert_eq!((r.dip_outweighs_doubt, r.ratio_floor), (None, None));
         let e = Rules::new(&classes[2..], &config).unwrap_err();
-        assert!(e.to_string().contains("`crack` class"), "{e}");
+        assert!(
+            matches!(e, MissionError::MissingClass { class: "crack" }),
+            "{e}"
+        );
     }
 }

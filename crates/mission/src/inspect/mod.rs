@@ -138,8 +138,7 @@ pub fn run_inspection(
 
 /// Writes the report as pretty JSON.
 fn save_report(path: &Path, report: &InspectReport) -> Result<(), MissionError> {
-    let json = serde_json::to_string_pretty(report)
-        .map_err(|e| MissionError::Invalid(format!("report: {e}")))?;
+    let json = serde_json::to_string_pretty(report)?;
     std::fs::write(path, json).map_err(|e| io_err(path, e))
 }
 

@@ -27,21 +27,20 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError
     std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
     let (image, h) = match &config.hardware {
         Some(hw) => {
-            let camera = hw.camera.as_ref().ok_or_else(|| {
-                MissionError::Invalid(format!(
-                    "a {:?} mission needs a camera (--camera DEVICE|FILE|URL)",
-                    config.mode
-                ))
-            })?;
+            let missing = |what| MissionError::Missing {
+                mode: config.mode.as_str(),
+                what,
+            };
+            let camera = hw
+                .camera
+                .as_ref()
+                .ok_or_else(|| missing("a camera (--camera DEVICE|FILE|URL)"))?;
             let cal = hw.homography.as_ref().ok_or_else(|| {
-                MissionError::Invalid(
-                    "a camera frame needs its pixel → surface calibration (--homography FILE, from `crackbot homography fit`)".into(),
-                )
+                missing("the camera's pixel → surface calibration (--homography FILE, from `crackbot homography fit`)")
             })?;
             use crackbot_vision::camera::{grab_frame, CameraSource, DEFAULT_TIMEOUT};
             let source = CameraSource::parse(&camera.to_string_lossy());
-            let image = grab_frame(&source, None, DEFAULT_TIMEOUT)
-                .map_err(|e| MissionError::Invalid(format!("camera {e}")))?;
+            let image = grab_frame(&source, None, DEFAULT_TIMEOUT)?;
             let h = crackbot_vision::homography::HomographyCalibration::load(cal)?.homography()?;
             (image, h)
         }
@@ -54,18 +53,22 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError
                 config.seed,
             )?;
             let h = crackbot_imaging::Homography::from_nalgebra(
-                frame.plate_to_image.try_inverse().ok_or_else(|| {
-                    MissionError::Invalid("the camera's homography is singular".into())
-                })?,
+                frame
+                    .plate_to_image
+                    .try_inverse()
+                    .ok_or(MissionError::SingularHomography)?,
             )
-            .map_err(|e| MissionError::Invalid(e.to_string()))?;
+            .map_err(|_| MissionError::SingularHomography)?;
             (frame.image, h)
         }
     };
     let frame_path = config.out_dir.join("frame.png");
     image
         .save(&frame_path)
-        .map_err(|e| MissionError::Invalid(format!("{}: {e}", frame_path.display())))?;
+        .map_err(|source| MissionError::Image {
+            path: frame_path.clone(),
+            source,
+        })?;
     let frame = FrameInfo {
         path: frame_path.display().to_string(),
         width: image.width(),
@@ -160,7 +163,10 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError
 
 /// An I/O error on `path`, naming it.
 pub(crate) fn io_err(path: &Path, e: std::io::Error) -> MissionError {
-    MissionError::Invalid(format!("{}: {e}", path.display()))
+    MissionError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    }
 }
 
 #[cfg(test)]
