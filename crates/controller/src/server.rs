@@ -43,8 +43,15 @@ pub enum ControllerError {
     #[error("controller socket: {0}")]
     Io(#[from] std::io::Error),
     /// A setting is out of range.
-    #[error("{0}")]
-    Invalid(String),
+    #[error("the setting {field} = {value} is outside {allowed}")]
+    Setting {
+        /// Which.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it may be.
+        allowed: &'static str,
+    },
     /// The controller thread panicked.
     #[error("the controller thread panicked")]
     Panicked,
@@ -151,10 +158,11 @@ impl SimController {
         host: SocketAddr,
     ) -> Result<SimController, ControllerError> {
         if !(config.state_rate_hz.is_finite() && (100.0..=1000.0).contains(&config.state_rate_hz)) {
-            return Err(ControllerError::Invalid(format!(
-                "state rate {} Hz is not in [100, 1000]",
-                config.state_rate_hz
-            )));
+            return Err(ControllerError::Setting {
+                field: "state_rate_hz",
+                value: config.state_rate_hz,
+                allowed: "[100, 1000] Hz",
+            });
         }
         let world = World::new(&config.scene, config.seed)?;
         let shared: SharedWorld = Arc::new(Mutex::new(Shared {
@@ -270,7 +278,7 @@ fn refusal_code(r: &Refusal) -> ErrorCode {
     match r {
         Refusal::OutsideWorkspace { .. } => ErrorCode::OutsideWorkspace,
         Refusal::OverSpeed { .. } => ErrorCode::OverSpeedLimit,
-        Refusal::Invalid(_) => ErrorCode::InvalidCommand,
+        Refusal::OutOfRange { .. } => ErrorCode::InvalidCommand,
         Refusal::Faulted(_) => ErrorCode::Faulted,
     }
 }

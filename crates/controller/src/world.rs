@@ -56,9 +56,18 @@ pub enum Refusal {
         /// The limit, mm/s.
         limit: f64,
     },
-    /// A slide of no length, or longer than the simulator takes.
-    #[error("invalid slide: {0}")]
-    Invalid(String),
+    /// A value outside its allowed range (a move's height, a slide's length).
+    #[error("{what} {value} mm is not in [{min}, {max}] mm")]
+    OutOfRange {
+        /// Which value.
+        what: &'static str,
+        /// The value asked, mm.
+        value: f64,
+        /// The least allowed, mm.
+        min: f64,
+        /// The most allowed, mm.
+        max: f64,
+    },
     /// The controller is stopped or faulted: it needs a new command after `Stop` is cleared.
     #[error("the controller is faulted: {0}")]
     Faulted(String),
@@ -306,9 +315,12 @@ impl World {
         self.limits.check_point("target", to)?;
         Limits::check_speed("travel", speed, self.limits.max_travel_speed_mm_s)?;
         if !(MIN_MOVE_HEIGHT_MM..=MAX_MOVE_HEIGHT_MM).contains(&z) {
-            return Err(Refusal::Invalid(format!(
-                "move height {z} mm is not in [{MIN_MOVE_HEIGHT_MM}, {MAX_MOVE_HEIGHT_MM}] mm"
-            )));
+            return Err(Refusal::OutOfRange {
+                what: "move height",
+                value: z,
+                min: MIN_MOVE_HEIGHT_MM,
+                max: MAX_MOVE_HEIGHT_MM,
+            });
         }
         // The finger leaves the surface: a later slide starts afresh.
         self.resting = None;
@@ -330,10 +342,12 @@ impl World {
         Limits::check_speed("slide", speed, self.limits.max_slide_speed_mm_s)?;
         let len = (end[0] - start[0]).hypot(end[1] - start[1]);
         if !(0.5..=crackbot_sim::run::MAX_STROKE_MM).contains(&len) {
-            return Err(Refusal::Invalid(format!(
-                "slide {id} is {len:.2} mm long (0.5 to {} mm)",
-                crackbot_sim::run::MAX_STROKE_MM
-            )));
+            return Err(Refusal::OutOfRange {
+                what: "slide length",
+                value: len,
+                min: 0.5,
+                max: crackbot_sim::run::MAX_STROKE_MM,
+            });
         }
         let pending = PendingSlide {
             id,
@@ -609,7 +623,7 @@ mod tests {
         let err = w.slide(1, [10.0, 10.0], [20.0, 10.0], 100.0).unwrap_err();
         assert!(matches!(err, Refusal::OverSpeed { .. }), "{err}");
         let err = w.slide(1, [10.0, 10.0], [10.1, 10.0], 3.89).unwrap_err();
-        assert!(matches!(err, Refusal::Invalid(_)), "{err}");
+        assert!(matches!(err, Refusal::OutOfRange { .. }), "{err}");
         for _ in 0..10 {
             w.step().expect("step");
         }
@@ -782,7 +796,7 @@ mod tests {
         // Heights the arm must not hold are refused.
         for z in [0.0, 0.2, 60.0, f64::NAN] {
             let err = w.move_to([60.0, 50.0], z, 20.0).unwrap_err();
-            assert!(matches!(err, Refusal::Invalid(_)), "{err}");
+            assert!(matches!(err, Refusal::OutOfRange { .. }), "{err}");
         }
     }
 }

@@ -29,18 +29,22 @@ pub fn tactile_csv(samples: &VecDeque<TactileSample>, t0: f64, t1: f64) -> Strin
 
 /// The report JSON, indented (it arrives compact in the mission's status).
 pub fn report_json(report: &str) -> Result<String, OperatorError> {
-    let v: serde_json::Value = serde_json::from_str(report)
-        .map_err(|e| OperatorError::Invalid(format!("the mission's report is not JSON: {e}")))?;
-    serde_json::to_string_pretty(&v).map_err(|e| OperatorError::Invalid(e.to_string()))
+    let v: serde_json::Value = serde_json::from_str(report)?;
+    Ok(serde_json::to_string_pretty(&v)?)
 }
 
 /// An RGBA image as PNG bytes.
 pub fn png(width: usize, height: usize, rgba: &[u8]) -> Result<Vec<u8>, OperatorError> {
-    let img = image::RgbaImage::from_raw(width as u32, height as u32, rgba.to_vec())
-        .ok_or_else(|| OperatorError::Invalid("screenshot: size and pixels disagree".into()))?;
+    let img = image::RgbaImage::from_raw(width as u32, height as u32, rgba.to_vec()).ok_or_else(
+        || OperatorError::Screenshot {
+            reason: format!("{width}×{height} px and {} bytes disagree", rgba.len()),
+        },
+    )?;
     let mut out = std::io::Cursor::new(Vec::new());
     img.write_to(&mut out, image::ImageFormat::Png)
-        .map_err(|e| OperatorError::Invalid(format!("encoding the screenshot: {e}")))?;
+        .map_err(|e| OperatorError::Screenshot {
+            reason: e.to_string(),
+        })?;
     Ok(out.into_inner())
 }
 

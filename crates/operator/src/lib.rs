@@ -30,9 +30,21 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum OperatorError {
-    /// Something the operator gave or a file holds is unusable; the message says what.
-    #[error("{0}")]
-    Invalid(String),
+    /// A mission was started while one is running.
+    #[error("a mission is running: stop it first")]
+    AlreadyRunning,
+    /// The mission's thread could not be started.
+    #[error("starting the mission thread: {0}")]
+    Thread(std::io::Error),
+    /// The mission's report is not JSON.
+    #[error("the mission's report is not JSON: {0}")]
+    Report(#[from] serde_json::Error),
+    /// A screenshot could not be encoded.
+    #[error("the screenshot: {reason}")]
+    Screenshot {
+        /// Why.
+        reason: String,
+    },
     /// A file could not be read or written.
     #[error("{path}: {source}")]
     Io {

@@ -131,9 +131,7 @@ impl SimBackend {
         wake: Option<egui::Context>,
     ) -> Result<(), crate::OperatorError> {
         if self.running() {
-            return Err(crate::OperatorError::Invalid(
-                "a mission is running: stop it first".into(),
-            ));
+            return Err(crate::OperatorError::AlreadyRunning);
         }
         self.missions += 1;
         let n = self.missions;
@@ -156,9 +154,7 @@ impl SimBackend {
             });
         if let Err(e) = spawned {
             self.running.store(false, Ordering::SeqCst);
-            return Err(crate::OperatorError::Invalid(format!(
-                "starting the mission thread: {e}"
-            )));
+            return Err(crate::OperatorError::Thread(e));
         }
         Ok(())
     }
