@@ -14,7 +14,7 @@ use crate::MissionError;
 /// A "no crack" verdict whose confidence is below this is doubted by
 /// `doubted_no_crack_with_dip` even where the model's own gate lets it stand (0.5 for the
 /// committed recognition model). Since the committed model learned the simulator's plates too
-/// (2026-11-27, fifteenth session), it no longer doubts every simulated slide as novel, and the
+/// (2026-11-27), it no longer doubts every simulated slide as novel, and the
 /// thinnest cracks of the trial scenes (0.5–0.7 mm, thinner than any plate it learned) come out
 /// as weak "no crack" votes. On the trials 10620–10739 (real time, looked at) every "no crack"
 /// verdict over a dip of confidence ≥ 0.6 had a confidence of 0.33–0.53: 25 over cracks (two of
