@@ -354,7 +354,7 @@ fn mean_width(widths: &[(f64, [f64; 2])]) -> Option<Width> {
 
 impl Rejection {
     /// What the finger felt instead, in words (`class` is the name of the top class), as the
-    /// report's `felt` says it; `height_mm` is the print check's height.
+    /// report's `felt` says it, with the print check's height from `rules`.
     pub(super) fn felt(&self, class: &str, rules: &Rules) -> String {
         let height = rules.print_check_mm.unwrap_or(0.0);
         match self {

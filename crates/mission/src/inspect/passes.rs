@@ -676,7 +676,7 @@ pub(super) fn nearest_of_several_dips(
 /// (`nearest_of_several_dips`), the samples around the one nearest the candidate (`near_mm`
 /// along the stroke) and that dip localised alone. `None` otherwise: the stroke's dip is the
 /// candidate's. The mission reports the candidate where this dip lies and judges its print
-/// check on these samples; `examples/replay_ratios.rs` replays it.
+/// check on these samples; crackbot-research's `examples/replay_ratios.rs` replays it.
 pub fn own_dip(
     samples: &[[f64; 4]],
     along: &[f64],

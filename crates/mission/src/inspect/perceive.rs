@@ -20,48 +20,11 @@ pub(super) struct Perceived {
 
 /// Looks at the scene ([`Perceived`]).
 pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError> {
-    use crackbot_sim::render::{render, CrackAssets, RenderOptions};
     use crackbot_vision::model::{build_detector, DetectorChoice};
     use crackbot_vision::preprocess::PostprocessParams;
 
     std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
-    let (image, h) = match &config.hardware {
-        Some(hw) => {
-            let missing = |what| MissionError::Missing {
-                mode: config.mode.as_str(),
-                what,
-            };
-            let camera = hw
-                .camera
-                .as_ref()
-                .ok_or_else(|| missing("a camera (--camera DEVICE|FILE|URL)"))?;
-            let cal = hw.homography.as_ref().ok_or_else(|| {
-                missing("the camera's pixel → surface calibration (--homography FILE, from `crackbot homography fit`)")
-            })?;
-            use crackbot_vision::camera::{grab_frame, CameraSource, DEFAULT_TIMEOUT};
-            let source = CameraSource::parse(&camera.to_string_lossy());
-            let image = grab_frame(&source, None, DEFAULT_TIMEOUT)?;
-            let h = crackbot_vision::homography::HomographyCalibration::load(cal)?.homography()?;
-            (image, h)
-        }
-        None => {
-            let assets = CrackAssets::load_default()?;
-            let frame = render(
-                &config.scene,
-                &assets,
-                &RenderOptions::default(),
-                config.seed,
-            )?;
-            let h = crackbot_imaging::Homography::from_nalgebra(
-                frame
-                    .plate_to_image
-                    .try_inverse()
-                    .ok_or(MissionError::SingularHomography)?,
-            )
-            .map_err(|_| MissionError::SingularHomography)?;
-            (frame.image, h)
-        }
-    };
+    let (image, h) = frame(config)?;
     let frame_path = config.out_dir.join("frame.png");
     image
         .save(&frame_path)
@@ -158,6 +121,51 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError
         candidates: out,
         trace,
         frame,
+    })
+}
+
+/// The frame to look at and its pixel → surface homography: a camera's, with its calibration
+/// (hardware), or the scene rendered (simulated).
+fn frame(
+    config: &InspectConfig,
+) -> Result<(image::RgbImage, crackbot_imaging::Homography), MissionError> {
+    use crackbot_sim::render::{render, CrackAssets, RenderOptions};
+    Ok(match &config.hardware {
+        Some(hw) => {
+            let missing = |what| MissionError::Missing {
+                mode: config.mode.as_str(),
+                what,
+            };
+            let camera = hw
+                .camera
+                .as_ref()
+                .ok_or_else(|| missing("a camera (--camera DEVICE|FILE|URL)"))?;
+            let cal = hw.homography.as_ref().ok_or_else(|| {
+                missing("the camera's pixel → surface calibration (--homography FILE, from `crackbot homography fit`)")
+            })?;
+            use crackbot_vision::camera::{grab_frame, CameraSource, DEFAULT_TIMEOUT};
+            let source = CameraSource::parse(&camera.to_string_lossy());
+            let image = grab_frame(&source, None, DEFAULT_TIMEOUT)?;
+            let h = crackbot_vision::homography::HomographyCalibration::load(cal)?.homography()?;
+            (image, h)
+        }
+        None => {
+            let assets = CrackAssets::load_default()?;
+            let frame = render(
+                &config.scene,
+                &assets,
+                &RenderOptions::default(),
+                config.seed,
+            )?;
+            let h = crackbot_imaging::Homography::from_nalgebra(
+                frame
+                    .plate_to_image
+                    .try_inverse()
+                    .ok_or(MissionError::SingularHomography)?,
+            )
+            .map_err(|_| MissionError::SingularHomography)?;
+            (frame.image, h)
+        }
     })
 }
 

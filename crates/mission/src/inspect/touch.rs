@@ -149,22 +149,23 @@ impl<'m, 'c> Touch<'m, 'c> {
         planned: &Slide,
     ) -> Result<(), MissionError> {
         let mut again: Option<Slide> = None;
-        let (slide, strokes) = loop {
+        let strokes = loop {
             let slide = again.as_ref().unwrap_or(planned);
             if rig.stop.load(Ordering::Relaxed) {
                 return Err(MissionError::Interrupted);
             }
             match self.stroke_slide(rig, report, (si, of), slide, again.is_some())? {
                 Stroked::Again(beside) => again = Some(beside),
-                Stroked::Judged(strokes) => break (slide.clone(), strokes),
+                Stroked::Judged(strokes) => break strokes,
             }
         };
+        let slide = again.as_ref().unwrap_or(planned);
         let cand = slide.candidates.first().copied();
         if let (Some(c), Some(h)) = (cand, self.config.print_check_mm) {
             let rules = self.rules;
             let felt = self.felt.iter_mut().find(|(k, _)| *k == c).map(|(_, f)| f);
             if let Some(f) = felt.filter(|f| f.reads_as_crack(&rules)) {
-                print_check(rig, self.planner, self.workspace, &slide, c, h, &strokes, f)?;
+                print_check(rig, self.planner, self.workspace, slide, c, h, &strokes, f)?;
             }
         }
         Ok(())
