@@ -24,11 +24,12 @@ const LAYERS: &[(&str, &[&str])] = &[
         &["crackbot-protocol", "crackbot-datasets", "crackbot-link"],
     ),
     (
-        "data: firmware, recordings, image geometry and annotations",
+        "data: firmware, recordings, image geometry and annotations, the finger's fibre",
         &[
             "crackbot-firmware",
             "crackbot-recording",
             "crackbot-imaging",
+            "crackbot-fibre",
         ],
     ),
     (
@@ -338,6 +339,58 @@ fn the_robot_path_builds_without_research_gui_or_fleet_crates() {
         }
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// The simulated rig's crates: the robot's default build has them for its built-in scene; the
+/// robot built for hardware only must not compile them.
+const SIMULATED_RIG: &[&str] = &["crackbot-sim", "crackbot-controller", "crackbot-emulator"];
+
+#[test]
+fn the_robot_without_the_simulator_feature_compiles_no_simulated_rig() {
+    let tree = |args: &[&str]| -> BTreeSet<String> {
+        let mut cmd = cargo();
+        cmd.args([
+            "tree",
+            "--locked",
+            "-p",
+            "crackbot-cli",
+            "-e",
+            "normal",
+            "--prefix",
+            "none",
+        ]);
+        run(cmd.args(args))
+            .lines()
+            .filter_map(|l| l.split_whitespace().next())
+            .map(str::to_string)
+            .collect()
+    };
+    let hardware_only = tree(&["--no-default-features"]);
+    for needed in [
+        "crackbot-mission",
+        "crackbot-link",
+        "crackbot-acquisition",
+        "crackbot-vision",
+    ] {
+        assert!(
+            hardware_only.contains(needed),
+            "the hardware-only robot lacks {needed}"
+        );
+    }
+    let found: Vec<_> = SIMULATED_RIG
+        .iter()
+        .filter(|c| hardware_only.contains(**c))
+        .collect();
+    assert!(
+        found.is_empty(),
+        "crackbot-cli --no-default-features compiles {found:?}: keep them behind the `sim` feature"
+    );
+    // And the default build has them: the robot's built-in scene is the simulator's.
+    let default = tree(&[]);
+    assert!(
+        SIMULATED_RIG.iter().all(|c| default.contains(*c)),
+        "{default:?}"
+    );
 }
 
 #[test]

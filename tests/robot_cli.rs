@@ -23,6 +23,9 @@ workspace_min_mm = [0.0, 0.0, -5.0]
 workspace_max_mm = [40.0, 24.0, 150.0]
 "#;
 
+/// What the robot knows of [`SCENE`]'s place on hardware: its arm's box (the rest default).
+const SITE: &str = "name = \"test plate\"\n[arm]\nworkspace_min_mm = [0.0, 0.0]\nworkspace_max_mm = [40.0, 24.0]\n";
+
 fn free_port() -> u16 {
     UdpSocket::bind("127.0.0.1:0")
         .and_then(|s| s.local_addr())
@@ -55,6 +58,7 @@ struct Controller {
 fn start_controller(dir: &std::path::Path, key: &std::path::Path, speedup: &str) -> Controller {
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, SCENE).expect("scene");
+    std::fs::write(dir.join("site.toml"), SITE).expect("site");
     spawn_controller(dir, &scene, key, speedup)
 }
 
@@ -100,7 +104,7 @@ fn spawn_controller(
 #[test]
 fn the_robot_drives_the_controller_process_over_the_link_and_refuses_a_bad_key() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let scene = dir.path().join("scene.toml");
+    let site = dir.path().join("site.toml");
     let key = dir.path().join("link.key");
     key_file(&key, "5a");
     let c = start_controller(dir.path(), &key, "8");
@@ -109,7 +113,7 @@ fn the_robot_drives_the_controller_process_over_the_link_and_refuses_a_bad_key()
 
     let robot = |extra: &[&str], key: &std::path::Path| {
         Command::new(binary("crackbot-robot"))
-            .args(["--scene", scene.to_str().expect("utf-8")])
+            .args(["--site", site.to_str().expect("utf-8")])
             .args([
                 "--mode",
                 "tactile",
@@ -190,6 +194,7 @@ fn crackbot_run_takes_the_robots_flags() {
     let (a, b) = (flags(&robot), flags(&run));
     for f in [
         "--scene",
+        "--site",
         "--mode",
         "--json",
         "--serial",
@@ -222,7 +227,7 @@ fn crackbot_run_takes_the_robots_flags() {
 #[test]
 fn a_controller_and_sensor_that_vanish_mid_mission_end_it_with_a_clear_error() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let scene = dir.path().join("scene.toml");
+    let site = dir.path().join("site.toml");
     let key = dir.path().join("link.key");
     key_file(&key, "3c");
     let c = start_controller(dir.path(), &key, "2");
@@ -230,7 +235,7 @@ fn a_controller_and_sensor_that_vanish_mid_mission_end_it_with_a_clear_error() {
     let _stdout = c._stdout;
     let out_dir = dir.path().join("mission");
     let robot = Command::new(binary("crackbot-robot"))
-        .args(["--scene", scene.to_str().expect("utf-8")])
+        .args(["--site", site.to_str().expect("utf-8")])
         .args(["--mode", "tactile", "--gamma", "0.75", "--speedup", "2"])
         .args(["--serial", &pty])
         .args(["--controller", &format!("127.0.0.1:{cport}")])
@@ -356,9 +361,8 @@ fn a_fused_mission_reads_its_camera_through_ffmpeg() {
     let (mut controller, pty, cport, hport) = (c.child, c.pty, c.port, c.host_port);
     let _stdout = c._stdout;
     let mission = dir.path().join("mission");
+    // The scene's arm is the default's: the robot's default site.
     let o = Command::new(binary("crackbot-robot"))
-        .arg("--scene")
-        .arg(&scene)
         .args(["--mode", "fused", "--speedup", "8", "--json"])
         .args(["--serial", &pty])
         .args(["--controller", &format!("127.0.0.1:{cport}")])

@@ -306,7 +306,10 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--max-iters", type=int, default=0)
-    ap.add_argument("--init", default=None)
+    ap.add_argument("--init", default=None, help="start from these weights (a best.pt/last.pt), with a new schedule")
+    ap.add_argument("--resume", action="store_true",
+                    help="continue the run in --out from its state.pt (weights, EMA, optimiser, step, elapsed "
+                         "time, best): the schedule goes on where it stopped; without state.pt, start afresh")
     ap.add_argument("--arch", default="crackseg", help="crackseg (from scratch, the shipped default) or effseg "
                     "(the pretrained EfficientNet-Lite0 encoder; train_effseg.sh)")
     ap.add_argument("--pretrained", default="", help="EfficientNet-Lite0 ImageNet weights (.pth) for effseg")
@@ -322,7 +325,15 @@ def main():
         mix = {"crackforest": 0.13, "uav75": 0.13, "quaywall": 0.12, "deepcrack": 0.18, "crack500": 0.16,
                "sim": 0.28}
     model = build(a.arch)
-    if a.init:
+    state_path = os.path.join(a.out, "state.pt")
+    state = torch.load(state_path, map_location="cpu") if a.resume and os.path.exists(state_path) else None
+    if state is not None:
+        if state["arch"] != a.arch:
+            sys.exit(f"--resume: {state_path} is a {state['arch']} run, not {a.arch}")
+        model.load_state_dict(state["model"])
+        print(f"resuming {state_path}: step {state['it']}, {state['t'] / 60:.1f} of {a.minutes:.0f} min",
+              flush=True)
+    elif a.init:
         model.load_state_dict(torch.load(a.init, map_location="cpu")["model"])
     elif a.pretrained:
         loaded, skipped = model.load_lite0(a.pretrained)
@@ -335,16 +346,21 @@ def main():
               {"params": [p for p in model.parameters() if id(p) not in enc], "scale": 1.0}]
     groups = [g for g in groups if g["params"]]
     opt = torch.optim.AdamW(groups, lr=a.lr, weight_decay=1e-4)
-    ds = Stream(a.sim, a.batch, a.crop, a.seed, mix)
+    it, elapsed, best = 0, 0.0, {"mAP50": -1.0}
+    if state is not None:
+        ema.m.load_state_dict(state["ema"])
+        ema.n = state["ema_n"]
+        opt.load_state_dict(state["opt"])
+        it, elapsed, best = state["it"], state["t"], state["best"]
+    # A resumed run draws other samples than the steps it already made.
+    ds = Stream(a.sim, a.batch, a.crop, a.seed + it, mix)
     dl = torch.utils.data.DataLoader(ds, batch_size=None, num_workers=a.workers, persistent_workers=a.workers > 0,
                                      prefetch_factor=4 if a.workers else None,
                                      collate_fn=lambda b: b)
     budget = a.minutes * 60
-    t0 = time.time()
-    last_eval = t0
-    best = {"mAP50": -1.0}
+    t0 = time.time() - elapsed
+    last_eval = time.time()
     log = open(os.path.join(a.out, "log.jsonl"), "a")
-    it = 0
     for x, t, v, weaks in dl:
         el = time.time() - t0
         prog = min(1.0, el / budget)
@@ -374,6 +390,10 @@ def main():
                 best = dict(m, it=it, t=round(el, 1))
                 torch.save(ck, os.path.join(a.out, "best.pt"))
             torch.save(ck, os.path.join(a.out, "last.pt"))
+            state = {"model": model.state_dict(), "ema": ema.m.state_dict(), "ema_n": ema.n,
+                     "opt": opt.state_dict(), "it": it, "t": el, "best": best, "arch": a.arch}
+            torch.save(state, state_path + ".tmp")
+            os.replace(state_path + ".tmp", state_path)
             rec["best"] = best
             print(json.dumps(rec), flush=True)
             log.write(json.dumps(rec) + "\n"); log.flush()

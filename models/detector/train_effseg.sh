@@ -5,6 +5,10 @@
 #   bash models/detector/train_effseg.sh                            # the committed effseg/ model: 75 minutes, 2 CPU cores
 #   TRAIN_MINUTES=2 SIM_SCENES=20 MODEL_OUT=/tmp/smoke RUNS=/tmp/smoke/runs bash models/detector/train_effseg.sh
 #                                                                   # a short smoke schedule (~8 min), models elsewhere
+#   RESUME=1 bash models/detector/train_effseg.sh                   # go on with a run that was stopped (a session's
+#                                                                   # end): its weights, optimiser, step and clock
+#   INIT=runs/eff/best.pt TRAIN_MINUTES=140 LR=1e-3 RUN_NAME=eff-long RESUME=1 bash models/detector/train_effseg.sh
+#                                                                   # a second, longer schedule from a finished run
 # MODEL_OUT (default: effseg/ beside this script; the shipped default detector, CrackSeg, is train.sh's) receives the ONNX files, reference/ and metrics.json; RUNS (default: runs)
 # the checkpoints, logs and rendered plates.
 # Data: the real photos' train splits (crackforest and uav75 masks, quaywall boxes), the DeepCrack and CRACK500 train
@@ -28,15 +32,27 @@ export OMP_NUM_THREADS=$THREADS
 MODEL_OUT="${MODEL_OUT:-$HERE/effseg}"
 mkdir -p "$MODEL_OUT"
 RUNS="${RUNS:-runs}"
-RUN=$RUNS/eff
+RUN=$RUNS/${RUN_NAME:-eff}
 SIM=$RUNS/simdata/train
 EVAL="$MODEL_OUT/out"
-rm -rf "$RUN" "$SIM"; mkdir -p "$RUN" "$EVAL"
-(cd "$ROOT" && cargo build --release --quiet -p crackbot-lab)
-LAB="${CARGO_TARGET_DIR:-$ROOT/target}/release/crackbot-lab"
-"$LAB" sim detector-set --scenes "$SIM_SCENES" --frames-per-scene 2 --seed 1000 --out "$SIM" --json > "$RUN/simdata.json"
-nice -n 5 $PY train.py --arch effseg --pretrained "$LITE0" --tiles --sim "$SIM" --minutes "$MINUTES" --lr 2e-3 \
-    --threads "$THREADS" --eval-every 600 --out "$RUN" | tee "$RUN/stdout.log"
+LR=${LR:-2e-3}
+START=(--pretrained "$LITE0")
+if [ -n "${INIT:-}" ]; then START=(--init "$INIT"); fi
+if [ "${RESUME:-0}" = 1 ] && [ -f "$RUN/state.pt" ]; then
+  echo "resuming $RUN"
+  START+=(--resume)
+else
+  rm -rf "$RUN"; mkdir -p "$RUN"
+fi
+mkdir -p "$EVAL"
+if [ "${RESUME:-0}" != 1 ] || [ ! -f "$RUNS/simdata.json" ]; then
+  (cd "$ROOT" && cargo build --release --quiet -p crackbot-lab)
+  LAB="${CARGO_TARGET_DIR:-$ROOT/target}/release/crackbot-lab"
+  rm -rf "$SIM"
+  "$LAB" sim detector-set --scenes "$SIM_SCENES" --frames-per-scene 2 --seed 1000 --out "$SIM" --json > "$RUNS/simdata.json"
+fi
+nice -n 5 $PY train.py --arch effseg "${START[@]}" --tiles --sim "$SIM" --minutes "$MINUTES" --lr "$LR" \
+    --threads "$THREADS" --eval-every 600 --out "$RUN" | tee -a "$RUN/stdout.log"
 $PY export.py --ckpt "$RUN/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
 $PY make_reference.py --models "$MODEL_OUT" --out "$MODEL_OUT/reference"
 for S in 320 256 416; do

@@ -27,7 +27,9 @@ use crackbot_acquisition::session::summarise_replay;
 use crackbot_acquisition::{
     PortConfig, RecordEnd, RecordMeta, RecordSession, Replay, ReplaySpeed, StreamReport,
 };
+#[cfg(feature = "sim")]
 use crackbot_mission::{run_demo, DemoConfig, DemoSurface};
+#[cfg(feature = "sim")]
 use crackbot_protocol::SAMPLE_RATE_HZ;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -50,6 +52,7 @@ enum Command {
     Run(Box<run::RunArgs>),
     /// Acquisition demo on the built-in default scene: simulated finger → emulated sensor →
     /// pseudo-terminal → acquisition → CSV → summary.
+    #[cfg(feature = "sim")]
     Demo(DemoArgs),
     /// Record a sensor's serial stream to CSV.
     Record(RecordArgs),
@@ -80,6 +83,7 @@ enum Command {
     Mission(lab::Forwarded),
 }
 
+#[cfg(feature = "sim")]
 #[derive(Debug, Args)]
 struct DemoArgs {
     /// Seconds of sensor data to stream.
@@ -169,6 +173,7 @@ fn main() -> Result<()> {
         .build()?;
     match cli.command {
         Command::Run(args) => run::run(*args),
+        #[cfg(feature = "sim")]
         Command::Demo(args) => runtime.block_on(demo(args)),
         Command::Record(args) => runtime.block_on(record(args)),
         Command::Replay(args) => runtime.block_on(replay(args)),
@@ -303,6 +308,7 @@ async fn record(args: RecordArgs) -> Result<()> {
     Ok(())
 }
 
+#[cfg(feature = "sim")]
 async fn demo(args: DemoArgs) -> Result<()> {
     let calibration = match &args.calibration {
         Some(path) => Calibration::load(path)?,

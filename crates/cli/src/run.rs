@@ -3,22 +3,28 @@
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+#[cfg(feature = "sim")]
 use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Args;
 use crackbot_mission::inspect::{
-    run_inspection, InspectConfig, InspectMode, InspectReport, Progress,
+    run_inspection, Hardware, InspectConfig, InspectMode, InspectReport, Progress, Site,
 };
-use crackbot_sim::Scene;
 
 /// Flags of the mission.
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Scene file, TOML (or JSON when named `.json`, as `trial_scenes` writes them; default: the
-    /// built-in default scene).
-    #[arg(long)]
+    /// Simulated rig: the scene file, TOML (or JSON when named `.json`, as `trial_scenes` writes
+    /// them; default: the built-in default scene).
+    #[cfg(feature = "sim")]
+    #[arg(long, conflicts_with = "serial")]
     pub scene: Option<PathBuf>,
+    /// Hardware: the site file (TOML: the arm's reachable box and speeds, the finger's
+    /// proximity fibre; see crackbot_mission::inspect::Site) [default: the built-in scene's
+    /// site and the calibrated fibre].
+    #[arg(long, requires = "serial")]
+    pub site: Option<PathBuf>,
     /// tactile (scan rows, no camera), vision (camera only) or fused (camera proposes, finger
     /// confirms).
     #[arg(long, default_value = "fused")]
@@ -108,9 +114,11 @@ pub struct RunArgs {
     #[arg(long)]
     pub detector: Option<PathBuf>,
     /// Simulated controller: clock offset, µs (the robot synchronises to it).
+    #[cfg(feature = "sim")]
     #[arg(long, default_value_t = 0.0)]
     pub clock_offset_us: f64,
     /// Simulated controller: clock drift, ppm.
+    #[cfg(feature = "sim")]
     #[arg(long, default_value_t = 0.0)]
     pub clock_drift_ppm: f64,
     /// Fault injection: probability that a link packet is lost (both directions).
@@ -123,9 +131,11 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 0.0)]
     pub duplicate: f64,
     /// Fault injection: the sensor stream stalls for 1 s during this slide (1-based).
+    #[cfg(feature = "sim")]
     #[arg(long)]
     pub stall_slide: Option<u32>,
     /// Fault injection: the controller restarts this many seconds after it started.
+    #[cfg(feature = "sim")]
     #[arg(long)]
     pub restart_after_s: Option<f64>,
     /// Hardware: the sensor's serial device (with --controller and --key).
@@ -205,8 +215,7 @@ pub fn run(args: RunArgs) -> Result<()> {
 
 /// The mission's configuration from the flags.
 fn config_from(args: &RunArgs) -> Result<InspectConfig> {
-    let scene = Scene::load_or_default(args.scene.as_deref())?;
-    let mut config = InspectConfig::new(scene, &args.out);
+    let mut config = rig_config(args)?;
     config.mode = args.mode;
     config.speedup = args.speedup;
     config.seed = args.seed;
@@ -241,8 +250,6 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
         config.width_model = p.clone();
     }
     config.detector_model = args.detector.clone();
-    config.clock.offset_us = args.clock_offset_us;
-    config.clock.drift_ppm = args.clock_drift_ppm;
     if args.loss > 0.0 || args.reorder > 0.0 || args.duplicate > 0.0 {
         let faults = crackbot_link::FaultConfig {
             drop: args.loss,
@@ -250,9 +257,48 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
             duplicate: args.duplicate,
             ..Default::default()
         };
-        config.faults.link = Some(faults.clone());
+        #[cfg(feature = "sim")]
+        {
+            config.faults.link = Some(faults.clone());
+        }
         config.host_link_faults = Some(crackbot_link::FaultConfig { seed: 2, ..faults });
     }
+    Ok(config)
+}
+
+/// The hardware the flags name (`--serial`, `--controller` and `--key` together).
+fn hardware(args: &RunArgs) -> Option<Hardware> {
+    let (serial, controller, key) = (args.serial.as_ref()?, args.controller?, args.key.as_ref()?);
+    Some(Hardware {
+        serial: serial.clone(),
+        controller,
+        bind: args.bind,
+        key_file: key.clone(),
+        camera: args.camera.clone(),
+        homography: args.homography.clone(),
+    })
+}
+
+/// The mission on the hardware the flags name, at its site (`--site`).
+fn hardware_config(args: &RunArgs, hw: Hardware) -> Result<InspectConfig> {
+    let site = match &args.site {
+        Some(path) => Site::load(path).context("--site")?,
+        None => Site::default(),
+    };
+    Ok(InspectConfig::on_hardware(hw, site, &args.out))
+}
+
+/// The mission's rig: the hardware the flags name, or the simulated scene (`--scene`) with the
+/// simulated controller's clock and faults.
+#[cfg(feature = "sim")]
+fn rig_config(args: &RunArgs) -> Result<InspectConfig> {
+    if let Some(hw) = hardware(args) {
+        return hardware_config(args, hw);
+    }
+    let scene = crackbot_sim::Scene::load_or_default(args.scene.as_deref())?;
+    let mut config = InspectConfig::new(scene, &args.out);
+    config.clock.offset_us = args.clock_offset_us;
+    config.clock.drift_ppm = args.clock_drift_ppm;
     config.faults.stall = args
         .stall_slide
         .map(|slide| crackbot_controller::SensorStall {
@@ -260,18 +306,19 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
             duration: Duration::from_secs(1),
         });
     config.faults.restart_after = args.restart_after_s.map(Duration::from_secs_f64);
-    if let (Some(serial), Some(controller), Some(key)) = (&args.serial, args.controller, &args.key)
-    {
-        config.hardware = Some(crackbot_mission::inspect::Hardware {
-            serial: serial.clone(),
-            controller,
-            bind: args.bind,
-            key_file: key.clone(),
-            camera: args.camera.clone(),
-            homography: args.homography.clone(),
-        });
-    }
     Ok(config)
+}
+
+/// The mission's rig: the hardware the flags name (this build has no simulator).
+#[cfg(not(feature = "sim"))]
+fn rig_config(args: &RunArgs) -> Result<InspectConfig> {
+    match hardware(args) {
+        Some(hw) => hardware_config(args, hw),
+        None => anyhow::bail!(
+            "this build has no simulator (built without the `sim` feature): a mission needs \
+             hardware, --serial DEVICE --controller ADDR --key FILE"
+        ),
+    }
 }
 
 fn progress_bar(hidden: bool) -> indicatif::ProgressBar {

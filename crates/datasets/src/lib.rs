@@ -94,3 +94,56 @@ mod tests {
         assert!(dir.is_dir());
     }
 }
+
+/// Environment variable naming the models folder (the repository's `models/`: `tactile/`,
+/// `detector/`).
+pub const MODELS_DIR_ENV: &str = "CRACKBOT_MODELS";
+
+/// A deployed model, `relative` to the models folder (e.g. `tactile/recognition.ctm`):
+/// under `$CRACKBOT_MODELS` when it is set (whether or not the file is there, so that an error
+/// names it); else in the first `models/` beside the running binary (its folder, or one or two
+/// above it, as `target/release/` of a clone) or in the working directory that holds it; else
+/// under the repository this crate was built from.
+pub fn model_path(relative: impl AsRef<Path>) -> PathBuf {
+    let relative = relative.as_ref();
+    if let Some(d) = std::env::var_os(MODELS_DIR_ENV).filter(|d| !d.is_empty()) {
+        return PathBuf::from(d).join(relative);
+    }
+    let beside_binary = std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.parent().map(Path::to_path_buf))
+        .into_iter()
+        .flat_map(|dir| {
+            dir.ancestors()
+                .take(3)
+                .map(Path::to_path_buf)
+                .collect::<Vec<_>>()
+        });
+    let candidates = beside_binary
+        .chain(std::iter::once(PathBuf::from(".")))
+        .map(|d| d.join("models").join(relative));
+    let built_from = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models")
+        .join(relative);
+    candidates
+        .into_iter()
+        .find(|p| p.exists())
+        .unwrap_or(built_from)
+}
+
+#[cfg(test)]
+mod model_tests {
+    use super::*;
+
+    #[test]
+    fn a_model_is_found_from_anywhere_and_the_variable_wins() {
+        // Found from the test binary (under the target folder, wherever it is).
+        assert!(model_path("tactile/recognition.ctm").is_file());
+        // The one variable, set, names the path even where nothing is (the error will say so).
+        // Only this test touches the variable.
+        std::env::set_var(MODELS_DIR_ENV, "/nonexistent/models");
+        let p = model_path("tactile/width.ctm");
+        std::env::remove_var(MODELS_DIR_ENV);
+        assert_eq!(p, Path::new("/nonexistent/models/tactile/width.ctm"));
+    }
+}

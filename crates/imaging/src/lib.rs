@@ -10,6 +10,7 @@
 //!   per-crack fields, the photo datasets' mask files) are typed optional fields.
 //! * [`scene_truth`]: a detector set's `features.json` (every crack, decoy and screw of every
 //!   rendered frame), written by the simulator and read by the detector's evaluation.
+//! * [`geometry`]: distances between surface points, segments and polylines.
 //! * [`thinning`]: binary images thinned to one-pixel centre lines (the planner's eq. 1 on
 //!   crack masks, the vision crate's touch points along a detected crack).
 //!
@@ -18,6 +19,7 @@
 
 pub mod coco;
 mod error;
+pub mod geometry;
 pub mod homography;
 pub mod scene_truth;
 pub mod thinning;

@@ -6,9 +6,10 @@
 //! data reach them through callbacks; stopping goes in as a future.
 //!
 //! * [`inspect`]: the inspection mission (tactile, vision or fused) over the authenticated link,
-//!   with the simulated controller started in-process on a simulated scene.
+//!   on a rig ([`inspect::RigBackend`]): hardware, or with the cargo feature `sim` (on by
+//!   default) the simulated controller and sensor started in-process on a simulated scene.
 //! * [`sync`]: passive clock synchronisation of the sensor's and the controller's clocks.
-//! * [`demo`]: the acquisition demo on a simulated scene: the simulated finger slides across a
+//! * `demo` (feature `sim`): the acquisition demo on a simulated scene: the simulated finger slides across a
 //!   crack, the real sensor firmware samples it on this host and streams 400 Hz frames into a new
 //!   pseudo-terminal, the acquisition reads them back over the real serial path, records them to
 //!   CSV and summarises the stream.
@@ -17,10 +18,12 @@
 //! ([`crackbot_acquisition::RecordSession`], [`crackbot_acquisition::session::summarise_replay`]);
 //! detection in camera frames is `crackbot-vision`'s.
 
+#[cfg(feature = "sim")]
 pub mod demo;
 pub mod inspect;
 pub mod sync;
 
+#[cfg(feature = "sim")]
 pub use demo::{run_demo, DemoConfig, DemoReport, DemoSurface};
 pub use inspect::{
     print_check_height, run_inspection, InspectConfig, InspectMode, InspectReport, Progress,
@@ -87,11 +90,24 @@ pub enum MissionError {
     #[error(transparent)]
     Acquisition(#[from] crackbot_acquisition::AcquisitionError),
     /// The emulated sensor failed.
+    #[cfg(feature = "sim")]
     #[error(transparent)]
     Emulator(#[from] crackbot_emulator::EmulatorError),
     /// The simulator could not be set up.
+    #[cfg(feature = "sim")]
     #[error(transparent)]
     Sim(#[from] crackbot_sim::SimError),
+    /// A site file could not be parsed.
+    #[error("the site file {}: {message}", path.display())]
+    SiteFile {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What the TOML parser said.
+        message: String,
+    },
+    /// The site's proximity fibre is out of range.
+    #[error(transparent)]
+    Fibre(#[from] crackbot_fibre::FibreError),
     /// A calibration file is unusable.
     #[error(transparent)]
     Calibration(#[from] crackbot_acquisition::calibration::CalibrationError),
@@ -156,6 +172,7 @@ pub enum MissionError {
     #[error(transparent)]
     Vision(#[from] crackbot_vision::VisionError),
     /// The simulated controller failed.
+    #[cfg(feature = "sim")]
     #[error(transparent)]
     Controller(#[from] crackbot_controller::ControllerError),
 }

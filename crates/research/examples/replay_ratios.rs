@@ -221,7 +221,7 @@ fn main() -> Result<(), Error> {
                             .iter()
                             .filter_map(|r| {
                                 surface_rise_mm(
-                                    &scene.sensor.optics,
+                                    &scene.sensor.optics.fibre(),
                                     r.levels,
                                     dark,
                                     PRINT_CHECK_HEIGHT_MM,

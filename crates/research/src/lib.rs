@@ -648,7 +648,7 @@ fn run(
     name: &str,
 ) -> Result<InspectReport, MissionError> {
     let mut c = base.template.clone();
-    c.scene = scene.clone();
+    c.set_scene(scene.clone());
     c.mode = mode;
     c.speedup = base.speedup;
     c.out_dir = base.out_dir.join(name);

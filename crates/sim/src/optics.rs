@@ -104,6 +104,17 @@ impl Default for OpticsParams {
 }
 
 impl OpticsParams {
+    /// The proximity fibre these optics model, as a mission knows it.
+    pub fn fibre(&self) -> crackbot_fibre::ProximityFibre {
+        crackbot_fibre::ProximityFibre {
+            peak_mm: self.proximity_peak_mm,
+            height_mm: self.proximity_height_mm,
+            dark_counts: self.proximity_dark_counts,
+            offset_mm: self.proximity_offset_mm,
+            spot_mm: self.proximity_spot_mm,
+        }
+    }
+
     /// The physical first guess the calibration starts from (resting levels read off the real
     /// flat recordings, gains and proximity geometry guessed).
     pub fn first_guess() -> Self {
@@ -224,14 +235,7 @@ impl OpticsParams {
     }
 }
 
-/// Relative intensity of a reflective fibre pair at distance `d_mm` whose curve peaks at
-/// `peak_mm`: `2u²/(1+u⁴)`, `u = d/peak` (0 at contact, 1 at the peak, `2/u²` far away).
-#[inline]
-pub fn proximity_intensity(d_mm: f64, peak_mm: f64) -> f64 {
-    let u = d_mm.max(0.0) / peak_mm;
-    let u2 = u * u;
-    2.0 * u2 / (1.0 + u2 * u2)
-}
+pub use crackbot_fibre::intensity as proximity_intensity;
 
 /// What the proximity fibre sees at one instant: its relative intensity (the distance curve
 /// averaged over its spot, times the reflectivity there).
@@ -319,6 +323,16 @@ impl Electronics {
 mod tests {
     use super::*;
     use rand::SeedableRng;
+
+    #[test]
+    fn the_calibrated_fibre_is_the_one_a_mission_knows_by_default() {
+        // A mission on hardware without a site file assumes the fibre the simulator was
+        // calibrated to; the two defaults must not drift apart.
+        assert_eq!(
+            OpticsParams::default().fibre(),
+            crackbot_fibre::ProximityFibre::default()
+        );
+    }
 
     #[test]
     fn proximity_curve_peaks_and_falls_off() {

@@ -251,32 +251,10 @@ fn groove_height(d: f64, half: f64, depth: f64, r: f64, angle_deg: f64) -> f64 {
 }
 
 fn dist(a: Point, b: Point) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+    crackbot_imaging::geometry::distance(a, b)
 }
 
-/// Distance from `p` to the polyline `path` (to the point itself for a single point).
-pub fn distance_to_polyline(path: &[Point], p: Point) -> f64 {
-    match path {
-        [] => f64::INFINITY,
-        [a] => dist(*a, p),
-        _ => path
-            .windows(2)
-            .map(|s| distance_to_segment(s[0], s[1], p))
-            .fold(f64::INFINITY, f64::min),
-    }
-}
-
-fn distance_to_segment(a: Point, b: Point, p: Point) -> f64 {
-    let ab = [b[0] - a[0], b[1] - a[1]];
-    let ap = [p[0] - a[0], p[1] - a[1]];
-    let len2 = ab[0] * ab[0] + ab[1] * ab[1];
-    let t = if len2 > 0.0 {
-        ((ap[0] * ab[0] + ap[1] * ab[1]) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    dist([a[0] + t * ab[0], a[1] + t * ab[1]], p)
-}
+pub use crackbot_imaging::geometry::distance_to_polyline;
 
 /// A plate with its features: the finger's world.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

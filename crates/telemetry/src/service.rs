@@ -182,7 +182,7 @@ impl RobotService {
             self.flags.mission_stop.store(false, Ordering::SeqCst);
         }
         let n = self.missions.fetch_add(1, Ordering::SeqCst) + 1;
-        let mut feed = MissionFeed::new(n, config.mode, &config.scene.name);
+        let mut feed = MissionFeed::new(n, config.mode, &config.site.name);
         self.publish_logged(feed.status());
         let result = run_inspection(config, &self.flags.mission_stop, |p| {
             match feed.on_progress(p) {
@@ -260,8 +260,10 @@ fn start_config(config: &mut InspectConfig, start: &StartRequest) -> Result<(), 
         .parse()
         .map_err(|e: String| format!("mode {:?}: {e}", start.mode))?;
     if let Some(toml) = &start.scene_toml {
-        config.scene = crackbot_sim::Scene::from_toml_str(toml, "<scene from the station>")
-            .map_err(|e| e.to_string())?;
+        config.set_scene(
+            crackbot_sim::Scene::from_toml_str(toml, "<scene from the station>")
+                .map_err(|e| e.to_string())?,
+        );
     }
     Ok(())
 }

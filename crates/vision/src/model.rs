@@ -115,17 +115,11 @@ pub const DEFAULT_MODEL: &str = "models/detector/crack-detector-320.onnx";
 /// The input sizes of the models trained in `models/detector/` (`crack-detector-<size>.onnx`).
 pub const TRAINED_INPUT_SIZES: [usize; 3] = [256, 320, 416];
 
-/// The default model: [`DEFAULT_MODEL`] under the working directory when it is there, else under
-/// the repository this crate was built from.
+/// The default model: [`DEFAULT_MODEL`] as [`crackbot_datasets::model_path`] finds it
+/// (`$CRACKBOT_MODELS`, beside the binary, the working directory or the repository it was built
+/// from).
 pub fn default_model() -> PathBuf {
-    let here = PathBuf::from(DEFAULT_MODEL);
-    if here.is_file() {
-        return here;
-    }
-    // A binary built from this repository also finds the model from elsewhere.
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(DEFAULT_MODEL)
+    crackbot_datasets::model_path(DEFAULT_MODEL.trim_start_matches("models/"))
 }
 
 /// The model to load: `explicit` when given, else [`default_model`].

@@ -1,15 +1,19 @@
-//! What a mission is told: its mode, hardware or simulated scene, models and the settings of
-//! every step, with their defaults and the checks that refuse a setting out of range.
+//! What a mission is told: its mode, its site, hardware or simulated scene, models and the
+//! settings of every step, with their defaults and the checks that refuse a setting out of
+//! range.
 
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
+#[cfg(feature = "sim")]
 use crackbot_controller::{ControllerClock, Faults};
 use crackbot_planner::Settings;
+#[cfg(feature = "sim")]
 use crackbot_sim::Scene;
 use serde::Serialize;
 
 use super::pieces::{PIECE_GAP_MM, PIECE_TRACE_GAP_MM};
+use super::site::Site;
 use crate::MissionError;
 
 /// What the mission uses.
@@ -93,10 +97,14 @@ pub struct Hardware {
 /// Settings of a mission.
 #[derive(Debug, Clone)]
 pub struct InspectConfig {
-    /// Real hardware; `None`: the simulated controller and sensor over the scene.
+    /// Real hardware; `None`: the simulated controller and sensor over the scene (feature
+    /// `sim`).
     pub hardware: Option<Hardware>,
-    /// The scene (simulated), or the workspace and manipulator description (hardware).
-    pub scene: Scene,
+    /// What the mission knows of the place: the arm's box and speeds, the finger's fibre.
+    pub site: Site,
+    /// The simulated scene ([`InspectConfig::new`], [`InspectConfig::set_scene`]).
+    #[cfg(feature = "sim")]
+    scene: Option<Scene>,
     /// Tactile, vision or fused.
     pub mode: InspectMode,
     /// Where the report and every recording go.
@@ -162,8 +170,10 @@ pub struct InspectConfig {
     /// Mean crack length of the tactile-only scan, mm (the paper's eq. 1 on real masks).
     pub mean_crack_length_mm: f64,
     /// The simulated controller's clock (offset, drift injected).
+    #[cfg(feature = "sim")]
     pub clock: ControllerClock,
     /// Faults injected into the simulated controller.
+    #[cfg(feature = "sim")]
     pub faults: Faults,
     /// Link packet faults injected on the host's side.
     pub host_link_faults: Option<crackbot_link::FaultConfig>,
@@ -238,21 +248,34 @@ fn dip_confidence_in_range(c: f64) -> Result<f64, MissionError> {
     }
 }
 
-/// How far beyond a crack's edge the finger of `sensor` feels it, mm: its proximity fibre looks
-/// `proximity_offset_mm` ahead of the tip over a spot `proximity_spot_mm` wide, so it sees the
-/// crack that much before the tip's centre gets there (2.4 mm for the fitted finger). The tip
-/// itself, a sphere on a flat plate, touches the surface only under its centre and feels the
-/// crack only over it.
-pub fn finger_reach_mm(sensor: &crackbot_sim::SensorParams) -> f64 {
-    let o = &sensor.optics;
-    o.proximity_offset_mm.abs() + o.proximity_spot_mm / 2.0
+#[cfg(feature = "sim")]
+impl InspectConfig {
+    /// A fused mission on the simulated rig over `scene` with the committed models, writing
+    /// into `out_dir`.
+    pub fn new(scene: Scene, out_dir: impl Into<PathBuf>) -> Self {
+        let mut config = InspectConfig::at(Site::of_scene(&scene), out_dir);
+        config.scene = Some(scene);
+        config
+    }
+
+    /// The simulated scene, if one was given.
+    pub fn scene(&self) -> Option<&Scene> {
+        self.scene.as_ref()
+    }
+
+    /// Simulates `scene`, and takes its site (name, manipulator, fibre) for the mission's.
+    pub fn set_scene(&mut self, scene: Scene) {
+        self.site = Site::of_scene(&scene);
+        self.scene = Some(scene);
+    }
 }
 
 impl InspectConfig {
-    /// A fused mission over `scene` with the committed models, writing into `out_dir`.
-    pub fn new(scene: Scene, out_dir: impl Into<PathBuf>) -> Self {
+    /// A fused mission at `site` with the committed models, writing into `out_dir`; on
+    /// hardware, set [`hardware`](Self::hardware) ([`InspectConfig::on_hardware`]).
+    pub fn at(site: Site, out_dir: impl Into<PathBuf>) -> Self {
         let settings = Settings {
-            travel_speed_mm_s: scene.manipulator.travel_speed_mm_s,
+            travel_speed_mm_s: site.arm.travel_speed_mm_s,
             // Strokes across the crack at the speed of the authors' recordings the tactile
             // models were trained on (4.6 mm/s, the simulator's fit to them:
             // crates/sim/docs/calibration.md). One stroke per candidate: on the simulated
@@ -267,18 +290,20 @@ impl InspectConfig {
             margin_mm: TOUCH_MARGIN_MM,
             min_margin_mm: TOUCH_MARGIN_MM,
             assumed_width_mm: 2.0,
-            min_stroke_mm: TOUCH_MIN_STROKE_MM.min(scene.manipulator.stroke_mm),
-            reach_mm: finger_reach_mm(&scene.sensor),
+            min_stroke_mm: TOUCH_MIN_STROKE_MM.min(site.arm.stroke_mm),
+            reach_mm: site.fibre.reach_mm(),
             settle_s: 0.1,
             ..Settings::default()
         };
         InspectConfig {
             hardware: None,
-            scene,
+            site,
+            #[cfg(feature = "sim")]
+            scene: None,
             mode: InspectMode::Fused,
             out_dir: out_dir.into(),
-            recognition_model: repo_path("models/tactile/recognition.ctm"),
-            width_model: repo_path("models/tactile/width.ctm"),
+            recognition_model: crackbot_datasets::model_path("tactile/recognition.ctm"),
+            width_model: crackbot_datasets::model_path("tactile/width.ctm"),
             detector_model: None,
             min_score: 0.3,
             proposal_min_score: 0.3,
@@ -294,9 +319,19 @@ impl InspectConfig {
             planner: settings,
             gamma: 0.5,
             mean_crack_length_mm: crackbot_planner::paper_mean_length_mm(148.06, 480.0, 100.0),
+            #[cfg(feature = "sim")]
             clock: ControllerClock::default(),
+            #[cfg(feature = "sim")]
             faults: Faults::default(),
             host_link_faults: None,
+        }
+    }
+
+    /// A fused mission on `hardware` at `site`, writing into `out_dir`.
+    pub fn on_hardware(hardware: Hardware, site: Site, out_dir: impl Into<PathBuf>) -> Self {
+        InspectConfig {
+            hardware: Some(hardware),
+            ..InspectConfig::at(site, out_dir)
         }
     }
 }
@@ -316,6 +351,7 @@ impl InspectConfig {
                 })
             }
         };
+        self.site.clone().checked()?;
         at_least_zero("min_dip_counts", self.min_dip_counts)?;
         if let Some(h) = self.print_check_mm {
             print_check_height(h)?;
@@ -333,19 +369,7 @@ impl InspectConfig {
     }
 }
 
-/// A path of this repository: under the working directory when it is there, else under the
-/// repository this crate was built from.
-pub fn repo_path(rel: &str) -> PathBuf {
-    let here = PathBuf::from(rel);
-    if here.exists() {
-        return here;
-    }
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(rel)
-}
-
-#[cfg(test)]
+#[cfg(all(test, feature = "sim"))]
 mod tests {
     use super::*;
     use crackbot_planner::{Candidate, Limits, Planner, Workspace};
@@ -371,7 +395,7 @@ mod tests {
     fn strokes_reach_as_far_as_the_proximity_fibre_sees_and_no_further() {
         let scene = Scene::builtin_default();
         let o = &scene.sensor.optics;
-        let reach = finger_reach_mm(&scene.sensor);
+        let reach = Site::of_scene(&scene).fibre.reach_mm();
         // The fitted fibre looks 1.8 mm ahead of the tip over a 1.13 mm spot.
         assert!((reach - (o.proximity_offset_mm + o.proximity_spot_mm / 2.0)).abs() < 1e-12);
         assert!((2.0..3.0).contains(&reach), "{reach}");

@@ -51,13 +51,13 @@ fn doubted_no_crack_with_dip(
 /// ratio of the curve's logarithmic slopes at the raised and the contact distance as `δ → 0`
 /// (0.37 for the fitted fibre 2 mm up). Ink keeps its whole share (1); deeper cracks keep more
 /// than the shallowest.
-pub fn shallowest_crack_ratio(optics: &crackbot_sim::optics::OpticsParams, height_mm: f64) -> f64 {
+pub fn shallowest_crack_ratio(fibre: &crackbot_fibre::ProximityFibre, height_mm: f64) -> f64 {
     let log_slope = |d: f64| {
-        let f = |x: f64| crackbot_sim::optics::proximity_intensity(x, optics.proximity_peak_mm);
+        let f = |x: f64| fibre.intensity(x);
         let e = 1e-4;
         (f(d + e).ln() - f(d - e).ln()) / (2.0 * e)
     };
-    let d0 = optics.proximity_height_mm;
+    let d0 = fibre.height_mm;
     log_slope(d0 + height_mm) / log_slope(d0)
 }
 
@@ -161,7 +161,7 @@ impl Rules {
             print_check_mm: config.print_check_mm,
             ratio_floor: config
                 .print_check_mm
-                .map(|h| shallowest_crack_ratio(&config.scene.sensor.optics, h)),
+                .map(|h| shallowest_crack_ratio(&config.site.fibre, h)),
         })
     }
 }
@@ -387,7 +387,7 @@ mod tests {
 
     #[test]
     fn the_shallowest_crack_keeps_about_a_third_of_its_dip_two_millimetres_up() {
-        let o = crackbot_sim::optics::OpticsParams::default();
+        let o = crackbot_fibre::ProximityFibre::default();
         let r = shallowest_crack_ratio(&o, 2.0);
         assert!((0.35..0.39).contains(&r), "{r}");
         // Higher up, less; in contact, all of it.
@@ -638,7 +638,7 @@ mod tests {
         let classes: Vec<String> = ["no crack", "crack", "bump", "wavy"]
             .map(String::from)
             .into();
-        let mut config = InspectConfig::new(crackbot_sim::Scene::builtin_default(), "unused");
+        let mut config = InspectConfig::at(crate::inspect::Site::default(), "unused");
         let r = Rules::new(&classes, &config).unwrap();
         assert_eq!((r.crack_class, r.no_crack_class), (1, Some(0)));
         assert_eq!(r.dip_outweighs_doubt, config.doubted_dip_confidence);

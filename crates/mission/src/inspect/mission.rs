@@ -41,7 +41,7 @@ pub(super) fn mission(
     let t = Instant::now();
     let seen = match config.mode {
         InspectMode::Tactile => None,
-        _ => Some(perceive(config)?),
+        _ => Some(perceive(config, rig.backend)?),
     };
     stages.perceive_s = t.elapsed().as_secs_f64();
     let (candidates, trace, mut report) = perceived(rig, seen);
@@ -125,7 +125,7 @@ fn perceived(
     });
     let report = InspectReport {
         mode: config.mode,
-        scene: config.scene.name.clone(),
+        scene: config.site.name.clone(),
         cracks: Vec::new(),
         rejected: Vec::new(),
         candidates: detections,
@@ -171,7 +171,7 @@ fn plan(
     config: &InspectConfig,
     candidates: &[Candidate],
 ) -> Result<(Planner, Workspace, Plan), MissionError> {
-    let m = &config.scene.manipulator;
+    let m = &config.site.arm;
     let workspace = Workspace {
         x_min_mm: m.workspace_min_mm[0],
         x_max_mm: m.workspace_max_mm[0],

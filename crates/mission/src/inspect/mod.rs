@@ -8,10 +8,12 @@
 //!                                 (online, streaming)          ▲ sensor: serial / PTY
 //! ```
 //!
-//! The same code runs on hardware (a serial port, a controller address, a camera image) and on
-//! a simulated scene, where [`run_inspection`] starts the simulated controller
-//! (`crackbot-controller`) in this process: real UDP sockets on loopback, the real firmware
-//! code writing into a pseudo-terminal, the real acquisition reading it.
+//! The same code runs on any rig ([`RigBackend`]): hardware ([`HardwareRig`]: a serial port, a
+//! controller address, a camera image) or, with the cargo feature `sim`, a simulated scene,
+//! where the simulated rig starts the simulated controller (`crackbot-controller`) in this
+//! process: real UDP sockets on loopback, the real firmware code writing into a
+//! pseudo-terminal, the real acquisition reading it. What the mission knows of the place is a
+//! [`Site`].
 //!
 //! * **Modes.** `fused` (the default): the detector proposes, the finger confirms. `vision`:
 //!   the detector's candidates are the report (nothing is touched). `tactile`: boustrophedon
@@ -42,13 +44,11 @@
 //!   error that says which. Everything recorded up to then is on disk.
 
 use std::collections::VecDeque;
-use std::net::{SocketAddr, UdpSocket};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use crackbot_controller::{ControllerClock, ServerConfig, SimController};
-use crackbot_link::{EpochSource, Key, LinkConfig, LinkEndpoint, Security};
+use crackbot_link::{EpochSource, LinkConfig, LinkEndpoint, Security};
 use crackbot_tactile::model::TactileModel;
 
 use crate::sync::ClockSync;
@@ -64,13 +64,17 @@ mod perceive;
 mod pieces;
 mod raised;
 mod report;
+mod rig;
 mod sensor;
+#[cfg(feature = "sim")]
+mod simulated;
+mod site;
 mod touch;
 
 pub use config::{
-    doubted_dip_confidence, finger_reach_mm, print_check_height, repo_path, CandidateSource,
-    Hardware, InspectConfig, InspectMode, DOUBTED_DIP_CONFIDENCE, MIN_DIP_COUNTS,
-    PRINT_CHECK_HEIGHT_MM, TOUCH_MARGIN_MM, TOUCH_MIN_STROKE_MM,
+    doubted_dip_confidence, print_check_height, CandidateSource, Hardware, InspectConfig,
+    InspectMode, DOUBTED_DIP_CONFIDENCE, MIN_DIP_COUNTS, PRINT_CHECK_HEIGHT_MM, TOUCH_MARGIN_MM,
+    TOUCH_MIN_STROKE_MM,
 };
 pub use feel::Feeling;
 pub use judge::{shallowest_crack_ratio, IMPLAUSIBLE_RATIO_SHARE, WEAK_NO_CRACK_CONFIDENCE};
@@ -89,17 +93,34 @@ pub use report::{
     CrackDoubt, Dip, Evidence, FrameInfo, InspectReport, LinkCounters, LiveSample, PassDoubt,
     PassRecord, Progress, RejectedCandidate, ReportedCrack, StageTimes, StreamHealth, NOT_JUDGED,
 };
+pub use rig::{rig_of, Connection, HardwareRig, RigBackend};
+#[cfg(feature = "sim")]
+pub use simulated::SimulatedRig;
+pub use site::{ArmLimits, Site};
 pub use touch::{RESTROKE_ALONG_MM, RESTROKE_KEEP_MM, UNEVEN_ENDS_SHARE};
 
 use arm::{link_err, Arm};
 use passes::Rig;
 pub(crate) use perceive::io_err;
 use sensor::Sensor;
-/// Runs a mission (see the [module docs](self)) on the simulated scene of `config`, or on
-/// its hardware. `stop` ends it early (the arm is stopped first); `progress` sees each stage.
-/// The report is also saved as `report.json` in the mission's folder.
+/// Runs a mission (see the [module docs](self)) on the rig `config` names ([`rig_of`]): its
+/// hardware, or the simulated rig of its scene. `stop` ends it early (the arm is stopped
+/// first); `progress` sees each stage. The report is also saved as `report.json` in the
+/// mission's folder.
 pub fn run_inspection(
     config: &InspectConfig,
+    stop: &AtomicBool,
+    progress: impl FnMut(&Progress),
+) -> Result<InspectReport, MissionError> {
+    config.check()?;
+    let mut rig = rig_of(config)?;
+    run_inspection_on(config, rig.as_mut(), stop, progress)
+}
+
+/// [`run_inspection`] on a rig of the caller's.
+pub fn run_inspection_on(
+    config: &InspectConfig,
+    backend: &mut dyn RigBackend,
     stop: &AtomicBool,
     mut progress: impl FnMut(&Progress),
 ) -> Result<InspectReport, MissionError> {
@@ -109,11 +130,18 @@ pub fn run_inspection(
     let recognition = TactileModel::load(&config.recognition_model)?;
     let width = TactileModel::load(&config.width_model)?;
     std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
-    let (mut arm, mut sensor, controller) = start_rig(config)?;
+    let started_rig = start_rig(config, backend);
+    let (mut arm, mut sensor) = match started_rig {
+        Ok(parts) => parts,
+        Err(e) => {
+            backend.shutdown();
+            return Err(e);
+        }
+    };
     let setup_s = started.elapsed().as_secs_f64();
 
     let result = {
-        let mut rig = Rig::new(config, &mut arm, &mut sensor, stop, &mut progress);
+        let mut rig = Rig::new(config, &mut arm, &mut sensor, backend, stop, &mut progress);
         mission::mission(&mut rig, (&recognition, &width), started, setup_s)
     };
     if result.is_err() {
@@ -127,9 +155,7 @@ pub fn run_inspection(
         duplicates: s.duplicates,
     };
     drop(sensor);
-    if let Some(c) = controller {
-        let _ = c.shutdown();
-    }
+    backend.shutdown();
     let mut report = result?;
     report.link = counters;
     save_report(&config.out_dir.join("report.json"), &report)?;
@@ -142,28 +168,21 @@ fn save_report(path: &Path, report: &InspectReport) -> Result<(), MissionError> 
     std::fs::write(path, json).map_err(|e| io_err(path, e))
 }
 
-/// The rig's parts: the arm over the authenticated link and the sensor stream, and the
-/// simulated controller when there is no hardware (its state files under `.link/`).
-fn start_rig(config: &InspectConfig) -> Result<(Arm, Sensor, Option<SimController>), MissionError> {
+/// The arm over the authenticated link and the sensor stream of the rig `backend` (its state
+/// files under `.link/`).
+fn start_rig(
+    config: &InspectConfig,
+    backend: &mut dyn RigBackend,
+) -> Result<(Arm, Sensor), MissionError> {
     let state_dir = config.out_dir.join(".link");
     std::fs::create_dir_all(&state_dir).map_err(|e| io_err(&state_dir, e))?;
-    let (host_socket, ctrl_addr, key, controller) = match &config.hardware {
-        Some(hw) => {
-            let key = Key::from_file(&hw.key_file)
-                .map_err(|e| MissionError::Link(format!("the link key: {e}")))?;
-            (bind(hw.bind)?, hw.controller, key, None)
-        }
-        None => {
-            let (host_socket, ctrl_addr, key, controller) = start_simulated(config, &state_dir)?;
-            (host_socket, ctrl_addr, key, Some(controller))
-        }
-    };
+    let c = backend.connect(config, &state_dir)?;
     let t0 = Instant::now();
     let mut ep = LinkEndpoint::from_socket(
-        host_socket,
-        ctrl_addr,
+        c.socket,
+        c.controller,
         LinkConfig::host(
-            Security::Signed(key),
+            Security::Signed(c.key),
             EpochSource::File(state_dir.join("host.epoch")),
         ),
     )
@@ -183,49 +202,6 @@ fn start_rig(config: &InspectConfig) -> Result<(Arm, Sensor, Option<SimControlle
         epoch: None,
         restarted: false,
     };
-    let port = match (&config.hardware, &controller) {
-        (Some(hw), _) => hw.serial.clone(),
-        (None, Some(c)) => c.sensor_path().to_string(),
-        (None, None) => String::new(),
-    };
-    let sensor = Sensor::open(&port, t0)?;
-    Ok((arm, sensor, controller))
-}
-
-/// A UDP socket bound to `a`.
-fn bind(a: SocketAddr) -> Result<UdpSocket, MissionError> {
-    UdpSocket::bind(a).map_err(|e| MissionError::Link(format!("binding {a}: {e}")))
-}
-
-/// The simulated controller and sensor, over loopback UDP and a PTY, with a fresh random key
-/// per mission that is never written anywhere (both ends live in this process): the host's
-/// socket, the controller's address, the key, the controller.
-fn start_simulated(
-    config: &InspectConfig,
-    state_dir: &Path,
-) -> Result<(UdpSocket, SocketAddr, Key, SimController), MissionError> {
-    let loopback: SocketAddr = ([127, 0, 0, 1], 0).into();
-    let host_socket = bind(loopback)?;
-    let ctrl_socket = bind(loopback)?;
-    let host_addr = host_socket
-        .local_addr()
-        .map_err(|e| MissionError::Link(e.to_string()))?;
-    let ctrl_addr: SocketAddr = ctrl_socket
-        .local_addr()
-        .map_err(|e| MissionError::Link(e.to_string()))?;
-    let key_bytes: [u8; 32] = rand::random();
-    let key = Key::from_bytes(&key_bytes).map_err(|e| MissionError::Link(e.to_string()))?;
-    let mut server = ServerConfig::new(
-        config.scene.clone(),
-        Security::Signed(key.clone()),
-        state_dir.join("controller.epoch"),
-    );
-    server.seed = config.seed;
-    server.clock = ControllerClock {
-        speedup: config.speedup,
-        ..config.clock
-    };
-    server.faults = config.faults.clone();
-    let controller = SimController::spawn(server, ctrl_socket, host_addr)?;
-    Ok((host_socket, ctrl_addr, key, controller))
+    let sensor = Sensor::open(&c.sensor_port, t0)?;
+    Ok((arm, sensor))
 }

@@ -14,6 +14,7 @@ use super::config::InspectConfig;
 use super::feel::Feel;
 use super::perceive::io_err;
 use super::report::{CrackDoubt, LiveSample, Progress, StreamHealth};
+use super::rig::RigBackend;
 use super::sensor::Sensor;
 use crate::MissionError;
 
@@ -98,12 +99,14 @@ pub(super) fn classify(
     Ok((online.end_slide()?, online_width.end_slide()?))
 }
 
-/// What a slide needs: the mission's settings, the arm, the sensor, the stop flag and the front
-/// end's progress callback, which also sees every sensor sample as it arrives.
+/// What a slide needs: the mission's settings, the arm, the sensor, the rig's camera, the stop
+/// flag and the front end's progress callback, which also sees every sensor sample as it
+/// arrives.
 pub(super) struct Rig<'a> {
     pub(super) config: &'a InspectConfig,
     pub(super) arm: &'a mut Arm,
     pub(super) sensor: &'a mut Sensor,
+    pub(super) backend: &'a mut dyn RigBackend,
     pub(super) stop: &'a AtomicBool,
     pub(super) progress: &'a mut dyn FnMut(&Progress),
     /// Samples already shown to the front end.
@@ -123,6 +126,7 @@ impl<'a> Rig<'a> {
         config: &'a InspectConfig,
         arm: &'a mut Arm,
         sensor: &'a mut Sensor,
+        backend: &'a mut dyn RigBackend,
         stop: &'a AtomicBool,
         progress: &'a mut dyn FnMut(&Progress),
     ) -> Self {
@@ -130,6 +134,7 @@ impl<'a> Rig<'a> {
             config,
             arm,
             sensor,
+            backend,
             stop,
             progress,
             shown: 0,
@@ -287,8 +292,7 @@ impl<'a> Rig<'a> {
             valid_until_us: self.arm.deadline_us()?,
         }))?;
         let here = self.arm.here();
-        let travel =
-            (a[0] - here[0]).hypot(a[1] - here[1]) / config.scene.manipulator.travel_speed_mm_s;
+        let travel = (a[0] - here[0]).hypot(a[1] - here[1]) / config.site.arm.travel_speed_mm_s;
         let stroke = (b[0] - a[0]).hypot(b[1] - a[1]) / speed;
         let budget = Duration::from_secs_f64((travel + stroke) / config.speedup * 1.5 + 3.0);
         let deadline = Instant::now() + budget;
@@ -355,7 +359,8 @@ impl<'a> Rig<'a> {
             positions.push(along(a, u, p));
         }
         // Frames lost to a stall that lasted past the stroke's end: too few samples for the stroke.
-        let expected = (b[0] - a[0]).hypot(b[1] - a[1]) / speed * crackbot_sim::run::SAMPLE_RATE_HZ;
+        let expected =
+            (b[0] - a[0]).hypot(b[1] - a[1]) / speed * f64::from(crackbot_protocol::SAMPLE_RATE_HZ);
         if (samples.len() as f64) < 0.8 * expected {
             return Err(MissionError::SensorStalled {
                 port: self.sensor.path.clone(),

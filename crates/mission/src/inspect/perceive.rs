@@ -1,4 +1,5 @@
-//! Perception: a frame (rendered, or a camera file), the detector, candidates in surface mm.
+//! Perception: a frame from the rig's camera (a camera on hardware, the scene rendered on the
+//! simulator), the detector, candidates in surface mm.
 
 use std::path::Path;
 
@@ -7,6 +8,7 @@ use crackbot_planner::Candidate;
 use super::config::{CandidateSource, InspectConfig, InspectMode};
 use super::pieces::CrackTrace;
 use super::report::FrameInfo;
+use super::rig::RigBackend;
 use crate::MissionError;
 
 /// What the camera gave: candidates in the scene's frame (rendered or grabbed, detected, mapped
@@ -18,13 +20,16 @@ pub(super) struct Perceived {
     pub frame: FrameInfo,
 }
 
-/// Looks at the scene ([`Perceived`]).
-pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError> {
+/// Looks at the scene through the camera of `rig` ([`Perceived`]).
+pub(super) fn perceive(
+    config: &InspectConfig,
+    rig: &mut dyn RigBackend,
+) -> Result<Perceived, MissionError> {
     use crackbot_vision::model::{build_detector, DetectorChoice};
     use crackbot_vision::preprocess::PostprocessParams;
 
     std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
-    let (image, h) = frame(config)?;
+    let (image, h) = rig.frame(config)?;
     let frame_path = config.out_dir.join("frame.png");
     image
         .save(&frame_path)
@@ -124,51 +129,6 @@ pub(super) fn perceive(config: &InspectConfig) -> Result<Perceived, MissionError
     })
 }
 
-/// The frame to look at and its pixel → surface homography: a camera's, with its calibration
-/// (hardware), or the scene rendered (simulated).
-fn frame(
-    config: &InspectConfig,
-) -> Result<(image::RgbImage, crackbot_imaging::Homography), MissionError> {
-    use crackbot_sim::render::{render, CrackAssets, RenderOptions};
-    Ok(match &config.hardware {
-        Some(hw) => {
-            let missing = |what| MissionError::Missing {
-                mode: config.mode.as_str(),
-                what,
-            };
-            let camera = hw
-                .camera
-                .as_ref()
-                .ok_or_else(|| missing("a camera (--camera DEVICE|FILE|URL)"))?;
-            let cal = hw.homography.as_ref().ok_or_else(|| {
-                missing("the camera's pixel → surface calibration (--homography FILE, from `crackbot homography fit`)")
-            })?;
-            use crackbot_vision::camera::{grab_frame, CameraSource, DEFAULT_TIMEOUT};
-            let source = CameraSource::parse(&camera.to_string_lossy());
-            let image = grab_frame(&source, None, DEFAULT_TIMEOUT)?;
-            let h = crackbot_vision::homography::HomographyCalibration::load(cal)?.homography()?;
-            (image, h)
-        }
-        None => {
-            let assets = CrackAssets::load_default()?;
-            let frame = render(
-                &config.scene,
-                &assets,
-                &RenderOptions::default(),
-                config.seed,
-            )?;
-            let h = crackbot_imaging::Homography::from_nalgebra(
-                frame
-                    .plate_to_image
-                    .try_inverse()
-                    .ok_or(MissionError::SingularHomography)?,
-            )
-            .map_err(|_| MissionError::SingularHomography)?;
-            (frame.image, h)
-        }
-    })
-}
-
 /// An I/O error on `path`, naming it.
 pub(crate) fn io_err(path: &Path, e: std::io::Error) -> MissionError {
     MissionError::Io {
@@ -177,9 +137,10 @@ pub(crate) fn io_err(path: &Path, e: std::io::Error) -> MissionError {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "sim"))]
 mod tests {
     use super::*;
+    use crate::inspect::SimulatedRig;
     use crackbot_sim::random_scene::{as_printed, trial_params};
     use crackbot_sim::surface::distance_to_polyline;
 
@@ -204,7 +165,7 @@ mod tests {
             let dir = tempfile::tempdir().unwrap();
             let mut c = InspectConfig::new(scene, dir.path());
             c.mode = InspectMode::Fused;
-            let seen = perceive(&c).unwrap();
+            let seen = perceive(&c, &mut SimulatedRig::default()).unwrap();
             let near: Vec<f64> = seen
                 .candidates
                 .iter()

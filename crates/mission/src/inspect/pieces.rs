@@ -16,9 +16,9 @@
 //! where that line leaves the map for no longer than the gap between them (plus the same
 //! tolerance).
 
+use crackbot_imaging::geometry::distance_to_polyline;
 use crackbot_imaging::Homography;
 use crackbot_planner::geometry::connected_groups;
-use crackbot_sim::surface::distance_to_polyline;
 use crackbot_vision::crack_map::{CrackMap, MAP_THRESHOLD};
 
 use crackbot_planner::Candidate;

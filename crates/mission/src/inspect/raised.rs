@@ -65,7 +65,7 @@ pub const MAX_SURFACE_RISE_MM: f64 = 1.5;
 /// cancels. `None` where the contact level is within a count of `dark` or the raised one is not
 /// above it. The raised fibre closer to the surface than the curve's peak reads as that close.
 pub fn surface_rise_mm(
-    optics: &crackbot_sim::optics::OpticsParams,
+    fibre: &crackbot_fibre::ProximityFibre,
     levels: [f64; 2],
     dark: f64,
     height_mm: f64,
@@ -74,10 +74,10 @@ pub fn surface_rise_mm(
     if !(contact > 1.0 && raised > 0.0) {
         return None;
     }
-    let peak = optics.proximity_peak_mm;
-    let d0 = optics.proximity_height_mm;
+    let peak = fibre.peak_mm;
+    let d0 = fibre.height_mm;
     // f(g) = 2u²/(1 + u⁴), u = g / peak: on its falling side u² = (1 + √(1 − t²)) / t.
-    let t = (raised / contact * crackbot_sim::optics::proximity_intensity(d0, peak)).min(1.0);
+    let t = (raised / contact * crackbot_fibre::intensity(d0, peak)).min(1.0);
     let u2 = (1.0 + (1.0 - t * t).max(0.0).sqrt()) / t;
     let g = peak * u2.sqrt();
     Some(d0 + height_mm - g)
@@ -178,7 +178,7 @@ pub(super) fn print_check(
         strokes,
         own,
         raised,
-        dark: rig.config.scene.sensor.optics.proximity_dark_counts,
+        dark: rig.config.site.fibre.dark_counts,
     };
     check.run(rig, [from, to], height_mm, felt)
 }
@@ -270,10 +270,10 @@ impl Check<'_> {
         first: Option<RaisedRatio>,
         f: &mut Felt,
     ) -> Result<Option<(RaisedRatio, f64)>, MissionError> {
-        let optics = &self.config.scene.sensor.optics;
+        let fibre = &self.config.site.fibre;
         let rise = first
             .filter(|r| r.print > print_check::PRINT_RATIO)
-            .and_then(|r| surface_rise_mm(optics, r.levels, self.dark, h))
+            .and_then(|r| surface_rise_mm(fibre, r.levels, self.dark, h))
             .filter(|r| *r > SURFACE_RISE_TOLERANCE_MM);
         let Some(rise) = rise else {
             return Ok(None);
@@ -423,14 +423,17 @@ mod tests {
 
     #[test]
     fn the_surface_rise_is_read_from_the_two_levels_whatever_the_reflectivity() {
-        let o = crackbot_sim::optics::OpticsParams::default();
-        let (d0, dark) = (o.proximity_height_mm, o.proximity_dark_counts);
-        let f = |d: f64| crackbot_sim::optics::proximity_intensity(d, o.proximity_peak_mm);
+        let o = crackbot_fibre::ProximityFibre::default();
+        let (d0, dark) = (o.height_mm, o.dark_counts);
+        let f = |d: f64| o.intensity(d);
+        // The calibrated fibre's peak signal above dark for reflectivity 1, counts
+        // (`crackbot_sim::optics::OpticsParams::proximity_peak_counts`).
+        let peak_counts = 772.15;
         // Levels of a surface of reflectivity `r` with the raised fibre `g` mm from it.
         let levels = |r: f64, g: f64| {
             [
-                dark + r * o.proximity_peak_counts * f(d0),
-                dark + r * o.proximity_peak_counts * f(g),
+                dark + r * peak_counts * f(d0),
+                dark + r * peak_counts * f(g),
             ]
         };
         for r in [0.3, 0.8, 1.0] {
@@ -447,7 +450,7 @@ mod tests {
         // Brighter than the curve's peak allows reads as the peak; no signal gives nothing.
         let touching = surface_rise_mm(&o, [dark + 100.0, dark + 300.0], dark, 2.0).unwrap();
         assert!(
-            (touching - (d0 + 2.0 - o.proximity_peak_mm)).abs() < 1e-9,
+            (touching - (d0 + 2.0 - o.peak_mm)).abs() < 1e-9,
             "{touching}"
         );
         assert_eq!(

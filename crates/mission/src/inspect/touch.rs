@@ -281,7 +281,7 @@ impl<'m, 'c> Touch<'m, 'c> {
         id: u64,
         strokes: &Strokes,
     ) -> Option<(Slide, [f64; 2])> {
-        let dark = self.config.scene.sensor.optics.proximity_dark_counts;
+        let dark = self.config.site.fibre.dark_counts;
         let (uneven, _) = strokes
             .profiles
             .iter()
@@ -348,7 +348,7 @@ impl<'m, 'c> Touch<'m, 'c> {
     ) -> Result<(), MissionError> {
         let cand = slide.candidates.first().copied();
         let pieces: Vec<(usize, usize)> = if cand.is_none() {
-            split_by_travel(&unit.along, self.config.scene.manipulator.stroke_mm)
+            split_by_travel(&unit.along, self.config.site.arm.stroke_mm)
         } else {
             vec![(0, unit.samples.len())]
         };

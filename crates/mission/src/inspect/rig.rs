@@ -1,0 +1,117 @@
+//! What a mission runs on: a [`RigBackend`] says where the arm's controller and the sensor are,
+//! starts what must be started, and gives the camera's frame. The mission's own arm and sensor
+//! code ([`super::arm`], [`super::sensor`]) is the same on every rig: it always talks to the
+//! controller over the authenticated UDP link and reads the sensor over a serial port, so what
+//! differs is only what answers at the other end.
+//!
+//! * [`HardwareRig`]: a real controller, serial port and camera ([`Hardware`]).
+//! * `SimulatedRig` (cargo feature `sim`): the simulated controller and emulated sensor
+//!   started in-process over loopback UDP and a pseudo-terminal, and the scene rendered as the
+//!   camera's frame.
+
+use std::net::{SocketAddr, UdpSocket};
+use std::path::Path;
+
+use crackbot_imaging::Homography;
+use crackbot_link::Key;
+use image::RgbImage;
+
+use super::config::{Hardware, InspectConfig};
+use crate::MissionError;
+
+/// Where a mission's arm and sensor are, once started.
+pub struct Connection {
+    /// This host's UDP socket for the link.
+    pub socket: UdpSocket,
+    /// The controller's UDP address.
+    pub controller: SocketAddr,
+    /// The link's pre-shared key.
+    pub key: Key,
+    /// The sensor's serial device (or pseudo-terminal).
+    pub sensor_port: String,
+}
+
+/// A mission's rig: the arm's controller, the sensor and the camera.
+pub trait RigBackend {
+    /// Starts what the rig needs (its state files under `state_dir`) and says where the arm and
+    /// the sensor are.
+    fn connect(
+        &mut self,
+        config: &InspectConfig,
+        state_dir: &Path,
+    ) -> Result<Connection, MissionError>;
+
+    /// One camera frame and its pixel → surface homography (fused and vision missions).
+    fn frame(&mut self, config: &InspectConfig) -> Result<(RgbImage, Homography), MissionError>;
+
+    /// Stops what [`connect`](Self::connect) started (nothing on hardware). Called once, after
+    /// the arm was stopped.
+    fn shutdown(&mut self) {}
+}
+
+/// Real hardware: the controller at [`Hardware::controller`], the sensor on
+/// [`Hardware::serial`], frames from [`Hardware::camera`].
+pub struct HardwareRig {
+    hardware: Hardware,
+}
+
+impl HardwareRig {
+    /// The rig of `hardware`.
+    pub fn new(hardware: Hardware) -> Self {
+        HardwareRig { hardware }
+    }
+}
+
+impl RigBackend for HardwareRig {
+    fn connect(&mut self, _: &InspectConfig, _: &Path) -> Result<Connection, MissionError> {
+        let hw = &self.hardware;
+        let key = Key::from_file(&hw.key_file)
+            .map_err(|e| MissionError::Link(format!("the link key: {e}")))?;
+        Ok(Connection {
+            socket: bind(hw.bind)?,
+            controller: hw.controller,
+            key,
+            sensor_port: hw.serial.clone(),
+        })
+    }
+
+    fn frame(&mut self, config: &InspectConfig) -> Result<(RgbImage, Homography), MissionError> {
+        use crackbot_vision::camera::{grab_frame, CameraSource, DEFAULT_TIMEOUT};
+        let hw = &self.hardware;
+        let missing = |what| MissionError::Missing {
+            mode: config.mode.as_str(),
+            what,
+        };
+        let camera = hw
+            .camera
+            .as_ref()
+            .ok_or_else(|| missing("a camera (--camera DEVICE|FILE|URL)"))?;
+        let cal = hw.homography.as_ref().ok_or_else(|| {
+            missing("the camera's pixel → surface calibration (--homography FILE, from `crackbot homography fit`)")
+        })?;
+        let source = CameraSource::parse(&camera.to_string_lossy());
+        let image = grab_frame(&source, None, DEFAULT_TIMEOUT)?;
+        let h = crackbot_vision::homography::HomographyCalibration::load(cal)?.homography()?;
+        Ok((image, h))
+    }
+}
+
+/// The rig `config` names: its hardware, or the simulated rig of its scene (feature `sim`).
+pub fn rig_of(config: &InspectConfig) -> Result<Box<dyn RigBackend>, MissionError> {
+    match &config.hardware {
+        Some(hw) => Ok(Box::new(HardwareRig::new(hw.clone()))),
+        #[cfg(feature = "sim")]
+        None => Ok(Box::new(super::simulated::SimulatedRig::default())),
+        #[cfg(not(feature = "sim"))]
+        None => Err(MissionError::Missing {
+            mode: config.mode.as_str(),
+            what: "hardware (--serial, --controller and --key): this build has no simulator \
+                   (the cargo feature `sim` is off)",
+        }),
+    }
+}
+
+/// A UDP socket bound to `a`.
+pub(super) fn bind(a: SocketAddr) -> Result<UdpSocket, MissionError> {
+    UdpSocket::bind(a).map_err(|e| MissionError::Link(format!("binding {a}: {e}")))
+}
