@@ -29,7 +29,11 @@ pub fn binary(name: &str) -> PathBuf {
     if !built.iter().any(|b| b == name) {
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
         let mut cmd = Command::new(cargo);
-        cmd.args(["build", "--quiet", "--workspace", "--bin", name]);
+        // One test target (`--test layering`, small) and the telemetry feature make this build
+        // resolve features exactly as `scripts/test.sh` does (`cargo test --workspace --features
+        // crackbot-cli/telemetry`: dev-dependencies on), so it reuses what the test run compiled
+        // instead of building tokio, rand and everything above them again with other features.
+        cmd.args(["build", "--quiet", "--workspace", "--test", "layering", "--bin", name]);
         cmd.args(["--features", "crackbot-cli/telemetry"]);
         if name == "crackbot" {
             cmd.args(["--bin", "crackbot-lab"]);
