@@ -33,7 +33,15 @@ pub fn binary(name: &str) -> PathBuf {
         // resolve features exactly as `scripts/test.sh` does (`cargo test --workspace --features
         // crackbot-cli/telemetry`: dev-dependencies on), so it reuses what the test run compiled
         // instead of building tokio, rand and everything above them again with other features.
-        cmd.args(["build", "--quiet", "--workspace", "--test", "layering", "--bin", name]);
+        cmd.args([
+            "build",
+            "--quiet",
+            "--workspace",
+            "--test",
+            "layering",
+            "--bin",
+            name,
+        ]);
         cmd.args(["--features", "crackbot-cli/telemetry"]);
         if name == "crackbot" {
             cmd.args(["--bin", "crackbot-lab"]);

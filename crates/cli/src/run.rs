@@ -43,7 +43,8 @@ pub struct RunArgs {
     pub seed: u64,
     /// Strokes across each candidate (forth and back count as two; the authors slid 4 and
     /// more). One stroke was as accurate as four on the simulated trials, at a third of the
-    /// time (crates/research/EXPERIMENTS.md).
+    /// time (crates/research/EXPERIMENTS.md, "Error against run time before the print check:
+    /// strokes, stroke length, margin").
     #[arg(long, default_value_t = 1)]
     pub passes: u32,
     /// Shortest stroke across a candidate, mm (default: 6, or the scene's manipulator stroke

@@ -11,7 +11,6 @@ use crackbot_sim::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crackbot_sim::{Integrator, Scene, SensorParams, SimError, Surface};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::command::Checked;
@@ -24,6 +23,9 @@ pub const TRAVEL_HEIGHT_MM: f64 = 5.0;
 pub const MIN_MOVE_HEIGHT_MM: f64 = 0.5;
 /// Highest height a move may take the finger to, mm.
 pub const MAX_MOVE_HEIGHT_MM: f64 = 50.0;
+
+/// Standard deviation of the noise on the lifted finger's deformation channels, counts.
+const LIFTED_NOISE_COUNTS: f64 = 0.6;
 
 /// What the controller refuses to do.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -224,7 +226,6 @@ pub struct World {
     lifted: [f64; 3],
     /// The way the arm last moved (the proximity fibre looks ahead along it).
     heading: [f64; 2],
-    noise: Normal<f64>,
     rng: ChaCha8Rng,
     seed: u64,
     slides: u32,
@@ -267,7 +268,6 @@ impl World {
             activity: Activity::Idle,
             lifted: [probe.counts[0], probe.counts[1], probe.counts[2]],
             heading: [1.0, 0.0],
-            noise: Normal::new(0.0, 0.6).map_err(|e| SimError::Invalid(e.to_string()))?,
             rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5eed),
             seed,
             slides: 0,
@@ -480,7 +480,8 @@ impl World {
         let sat = o.saturation_counts;
         let mut c = [self.lifted[0], self.lifted[1], self.lifted[2], 0.0];
         for v in &mut c[..3] {
-            *v += self.noise.sample(&mut self.rng);
+            let z: f64 = rand::Rng::sample(&mut self.rng, rand_distr::StandardNormal);
+            *v += LIFTED_NOISE_COUNTS * z;
         }
         let n: f64 = rand::Rng::sample(&mut self.rng, rand_distr::StandardNormal);
         c[3] = o.saturate((p + p_noise * n).min(sat));

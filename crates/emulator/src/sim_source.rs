@@ -152,9 +152,11 @@ impl SignalSource for SimSource {
 /// The plate of [`SimSource::over_crack`] and its slide line.
 fn crack_plate(width_mm: f64) -> Result<(Surface, SlideLine), SimError> {
     if !(width_mm.is_finite() && (0.0..=50.0).contains(&width_mm)) {
-        return Err(SimError::Invalid(format!(
-            "crack width must be between 0 and 50 mm, got {width_mm}"
-        )));
+        return Err(SimError::setting(
+            "crack_width_mm",
+            width_mm,
+            "in [0, 50] mm",
+        ));
     }
     let samples = Samples::default();
     let crack_x = 100.0;
@@ -179,24 +181,27 @@ fn crack_plate(width_mm: f64) -> Result<(Surface, SlideLine), SimError> {
 
 /// The slide line of [`SimSource::across_first_crack`].
 fn line_across_first_crack(scene: &Scene) -> Result<SlideLine, SimError> {
-    let (path, width_mm) = scene
+    let (index, path, width_mm) = scene
         .features
         .iter()
-        .find_map(|f| match f {
-            Feature::Crack { path, width_mm, .. } => Some((path, *width_mm)),
+        .enumerate()
+        .find_map(|(k, f)| match f {
+            Feature::Crack { path, width_mm, .. } => Some((k, path, *width_mm)),
             _ => None,
         })
-        .ok_or_else(|| {
-            SimError::Invalid(format!(
-                "scene {:?} has no crack to slide across",
-                scene.name
-            ))
+        .ok_or_else(|| SimError::NoCrack {
+            scene: scene.name.clone(),
         })?;
     let (mid, tangent) = polyline_midpoint(path).ok_or_else(|| {
-        SimError::Invalid(format!(
-            "the first crack of scene {:?} has a path of zero length",
-            scene.name
-        ))
+        let points: Vec<String> = path
+            .iter()
+            .map(|p| format!("[{}, {}]", p[0], p[1]))
+            .collect();
+        SimError::setting(
+            format!("features[{index}].path"),
+            format!("[{}]", points.join(", ")),
+            "a path of non-zero length (the first crack is the one slid across)",
+        )
     })?;
     let normal = [-tangent[1], tangent[0]];
     let back = width_mm.max(0.0) / 2.0 + CRACK_LEAD_IN_MM;
@@ -314,10 +319,14 @@ mod tests {
     #[test]
     fn bad_widths_are_rejected() {
         for w in [-1.0, f64::NAN, 80.0] {
-            assert!(matches!(
-                SimSource::over_crack(w, 1),
-                Err(SimError::Invalid(_))
-            ));
+            let err = SimSource::over_crack(w, 1).err();
+            assert!(
+                matches!(
+                    &err,
+                    Some(SimError::Setting { field, .. }) if field == "crack_width_mm"
+                ),
+                "{w}: {err:?}"
+            );
         }
     }
 
@@ -342,11 +351,17 @@ mod tests {
             source.sample(0.0);
         }
         assert!(source.error().is_none());
-        assert!(line_across_first_crack(&Scene {
+        let err = line_across_first_crack(&Scene {
             features: Vec::new(),
+            name: "bare".into(),
             ..scene
         })
-        .is_err());
+        .unwrap_err();
+        assert!(
+            matches!(&err, SimError::NoCrack { scene } if scene == "bare"),
+            "{err:?}"
+        );
+        assert!(err.to_string().contains("no crack"), "{err}");
     }
 
     #[test]

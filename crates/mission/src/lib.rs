@@ -34,9 +34,15 @@ pub use inspect::{
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum MissionError {
-    /// A setting is out of range; the message names it.
-    #[error("{0}")]
-    Invalid(String),
+    /// A mission asked for from outside (a station's start request over telemetry) cannot be
+    /// run as asked.
+    #[error("the start request's {field} cannot be used: {reason}")]
+    StartRequest {
+        /// The request's field (`mode`, `scene_toml`).
+        field: &'static str,
+        /// Why.
+        reason: String,
+    },
     /// A file or folder could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {

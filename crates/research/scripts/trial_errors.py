@@ -20,7 +20,9 @@ fused score as the trials count it (the mean over trials of correct / (reports +
 next to what it would be on the same strokes with a finger that is never wrong (a crack it
 rejected found where no other report claimed it; a print, relief or bare plate it confirmed
 dropped, its crack missed where that report had claimed one): what vision and the plan allow.
-Used for `crates/research/EXPERIMENTS.md`, seventh and twenty-fifth sessions.
+Written for `crates/research/EXPERIMENTS.md`, "Raised passes stop over what stands under them",
+and given the bound for "What vision and the plan allow: the score with a finger that is never
+wrong"; most sections since use it.
 
 With `PASSES=1` it also prints one line per judged pass over a candidate: `pass SEED CANDIDATE
 TRUTH WIDTH CLASS CONFIDENCE DOUBT DIP` (what the pass's own stroke crossed nearest its middle,

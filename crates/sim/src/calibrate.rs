@@ -79,10 +79,7 @@ pub fn fit_mounts(
             .map(|row| row.channels())
             .collect();
         if rows.is_empty() {
-            return Err(SimError::Invalid(format!(
-                "no real recording of the plate labelled {} to fit its mount to",
-                trace.label
-            )));
+            return Err(SimError::NoRealRecordingOfPlate { label: trace.label });
         }
         let mut m = PlateMount::default();
         let real_med = |c: usize| median(rows.iter().map(|r| r[c]).collect());
@@ -336,24 +333,20 @@ impl SearchSettings {
         let mut free = [true; 7];
         for name in &self.fixed {
             let k = MECHANICS.iter().position(|m| m == name).ok_or_else(|| {
-                SimError::Invalid(format!(
-                    "unknown mechanics parameter {name:?} (one of {})",
-                    MECHANICS.join(", ")
-                ))
+                SimError::setting(
+                    "fixed",
+                    format!("{name:?}"),
+                    format!("a mechanics parameter, one of {}", MECHANICS.join(", ")),
+                )
             })?;
             free[k] = false;
         }
         let spot = self.proximity.min_spot_mm;
         if !(spot.is_finite() && spot >= 0.0) {
-            return Err(SimError::Invalid(format!(
-                "the smallest proximity spot must be a non-negative number of mm, got {spot}"
-            )));
+            return Err(SimError::setting("proximity.min_spot_mm", spot, "≥ 0 mm"));
         }
         if !(self.speed_weight.is_finite() && self.speed_weight >= 0.0) {
-            return Err(SimError::Invalid(format!(
-                "the tip-speed weight must be a non-negative number, got {}",
-                self.speed_weight
-            )));
+            return Err(SimError::setting("speed_weight", self.speed_weight, "≥ 0"));
         }
         Ok(free)
     }
@@ -864,9 +857,7 @@ pub fn calibrate(
         search.speed_weight,
     );
     if recognition.is_empty() {
-        return Err(SimError::Invalid(
-            "no real recordings to calibrate against".into(),
-        ));
+        return Err(SimError::NoRealRecordings);
     }
     let mut experiments = vec![(
         Experiment::Recognition,
@@ -950,7 +941,8 @@ pub fn calibrate(
                     );
                     weighted_loss(&rms) + speed_weight * sets_speed_rms(&sets).powi(2)
                 }
-                Err(SimError::Invalid(_)) => f64::INFINITY,
+                // Mechanics out of range (a validation refusing them): not a candidate.
+                Err(SimError::Setting { .. }) => f64::INFINITY,
                 Err(e) => {
                     failure.get_or_insert(e);
                     f64::INFINITY

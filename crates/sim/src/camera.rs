@@ -16,7 +16,7 @@ pub use crackbot_imaging::homography::apply_in_front as apply_homography;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::SimError;
+use crate::{list, SimError};
 
 /// A pinhole camera above the plate.
 ///
@@ -74,10 +74,6 @@ pub struct Camera {
     h_inv: Matrix3<f64>,
 }
 
-fn invalid(msg: String) -> SimError {
-    SimError::Invalid(msg)
-}
-
 impl Camera {
     /// Builds the camera of `spec`. Fails (naming the field) on non-finite numbers, a zero
     /// resolution, non-positive focal lengths, a camera on the plate's plane, or a viewing
@@ -85,56 +81,71 @@ impl Camera {
     pub fn from_spec(spec: &CameraSpec) -> Result<Camera, SimError> {
         let [width, height] = spec.resolution;
         if width == 0 || height == 0 {
-            return Err(invalid(format!(
-                "camera.resolution must be positive, got [{width}, {height}]"
-            )));
+            return Err(SimError::setting(
+                "camera.resolution",
+                list(&spec.resolution),
+                "> 0 in width and height",
+            ));
         }
         let [fx, fy] = spec.focal_px;
         if !(fx.is_finite() && fx > 0.0 && fy.is_finite() && fy > 0.0) {
-            return Err(invalid(format!(
-                "camera.focal_px must be positive, got [{fx}, {fy}]"
-            )));
+            return Err(SimError::setting(
+                "camera.focal_px",
+                list(&spec.focal_px),
+                "> 0 in x and y",
+            ));
         }
         let [cx, cy] = spec
             .principal_px
             .unwrap_or([f64::from(width) / 2.0, f64::from(height) / 2.0]);
         if !(cx.is_finite() && cy.is_finite()) {
-            return Err(invalid(format!(
-                "camera.principal_px must be finite, got [{cx}, {cy}]"
-            )));
+            return Err(SimError::setting(
+                "camera.principal_px",
+                list(&[cx, cy]),
+                "finite",
+            ));
         }
         if !spec.position_mm.iter().all(|v| v.is_finite()) {
-            return Err(invalid(format!(
-                "camera.position_mm must be finite, got {:?}",
-                spec.position_mm
-            )));
+            return Err(SimError::setting(
+                "camera.position_mm",
+                list(&spec.position_mm),
+                "finite",
+            ));
         }
         if !spec.look_at_mm.iter().all(|v| v.is_finite()) {
-            return Err(invalid(format!(
-                "camera.look_at_mm must be finite, got {:?}",
-                spec.look_at_mm
-            )));
+            return Err(SimError::setting(
+                "camera.look_at_mm",
+                list(&spec.look_at_mm),
+                "finite",
+            ));
         }
         if !spec.roll_deg.is_finite() {
-            return Err(invalid(format!(
-                "camera.roll_deg must be finite, got {}",
-                spec.roll_deg
-            )));
+            return Err(SimError::setting(
+                "camera.roll_deg",
+                spec.roll_deg,
+                "finite",
+            ));
         }
         let centre = Vector3::from(spec.position_mm);
         if centre.z.abs() < 1e-9 {
-            return Err(invalid(format!(
-                "camera.position_mm must be off the plate's plane (z ≠ 0), got {:?}",
-                spec.position_mm
-            )));
+            return Err(SimError::setting(
+                "camera.position_mm",
+                list(&spec.position_mm),
+                "off the plate's plane (z ≠ 0)",
+            ));
         }
         let target = Vector3::new(spec.look_at_mm[0], spec.look_at_mm[1], 0.0);
         let forward = (target - centre).normalize();
         let x0 = forward.cross(&Vector3::y());
         if x0.norm() < 1e-6 {
-            return Err(invalid(
-                "camera: the viewing direction runs along the plate's y axis, roll 0 is undefined"
-                    .into(),
+            return Err(SimError::setting(
+                "camera.position_mm",
+                list(&spec.position_mm),
+                format!(
+                    "off the line along the plate's y axis through camera.look_at_mm {} (roll 0 \
+                     is undefined looking along it)",
+                    list(&spec.look_at_mm)
+                ),
             ));
         }
         let x0 = x0.normalize();
@@ -146,8 +157,8 @@ impl Camera {
         let k = Matrix3::new(fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0);
         let t = -(r * centre);
         let h = k * Matrix3::from_columns(&[r.column(0).into_owned(), r.column(1).into_owned(), t]);
-        let h_inv = h.try_inverse().ok_or_else(|| {
-            invalid("camera: the plate-to-image homography is singular".to_string())
+        let h_inv = h.try_inverse().ok_or_else(|| SimError::Homography {
+            message: "the camera's plate-to-image homography is singular".to_string(),
         })?;
         Ok(Camera {
             width,

@@ -23,7 +23,7 @@ use crate::plates::{calibrated_mounts, calibrated_samples, calibrated_sensor};
 pub use crate::plates::{Experiment, PlateMount, PrintedDecoy, PrintedSlot, Samples};
 use crate::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crate::surface::{Feature, Surface};
-use crate::{SensorParams, SimError};
+use crate::{list, SensorParams, SimError};
 
 /// Sliding speed of the authors' recordings, mm/s: their 16 mm strokes take about 1,395 samples
 /// at 400 Hz (repetition 1 of every plate, from the position column).
@@ -103,11 +103,16 @@ impl ExperimentConfig {
     /// `crackbot sim calibrate --params-out` writes them; the fields it leaves out keep their
     /// values. Validates the result.
     pub fn apply_params_toml(&mut self, text: &str) -> Result<(), SimError> {
-        let invalid = |m: String| SimError::Invalid(m);
-        let mut params: toml::Table = toml::from_str(text).map_err(|e| invalid(e.to_string()))?;
+        let table = |table: &str, message: String| SimError::ParameterTable {
+            table: table.to_string(),
+            message,
+        };
+        let mut params: toml::Table = toml::from_str(text).map_err(|e| SimError::Parameters {
+            message: e.to_string(),
+        })?;
         let mut sensor = match params.remove("sensor") {
             Some(toml::Value::Table(t)) => t,
-            Some(_) => return Err(invalid("[sensor] must be a table".into())),
+            Some(_) => return Err(table("sensor", "must be a table".into())),
             None => toml::Table::new(),
         };
         self.sensor.finger = overlay(
@@ -132,43 +137,54 @@ impl ExperimentConfig {
                     .keys()
                     .find(|k| *k != "recognition" && *k != "width")
                 {
-                    return Err(invalid(format!(
-                        "mounts.{k}: unknown experiment (recognition or width)"
-                    )));
+                    return Err(table(
+                        &format!("mounts.{k}"),
+                        "unknown experiment (recognition or width)".into(),
+                    ));
                 }
                 if let Some(v) = per_experiment.remove(key) {
                     self.mounts = v
                         .try_into()
-                        .map_err(|e| invalid(format!("mounts.{key}: {e}")))?;
+                        .map_err(|e| table(&format!("mounts.{key}"), e.to_string()))?;
                 }
             }
-            Some(_) => return Err(invalid("[mounts] must be a table".into())),
+            Some(_) => return Err(table("mounts", "must be a table".into())),
         }
-        if let Some(k) = sensor.keys().chain(params.keys()).next() {
-            return Err(invalid(format!("unknown parameter table {k}")));
+        let unknown = sensor
+            .keys()
+            .map(|k| format!("sensor.{k}"))
+            .chain(params.keys().cloned())
+            .next();
+        if let Some(k) = unknown {
+            return Err(table(
+                &k,
+                "unknown table (sensor.finger, sensor.optics, samples or mounts)".into(),
+            ));
         }
         self.validate()
     }
 
     /// Checks the settings.
     pub fn validate(&self) -> Result<(), SimError> {
-        if self.recordings == 0 || self.slides == 0 {
-            return Err(SimError::Invalid(format!(
-                "need at least one recording and one slide, got {} recordings of {} slides",
-                self.recordings, self.slides
-            )));
+        for (name, n) in [("recordings", self.recordings), ("slides", self.slides)] {
+            if n == 0 {
+                return Err(SimError::setting(name, n, "≥ 1"));
+            }
         }
         let (lo, hi) = self.start_range_mm;
         if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
-            return Err(SimError::Invalid(format!(
-                "start range must be 0 ≤ min ≤ max mm, got {lo}..{hi}"
-            )));
+            return Err(SimError::setting(
+                "start_range_mm",
+                list(&[lo, hi]),
+                "[min, max] with 0 ≤ min ≤ max mm",
+            ));
         }
         if !(self.position_rate_hz.is_finite() && self.position_rate_hz > 0.0) {
-            return Err(SimError::Invalid(format!(
-                "position rate must be positive, got {} Hz",
-                self.position_rate_hz
-            )));
+            return Err(SimError::setting(
+                "position_rate_hz",
+                self.position_rate_hz,
+                "> 0 Hz",
+            ));
         }
         let s = &self.samples;
         // Every depth the plates are cut to, named as a parameter file names it.
@@ -189,69 +205,86 @@ impl ExperimentConfig {
         .chain(slot_depths);
         for (name, depth) in depths {
             if let Some(d) = depth.filter(|d| !(d.is_finite() && *d > 0.0)) {
-                return Err(SimError::Invalid(format!(
-                    "{name} must be a positive depth in mm, got {d}"
-                )));
+                return Err(SimError::setting(name, d, "> 0 mm (a depth)"));
             }
         }
         for (k, slot) in s.printed_slots.iter().enumerate() {
             let name = format!("samples.printed_slots[{k}]");
             if !s.widths_mm.contains(&slot.nominal_mm) {
-                return Err(SimError::Invalid(format!(
-                    "{name}: nominal_mm = {} is not one of samples.widths_mm {:?}",
-                    slot.nominal_mm, s.widths_mm
-                )));
+                return Err(SimError::setting(
+                    format!("{name}.nominal_mm"),
+                    slot.nominal_mm,
+                    format!("one of samples.widths_mm {}", list(&s.widths_mm)),
+                ));
             }
-            if s.printed_slots[..k]
+            if let Some(j) = s.printed_slots[..k]
                 .iter()
-                .any(|p| p.nominal_mm == slot.nominal_mm)
+                .position(|p| p.nominal_mm == slot.nominal_mm)
             {
-                return Err(SimError::Invalid(format!(
-                    "{name}: the {} mm plate is listed twice",
-                    slot.nominal_mm
-                )));
+                return Err(SimError::setting(
+                    format!("{name}.nominal_mm"),
+                    slot.nominal_mm,
+                    format!(
+                        "a plate not listed before (samples.printed_slots[{j}] lists it: it is \
+                         listed twice)"
+                    ),
+                ));
             }
             if let Some(w) = slot.width_mm.filter(|w| !(w.is_finite() && *w >= 0.0)) {
-                return Err(SimError::Invalid(format!(
-                    "{name}: width_mm must be ≥ 0 mm, got {w}"
-                )));
+                return Err(SimError::setting(format!("{name}.width_mm"), w, "≥ 0 mm"));
             }
         }
         for (k, d) in s.printed_decoys.iter().enumerate() {
             if self.experiment != Experiment::Recognition {
-                return Err(SimError::Invalid(
-                    "samples.printed_decoys: printed decoys are plates of the recognition experiment only"
-                        .into(),
+                return Err(SimError::setting(
+                    "samples.printed_decoys",
+                    format!("{} decoys", s.printed_decoys.len()),
+                    "empty in the width experiment (printed decoys are plates of the \
+                     recognition experiment only)",
                 ));
             }
             if !(d.width_mm.is_finite() && d.width_mm > 0.0) {
-                return Err(SimError::Invalid(format!(
-                    "samples.printed_decoys[{k}].width_mm must be a positive width in mm, got {}",
-                    d.width_mm
-                )));
+                return Err(SimError::setting(
+                    format!("samples.printed_decoys[{k}].width_mm"),
+                    d.width_mm,
+                    "> 0 mm",
+                ));
             }
             if !(d.reflectivity.is_finite() && (0.0..=1.0).contains(&d.reflectivity)) {
-                return Err(SimError::Invalid(format!(
-                    "samples.printed_decoys[{k}].reflectivity must be within [0, 1], got {}",
-                    d.reflectivity
-                )));
+                return Err(SimError::setting(
+                    format!("samples.printed_decoys[{k}].reflectivity"),
+                    d.reflectivity,
+                    "within [0, 1]",
+                ));
             }
         }
         let n = self.surfaces().len() - s.printed_decoys.len();
+        // The mounts are this experiment's table of a parameter file.
+        let mounts = match self.experiment {
+            Experiment::Recognition => "mounts.recognition",
+            Experiment::Width => "mounts.width",
+        };
         if !self.mounts.is_empty() && self.mounts.len() != n {
-            return Err(SimError::Invalid(format!(
-                "{} plate mounts given for {n} plates",
-                self.mounts.len()
-            )));
+            return Err(SimError::setting(
+                mounts,
+                format!("{} plate mounts", self.mounts.len()),
+                format!("one per plate ({n} plates), or none"),
+            ));
         }
         for (k, m) in self.mounts.iter().enumerate() {
-            if !(m.offset_counts.iter().all(|v| v.is_finite())
-                && m.reflectivity.is_finite()
-                && m.reflectivity >= 0.0)
-            {
-                return Err(SimError::Invalid(format!(
-                    "plate mount {k}: offsets must be finite and reflectivity ≥ 0, got {m:?}"
-                )));
+            if !m.offset_counts.iter().all(|v| v.is_finite()) {
+                return Err(SimError::setting(
+                    format!("{mounts}[{k}].offset_counts"),
+                    list(&m.offset_counts),
+                    "finite",
+                ));
+            }
+            if !(m.reflectivity.is_finite() && m.reflectivity >= 0.0) {
+                return Err(SimError::setting(
+                    format!("{mounts}[{k}].reflectivity"),
+                    m.reflectivity,
+                    "≥ 0",
+                ));
             }
         }
         self.sensor.finger.validate()?;
@@ -359,7 +392,10 @@ fn overlay<T: Serialize + serde::de::DeserializeOwned>(
     over: Option<toml::Value>,
     what: &str,
 ) -> Result<T, SimError> {
-    let invalid = |e: &dyn std::fmt::Display| SimError::Invalid(format!("{what}: {e}"));
+    let invalid = |e: &dyn std::fmt::Display| SimError::ParameterTable {
+        table: what.to_string(),
+        message: e.to_string(),
+    };
     let mut merged = toml::Value::try_from(base).map_err(|e| invalid(&e))?;
     match (merged.as_table_mut(), over) {
         (_, None) => {}

@@ -58,9 +58,82 @@ pub struct SensorParams {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SimError {
-    /// A scene or parameter is invalid; the message names the field and the value.
-    #[error("invalid scene: {0}")]
-    Invalid(String),
+    /// A setting, scene or parameter value is out of range.
+    #[error("invalid setting {field} = {value}: it must be {allowed}")]
+    Setting {
+        /// The setting's path as a scene or parameter file names it, e.g. `camera.noise_sigma`,
+        /// `features[2].width_mm`, `samples.printed_slots[1].nominal_mm`.
+        field: String,
+        /// The value given, as written (numbers, arrays).
+        value: String,
+        /// What it may be, e.g. `≥ 0`, `in [0, 1]`, `one of samples.widths_mm [1, 2]`.
+        allowed: String,
+    },
+    /// An error in the scene read from `path` (a file, or e.g. `<builtin default.toml>`).
+    #[error("{path}: {source}")]
+    InScene {
+        /// The scene's file.
+        path: String,
+        /// What is wrong with it.
+        #[source]
+        source: Box<SimError>,
+    },
+    /// The scene has no camera: there is nothing to render.
+    #[error("scene {scene:?} has no camera: nothing to render (add a [camera] table)")]
+    NoCamera {
+        /// The scene's name.
+        scene: String,
+    },
+    /// The camera sees none of the plate.
+    #[error(
+        "the camera does not see the plate: none of its corners, its centre or the look-at point \
+         falls inside the image (check camera.principal_px and camera.focal_px)"
+    )]
+    CameraMissesPlate,
+    /// The scene has no crack to slide across.
+    #[error("scene {scene:?} has no crack to slide across")]
+    NoCrack {
+        /// The scene's name.
+        scene: String,
+    },
+    /// Cracks are to be drawn but no crack photo strips are loaded.
+    #[error("no crack photo strips loaded: cannot draw cracks")]
+    NoCrackPhotos,
+    /// An internal image buffer has the wrong size.
+    #[error("{what} buffer of the wrong size")]
+    Buffer {
+        /// Which buffer.
+        what: &'static str,
+    },
+    /// A plate↔image homography cannot be used (singular, or not fitted).
+    #[error("homography: {message}")]
+    Homography {
+        /// Why.
+        message: String,
+    },
+    /// A parameter text (`sim dataset --params`, `sim calibrate --start`) is not TOML.
+    #[error("cannot parse the parameters: {message}")]
+    Parameters {
+        /// What the TOML parser said.
+        message: String,
+    },
+    /// A table of a parameter text is unknown or does not hold what it must.
+    #[error("parameter table [{table}]: {message}")]
+    ParameterTable {
+        /// The table, e.g. `sensor.finger`, `mounts.width`.
+        table: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// There are no real recordings to calibrate against.
+    #[error("no real recordings to calibrate against")]
+    NoRealRecordings,
+    /// None of the real recordings is of a plate whose mount is to be fitted.
+    #[error("no real recording of the plate labelled {label} to fit its mount to")]
+    NoRealRecordingOfPlate {
+        /// The plate's label (column 8 of its recordings).
+        label: f64,
+    },
     /// A scene file could not be parsed.
     #[error("cannot parse scene {path}: {message}")]
     Parse {
@@ -119,6 +192,20 @@ pub enum SimError {
 }
 
 impl SimError {
+    /// A [`SimError::Setting`]: `field` (as a scene or parameter file names it) has `value`, which
+    /// is not `allowed`.
+    pub fn setting(
+        field: impl Into<String>,
+        value: impl std::fmt::Display,
+        allowed: impl Into<String>,
+    ) -> SimError {
+        SimError::Setting {
+            field: field.into(),
+            value: value.to_string(),
+            allowed: allowed.into(),
+        }
+    }
+
     /// A closure mapping an I/O error on `path` to [`SimError::Io`].
     pub fn io(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> SimError + '_ {
         move |source| SimError::Io {
@@ -130,7 +217,7 @@ impl SimError {
 
 impl From<crackbot_imaging::ImagingError> for SimError {
     /// I/O failures as [`SimError::Io`], malformed COCO or JSON files as [`SimError::Data`], anything
-    /// else (a homography that cannot be used) as [`SimError::Invalid`].
+    /// else (a homography that cannot be used) as [`SimError::Homography`].
     fn from(e: crackbot_imaging::ImagingError) -> Self {
         use crackbot_imaging::ImagingError as E;
         match e {
@@ -142,7 +229,16 @@ impl From<crackbot_imaging::ImagingError> for SimError {
                 path: path.display().to_string(),
                 message,
             },
-            other => SimError::Invalid(other.to_string()),
+            E::Homography(message) => SimError::Homography { message },
+            other => SimError::Homography {
+                message: other.to_string(),
+            },
         }
     }
+}
+
+/// `values` as `[a, b, c]`, each as `Display` writes it (`[-1, 2.5]`, `[NaN, 0]`).
+pub(crate) fn list<T: std::fmt::Display>(values: &[T]) -> String {
+    let items: Vec<String> = values.iter().map(ToString::to_string).collect();
+    format!("[{}]", items.join(", "))
 }

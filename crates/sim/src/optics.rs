@@ -22,7 +22,7 @@ use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
 use crate::finger::Readout;
-use crate::SimError;
+use crate::{list, SimError};
 
 /// Channels, in the order of the recordings: D1, D2, D3, P.
 pub const CHANNELS: usize = 4;
@@ -141,54 +141,69 @@ impl OpticsParams {
 
     /// Checks every parameter, naming the first bad one.
     pub fn validate(&self) -> Result<(), SimError> {
-        let finite = self
-            .rest_counts
-            .iter()
-            .chain(&self.lateral_gain)
-            .chain(&self.normal_gain)
-            .chain(&self.moment_gain)
-            .chain(&self.noise_counts)
-            .chain(&[
-                self.proximity_dark_counts,
-                self.proximity_peak_counts,
-                self.proximity_height_mm,
-                self.proximity_offset_mm,
-                self.proximity_spot_mm,
-            ])
-            .all(|v| v.is_finite());
-        if !finite {
-            return Err(SimError::Invalid(
-                "sensor.optics has a value that is not a finite number".into(),
-            ));
+        let arrays: [(&str, &[f64]); 5] = [
+            ("rest_counts", &self.rest_counts),
+            ("lateral_gain", &self.lateral_gain),
+            ("normal_gain", &self.normal_gain),
+            ("moment_gain", &self.moment_gain),
+            ("noise_counts", &self.noise_counts),
+        ];
+        for (name, values) in arrays {
+            if !values.iter().all(|v| v.is_finite()) {
+                return Err(SimError::setting(
+                    format!("sensor.optics.{name}"),
+                    list(values),
+                    "finite",
+                ));
+            }
+        }
+        for (name, v) in [
+            ("proximity_dark_counts", self.proximity_dark_counts),
+            ("proximity_peak_counts", self.proximity_peak_counts),
+            ("proximity_height_mm", self.proximity_height_mm),
+            ("proximity_offset_mm", self.proximity_offset_mm),
+            ("proximity_spot_mm", self.proximity_spot_mm),
+        ] {
+            if !v.is_finite() {
+                return Err(SimError::setting(
+                    format!("sensor.optics.{name}"),
+                    v,
+                    "finite",
+                ));
+            }
         }
         if !(self.proximity_peak_mm.is_finite() && self.proximity_peak_mm > 0.0) {
-            return Err(SimError::Invalid(format!(
-                "sensor.optics.proximity_peak_mm must be positive, got {}",
-                self.proximity_peak_mm
-            )));
+            return Err(SimError::setting(
+                "sensor.optics.proximity_peak_mm",
+                self.proximity_peak_mm,
+                "> 0 mm",
+            ));
         }
         if !(self.proximity_cone_deg.is_finite() && (0.0..80.0).contains(&self.proximity_cone_deg))
         {
-            return Err(SimError::Invalid(format!(
-                "sensor.optics.proximity_cone_deg must be in [0, 80) degrees, got {}",
-                self.proximity_cone_deg
-            )));
+            return Err(SimError::setting(
+                "sensor.optics.proximity_cone_deg",
+                self.proximity_cone_deg,
+                "in [0, 80) degrees",
+            ));
         }
         if !(1..=16).contains(&self.adc_bits) {
-            return Err(SimError::Invalid(format!(
-                "sensor.optics.adc_bits must be 1..=16, got {}",
-                self.adc_bits
-            )));
+            return Err(SimError::setting(
+                "sensor.optics.adc_bits",
+                self.adc_bits,
+                "in 1..=16",
+            ));
         }
         let full = self.adc_full_scale();
         if !(self.saturation_counts.is_finite()
             && self.saturation_counts > 0.0
             && self.saturation_counts <= full)
         {
-            return Err(SimError::Invalid(format!(
-                "sensor.optics.saturation_counts must be in (0, {full}], got {}",
-                self.saturation_counts
-            )));
+            return Err(SimError::setting(
+                "sensor.optics.saturation_counts",
+                self.saturation_counts,
+                format!("in (0, {full}]"),
+            ));
         }
         for (name, v) in [
             ("drift_counts_per_sqrt_s", self.drift_counts_per_sqrt_s),
@@ -199,14 +214,14 @@ impl OpticsParams {
             ("recording_gain_sigma", self.recording_gain_sigma),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(SimError::Invalid(format!(
-                    "sensor.optics.{name} must be a non-negative number, got {v}"
-                )));
+                return Err(SimError::setting(format!("sensor.optics.{name}"), v, "≥ 0"));
             }
         }
         if self.noise_counts.iter().any(|v| *v < 0.0) {
-            return Err(SimError::Invalid(
-                "sensor.optics.noise_counts must not be negative".into(),
+            return Err(SimError::setting(
+                "sensor.optics.noise_counts",
+                list(&self.noise_counts),
+                "≥ 0 in every channel",
             ));
         }
         Ok(())
@@ -368,5 +383,46 @@ mod tests {
             e.quantise(&[-5.0, 1e9, 12.4, f64::NAN]),
             [0.0, 1023.0, 12.0, 0.0]
         );
+    }
+
+    /// The field `p` is refused for, after checking the message names it with its value.
+    fn refused_field(p: &OpticsParams) -> String {
+        let err = p.validate().unwrap_err();
+        let SimError::Setting { field, value, .. } = &err else {
+            panic!("expected SimError::Setting, got {err:?}");
+        };
+        assert!(
+            err.to_string().contains(&format!("{field} = {value}")),
+            "{err}"
+        );
+        field.clone()
+    }
+
+    #[test]
+    fn bad_optics_are_settings_named_as_a_scene_names_them() {
+        let good = OpticsParams::default();
+        good.validate().unwrap();
+        let mut p = good.clone();
+        p.saturation_counts = 2000.0;
+        let err = p.validate().unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "invalid setting sensor.optics.saturation_counts = 2000: it must be in (0, 1023]"
+        );
+        let mut p = good.clone();
+        p.lateral_gain[1] = f64::NAN;
+        assert_eq!(refused_field(&p), "sensor.optics.lateral_gain");
+        let mut p = good.clone();
+        p.proximity_spot_mm = f64::INFINITY;
+        assert_eq!(refused_field(&p), "sensor.optics.proximity_spot_mm");
+        let mut p = good.clone();
+        p.adc_bits = 0;
+        assert_eq!(refused_field(&p), "sensor.optics.adc_bits");
+        let mut p = good.clone();
+        p.recording_gain_sigma = -0.1;
+        assert_eq!(refused_field(&p), "sensor.optics.recording_gain_sigma");
+        let mut p = good;
+        p.noise_counts[2] = -1.0;
+        assert_eq!(refused_field(&p), "sensor.optics.noise_counts");
     }
 }

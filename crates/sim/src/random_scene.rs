@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::camera::CameraSpec;
 use crate::scene::{ManipulatorSpec, Material, PlateSpec};
 use crate::surface::{Feature, Point};
-use crate::{Scene, SensorParams, SimError};
+use crate::{list, Scene, SensorParams, SimError};
 
 /// The plate materials drawn from: name, sRGB colour (before a small random tint) and
 /// reflectivity.
@@ -110,36 +110,35 @@ impl Default for RandomSceneParams {
     }
 }
 
-fn invalid(msg: String) -> SimError {
-    SimError::Invalid(format!("random scene parameters: {msg}"))
-}
-
 /// `lo ≤ hi`, both finite, and `lo > 0` when `positive` (else `lo ≥ 0`).
 fn check_range(name: &str, r: [f64; 2], positive: bool) -> Result<(), SimError> {
     let [lo, hi] = r;
     let lo_ok = if positive { lo > 0.0 } else { lo >= 0.0 };
     if !(lo.is_finite() && hi.is_finite() && lo_ok && lo <= hi) {
         let bound = if positive { "0 <" } else { "0 ≤" };
-        return Err(invalid(format!(
-            "{name} must be a range {bound} lo ≤ hi, got [{lo}, {hi}]"
-        )));
+        return Err(SimError::setting(
+            name,
+            list(&r),
+            format!("a range [lo, hi] with {bound} lo ≤ hi"),
+        ));
     }
     Ok(())
 }
 
 fn check_count(name: &str, r: [u32; 2]) -> Result<(), SimError> {
     if r[0] > r[1] || r[1] > 100 {
-        return Err(invalid(format!(
-            "{name} must be a range lo ≤ hi ≤ 100, got [{}, {}]",
-            r[0], r[1]
-        )));
+        return Err(SimError::setting(
+            name,
+            list(&r),
+            "a range [lo, hi] with lo ≤ hi ≤ 100",
+        ));
     }
     Ok(())
 }
 
 fn check_non_negative(name: &str, v: f64) -> Result<(), SimError> {
     if !(v.is_finite() && v >= 0.0) {
-        return Err(invalid(format!("{name} must be ≥ 0, got {v}")));
+        return Err(SimError::setting(name, v, "≥ 0"));
     }
     Ok(())
 }
@@ -150,16 +149,23 @@ impl RandomSceneParams {
     pub fn validate(&self) -> Result<(), SimError> {
         let [sx, sy] = self.plate_size_mm;
         if !(sx.is_finite() && sy.is_finite() && sx > 0.0 && sy > 0.0) {
-            return Err(invalid(format!(
-                "plate_size_mm must be positive, got [{sx}, {sy}]"
-            )));
+            return Err(SimError::setting(
+                "plate_size_mm",
+                list(&self.plate_size_mm),
+                "> 0 mm in x and y",
+            ));
         }
         check_non_negative("margin_mm", self.margin_mm)?;
         if 2.0 * self.margin_mm >= sx.min(sy) {
-            return Err(invalid(format!(
-                "margin_mm {} leaves no room on a {sx} × {sy} mm plate",
-                self.margin_mm
-            )));
+            return Err(SimError::setting(
+                "margin_mm",
+                self.margin_mm,
+                format!(
+                    "below {} mm, half the smaller side of the {sx} × {sy} mm plate (this one \
+                     leaves no room)",
+                    sx.min(sy) / 2.0
+                ),
+            ));
         }
         for (name, r) in [
             ("cracks", self.cracks),
@@ -172,7 +178,11 @@ impl RandomSceneParams {
         }
         check_count("segments", self.segments)?;
         if self.segments[0] == 0 {
-            return Err(invalid("segments must be at least 1".into()));
+            return Err(SimError::setting(
+                "segments",
+                list(&self.segments),
+                "a range [lo, hi] with 1 ≤ lo ≤ hi",
+            ));
         }
         for (name, r, positive) in [
             ("length_mm", self.length_mm, true),
@@ -189,28 +199,36 @@ impl RandomSceneParams {
             check_range(name, r, positive)?;
         }
         if self.decoy_reflectivity[1] > 1.0 {
-            return Err(invalid(format!(
-                "decoy_reflectivity must be within [0, 1], got {:?}",
-                self.decoy_reflectivity
-            )));
+            return Err(SimError::setting(
+                "decoy_reflectivity",
+                list(&self.decoy_reflectivity),
+                "within [0, 1]",
+            ));
         }
         if self.lighting_variation[1] > 1.0 {
-            return Err(invalid(format!(
-                "lighting_variation must be within [0, 1], got {:?}",
-                self.lighting_variation
-            )));
+            return Err(SimError::setting(
+                "lighting_variation",
+                list(&self.lighting_variation),
+                "within [0, 1]",
+            ));
         }
         if self.screw_diameter_mm[1] >= sx.min(sy) {
-            return Err(invalid(format!(
-                "screw_diameter_mm {:?} does not fit on a {sx} × {sy} mm plate",
-                self.screw_diameter_mm
-            )));
+            return Err(SimError::setting(
+                "screw_diameter_mm",
+                list(&self.screw_diameter_mm),
+                format!(
+                    "below {} mm, the smaller side of the {sx} × {sy} mm plate (a screw must fit \
+                     on it)",
+                    sx.min(sy)
+                ),
+            ));
         }
         if self.resolution[0] == 0 || self.resolution[1] == 0 {
-            return Err(invalid(format!(
-                "resolution must be positive, got {:?}",
-                self.resolution
-            )));
+            return Err(SimError::setting(
+                "resolution",
+                list(&self.resolution),
+                "> 0 in width and height",
+            ));
         }
         for (name, v) in [
             ("look_at_jitter_mm", self.look_at_jitter_mm),
@@ -221,10 +239,16 @@ impl RandomSceneParams {
         }
         // Keep the camera looking at the plate and well above it, not edge-on.
         if self.camera_offset_mm > 0.5 * self.camera_height_mm[0] {
-            return Err(invalid(format!(
-                "camera_offset_mm {} is too oblique for a camera {} mm high (at most half the height)",
-                self.camera_offset_mm, self.camera_height_mm[0]
-            )));
+            return Err(SimError::setting(
+                "camera_offset_mm",
+                self.camera_offset_mm,
+                format!(
+                    "at most {} mm, half the lowest camera_height_mm {} (further off, the view is \
+                     too oblique)",
+                    0.5 * self.camera_height_mm[0],
+                    self.camera_height_mm[0]
+                ),
+            ));
         }
         Ok(())
     }
@@ -443,7 +467,8 @@ pub fn trial_params() -> RandomSceneParams {
 /// `scene` with every crack given the cross-section of the authors' printed plates (depth and wall
 /// angle as fitted to their recordings, `crate::plates::calibrated_samples`): the
 /// profile the deployed tactile models know. Random scenes otherwise draw V-grooves whose depth
-/// follows their width, which the models never felt (see `crates/research/EXPERIMENTS.md`).
+/// follows their width, which the models never felt (`crates/research/EXPERIMENTS.md`, "The same
+/// scenes, cracks with the authors' printed profile").
 pub fn as_printed(scene: &Scene) -> Scene {
     let s = crate::plates::calibrated_samples();
     let mut out = scene.clone();
@@ -552,18 +577,44 @@ mod tests {
             crack_width_mm: [2.0, 1.0],
             ..RandomSceneParams::default()
         };
-        let msg = random_scene(&p, 0).unwrap_err().to_string();
-        assert!(msg.contains("crack_width_mm"), "{msg}");
+        let err = random_scene(&p, 0).unwrap_err();
+        assert!(
+            matches!(
+                &err,
+                SimError::Setting { field, value, allowed }
+                    if field == "crack_width_mm"
+                        && value == "[2, 1]"
+                        && allowed == "a range [lo, hi] with 0 < lo ≤ hi"
+            ),
+            "{err:?}"
+        );
+        assert_eq!(
+            err.to_string(),
+            "invalid setting crack_width_mm = [2, 1]: it must be a range [lo, hi] with 0 < lo ≤ hi"
+        );
+        let field_of = |p: &RandomSceneParams| match p.validate() {
+            Err(SimError::Setting { field, .. }) => field,
+            other => panic!("expected SimError::Setting, got {other:?}"),
+        };
         let p = RandomSceneParams {
             margin_mm: 60.0,
             ..RandomSceneParams::default()
         };
-        let msg = p.validate().unwrap_err().to_string();
-        assert!(msg.contains("margin_mm"), "{msg}");
+        assert_eq!(field_of(&p), "margin_mm");
         let p = RandomSceneParams {
             cracks: [3, 1],
             ..RandomSceneParams::default()
         };
-        assert!(p.validate().unwrap_err().to_string().contains("cracks"));
+        assert_eq!(field_of(&p), "cracks");
+        let p = RandomSceneParams {
+            decoy_reflectivity: [0.2, 1.5],
+            ..RandomSceneParams::default()
+        };
+        assert_eq!(field_of(&p), "decoy_reflectivity");
+        let p = RandomSceneParams {
+            noise_sigma: [-1.0, 2.0],
+            ..RandomSceneParams::default()
+        };
+        assert_eq!(field_of(&p), "noise_sigma");
     }
 }

@@ -8,7 +8,7 @@ use crate::finger::{
 };
 use crate::optics::{proximity_intensity, Electronics, OpticsParams, Scene1d, CHANNELS};
 use crate::surface::{Point, Profile, Surface};
-use crate::{SensorParams, SimError};
+use crate::{list, SensorParams, SimError};
 
 /// The sensor's sampling rate, Hz: the wire protocol's `crackbot_protocol::SAMPLE_RATE_HZ`.
 pub const SAMPLE_RATE_HZ: f64 = crackbot_protocol::SAMPLE_RATE_HZ as f64;
@@ -269,35 +269,41 @@ impl SlideSim {
         sensor.optics.validate()?;
         integrator.validate()?;
         if !line.start.iter().all(|v| v.is_finite()) {
-            return Err(SimError::Invalid(format!(
-                "slide start {:?} must be finite mm",
-                line.start
-            )));
+            return Err(SimError::setting(
+                "slide.start",
+                list(&line.start),
+                "finite (mm)",
+            ));
         }
         if !(plate_reflectivity.is_finite() && plate_reflectivity >= 0.0) {
-            return Err(SimError::Invalid(format!(
-                "plate reflectivity must be a number ≥ 0, got {plate_reflectivity}"
-            )));
+            return Err(SimError::setting(
+                "plate_reflectivity",
+                plate_reflectivity,
+                "≥ 0",
+            ));
         }
         let norm = (line.direction[0].powi(2) + line.direction[1].powi(2)).sqrt();
         if !(norm.is_finite() && norm > 0.0) {
-            return Err(SimError::Invalid(format!(
-                "slide direction {:?} has no length",
-                line.direction
-            )));
+            return Err(SimError::setting(
+                "slide.direction",
+                list(&line.direction),
+                "a direction of finite, non-zero length",
+            ));
         }
         if !(line.stroke_mm.is_finite() && line.stroke_mm > 0.0 && line.stroke_mm <= MAX_STROKE_MM)
         {
-            return Err(SimError::Invalid(format!(
-                "stroke must be a positive length up to {MAX_STROKE_MM} mm, got {}",
-                line.stroke_mm
-            )));
+            return Err(SimError::setting(
+                "slide.stroke_mm",
+                line.stroke_mm,
+                format!("in (0, {MAX_STROKE_MM}] mm"),
+            ));
         }
         if !(line.speed_mm_s.is_finite() && line.speed_mm_s > 0.0) {
-            return Err(SimError::Invalid(format!(
-                "slide speed must be positive in mm/s, got {}",
-                line.speed_mm_s
-            )));
+            return Err(SimError::setting(
+                "slide.speed_mm_s",
+                line.speed_mm_s,
+                "> 0 mm/s",
+            ));
         }
         let dir = [line.direction[0] / norm, line.direction[1] / norm];
         let margin =
@@ -353,14 +359,18 @@ impl SlideSim {
         seed: u64,
     ) -> Result<Self, SimError> {
         if !(rms_mm.is_finite() && rms_mm >= 0.0) {
-            return Err(SimError::Invalid(format!(
-                "roughness must be a non-negative rms in mm, got {rms_mm}"
-            )));
+            return Err(SimError::setting(
+                "samples.roughness_rms_mm",
+                rms_mm,
+                "≥ 0 mm",
+            ));
         }
         if !(correlation_mm.is_finite() && correlation_mm > 0.0) {
-            return Err(SimError::Invalid(format!(
-                "roughness correlation length must be positive mm, got {correlation_mm}"
-            )));
+            return Err(SimError::setting(
+                "samples.roughness_correlation_mm",
+                correlation_mm,
+                "> 0 mm",
+            ));
         }
         if rms_mm == 0.0 {
             return Ok(self);

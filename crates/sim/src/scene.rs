@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::camera::Camera;
 pub use crate::camera::CameraSpec;
 use crate::surface::{Feature, Point, Surface};
-use crate::{SensorParams, SimError};
+use crate::{list, SensorParams, SimError};
 
 /// The text of the built-in default scene (`crates/sim/scenes/default.toml`).
 pub const DEFAULT_SCENE_TOML: &str = include_str!("../scenes/default.toml");
@@ -202,9 +202,9 @@ impl Scene {
             path: source.to_string(),
             message,
         })?;
-        scene.validate().map_err(|e| match e {
-            SimError::Invalid(m) => SimError::Invalid(format!("{source}: {m}")),
-            other => other,
+        scene.validate().map_err(|e| SimError::InScene {
+            path: source.to_string(),
+            source: Box::new(e),
         })?;
         Ok(scene)
     }
@@ -297,19 +297,37 @@ impl Scene {
     pub fn validate(&self) -> Result<(), SimError> {
         let [sx, sy] = self.plate.size_mm;
         if !(sx.is_finite() && sx > 0.0 && sy.is_finite() && sy > 0.0) {
-            return Err(SimError::Invalid(format!(
-                "plate.size_mm must be positive, got [{sx}, {sy}]"
-            )));
+            return Err(SimError::setting(
+                "plate.size_mm",
+                list(&self.plate.size_mm),
+                "> 0 mm in x and y",
+            ));
         }
         let refl = self.plate.material.reflectivity;
         if !(0.0..=1.0).contains(&refl) {
-            return Err(SimError::Invalid(format!(
-                "plate.material.reflectivity must be in [0, 1], got {refl}"
-            )));
+            return Err(SimError::setting(
+                "plate.material.reflectivity",
+                refl,
+                "in [0, 1]",
+            ));
         }
         for (i, f) in self.features.iter().enumerate() {
-            validate_feature(f, self.plate.size_mm)
-                .map_err(|m| SimError::Invalid(format!("features[{i}] ({}): {m}", f.kind())))?;
+            validate_feature(f, self.plate.size_mm).map_err(|e| match e {
+                SimError::Setting {
+                    field,
+                    value,
+                    allowed,
+                } => SimError::Setting {
+                    field: if field.is_empty() {
+                        format!("features[{i}]")
+                    } else {
+                        format!("features[{i}].{field}")
+                    },
+                    value,
+                    allowed: format!("{allowed} for a {}", f.kind()),
+                },
+                other => other,
+            })?;
         }
         self.validate_manipulator()?;
         if let Some(spec) = &self.camera {
@@ -328,32 +346,53 @@ impl Scene {
             ("manipulator.travel_speed_mm_s", m.travel_speed_mm_s),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(SimError::Invalid(format!(
-                    "{name} must be positive, got {v}"
-                )));
+                return Err(SimError::setting(name, v, "> 0"));
             }
         }
         let (lo, hi) = (m.workspace_min_mm, m.workspace_max_mm);
-        if !lo.iter().chain(&hi).all(|v| v.is_finite()) {
-            return Err(SimError::Invalid(format!(
-                "manipulator.workspace_min_mm/workspace_max_mm must be finite, got {lo:?} and {hi:?}"
-            )));
+        for (name, v) in [
+            ("manipulator.workspace_min_mm", lo),
+            ("manipulator.workspace_max_mm", hi),
+        ] {
+            if !v.iter().all(|v| v.is_finite()) {
+                return Err(SimError::setting(name, list(&v), "finite"));
+            }
         }
         for (k, axis) in ["x", "y", "z"].iter().enumerate() {
             if lo[k] >= hi[k] {
-                return Err(SimError::Invalid(format!(
-                    "manipulator.workspace_min_mm must be below workspace_max_mm in {axis}, got {} ≥ {}",
-                    lo[k], hi[k]
-                )));
+                return Err(SimError::setting(
+                    "manipulator.workspace_min_mm",
+                    list(&lo),
+                    format!(
+                        "below manipulator.workspace_max_mm {} in {axis} ({} ≥ {})",
+                        list(&hi),
+                        lo[k],
+                        hi[k]
+                    ),
+                ));
             }
         }
         let size = self.plate.size_mm;
         for (k, axis) in ["x", "y"].iter().enumerate() {
-            if lo[k] > 0.0 || hi[k] < size[k] {
-                return Err(SimError::Invalid(format!(
-                    "manipulator workspace must cover the plate in {axis}: [{}, {}] does not contain [0, {}]",
-                    lo[k], hi[k], size[k]
-                )));
+            let cover = |bound: &str| {
+                format!(
+                    "{bound} in {axis}: the workspace must cover the plate [0, {}]",
+                    size[k]
+                )
+            };
+            if lo[k] > 0.0 {
+                return Err(SimError::setting(
+                    "manipulator.workspace_min_mm",
+                    list(&lo),
+                    cover("≤ 0"),
+                ));
+            }
+            if hi[k] < size[k] {
+                return Err(SimError::setting(
+                    "manipulator.workspace_max_mm",
+                    list(&hi),
+                    cover(&format!("≥ {}", size[k])),
+                ));
             }
         }
         Ok(())
@@ -361,36 +400,47 @@ impl Scene {
 
     fn validate_camera(&self, spec: &CameraSpec) -> Result<(), SimError> {
         if !(spec.noise_sigma.is_finite() && spec.noise_sigma >= 0.0) {
-            return Err(SimError::Invalid(format!(
-                "camera.noise_sigma must be ≥ 0, got {}",
-                spec.noise_sigma
-            )));
+            return Err(SimError::setting(
+                "camera.noise_sigma",
+                spec.noise_sigma,
+                "≥ 0",
+            ));
         }
         if !(0.0..=1.0).contains(&spec.lighting_variation) {
-            return Err(SimError::Invalid(format!(
-                "camera.lighting_variation must be in [0, 1], got {}",
-                spec.lighting_variation
-            )));
+            return Err(SimError::setting(
+                "camera.lighting_variation",
+                spec.lighting_variation,
+                "in [0, 1]",
+            ));
         }
         let z = spec.position_mm[2];
         if !(z.is_finite() && z > 0.0) {
-            return Err(SimError::Invalid(format!(
-                "camera.position_mm must be above the plate (z > 0), got z = {z}"
-            )));
+            return Err(SimError::setting(
+                "camera.position_mm",
+                list(&spec.position_mm),
+                "above the plate (z > 0)",
+            ));
         }
         let [sx, sy] = self.plate.size_mm;
         let [lx, ly] = spec.look_at_mm;
         if !(lx >= 0.0 && lx <= sx && ly >= 0.0 && ly <= sy) {
-            return Err(SimError::Invalid(format!(
-                "camera.look_at_mm must be a point on the plate [0, {sx}] × [0, {sy}], got [{lx}, {ly}]: the camera looks away from the plate"
-            )));
+            return Err(SimError::setting(
+                "camera.look_at_mm",
+                list(&spec.look_at_mm),
+                format!("a point on the plate [0, {sx}] × [0, {sy}] (the camera looks away from the plate)"),
+            ));
         }
         let cam = Camera::from_spec(spec)?;
         let tilt = (-cam.forward()[2]).clamp(-1.0, 1.0).acos().to_degrees();
         if tilt > MAX_CAMERA_TILT_DEG {
-            return Err(SimError::Invalid(format!(
-                "camera.position_mm looks at the plate edge-on: the optical axis is {tilt:.1}° from the vertical (at most {MAX_CAMERA_TILT_DEG}°)"
-            )));
+            return Err(SimError::setting(
+                "camera.position_mm",
+                list(&spec.position_mm),
+                format!(
+                    "a view at most {MAX_CAMERA_TILT_DEG}° from the vertical (this one is \
+                     {tilt:.1}°: the camera looks at the plate edge-on)"
+                ),
+            ));
         }
         let probes = [
             [0.0, 0.0],
@@ -405,9 +455,7 @@ impl Scene {
                 .is_some_and(|uv| cam.in_image(uv))
         });
         if !sees {
-            return Err(SimError::Invalid(
-                "camera does not see the plate: none of its corners, its centre or the look-at point falls inside the image (check camera.principal_px and camera.focal_px)".into(),
-            ));
+            return Err(SimError::CameraMissesPlate);
         }
         Ok(())
     }
@@ -421,35 +469,41 @@ impl Scene {
     }
 }
 
-fn check_positive(name: &str, v: f64) -> Result<(), String> {
+fn check_positive(name: &str, v: f64) -> Result<(), SimError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(format!("{name} must be > 0, got {v}"))
+        Err(SimError::setting(name, v, "> 0"))
     }
 }
 
-fn check_non_negative(name: &str, v: f64) -> Result<(), String> {
+fn check_non_negative(name: &str, v: f64) -> Result<(), SimError> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {
-        Err(format!("{name} must be ≥ 0, got {v}"))
+        Err(SimError::setting(name, v, "≥ 0"))
     }
 }
 
-fn check_point(name: &str, p: Point) -> Result<(), String> {
+fn check_point(name: &str, p: Point) -> Result<(), SimError> {
     if p.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
-        Err(format!("{name} must be finite, got [{}, {}]", p[0], p[1]))
+        Err(SimError::setting(name, list(&p), "finite"))
     }
 }
 
-fn check_path(path: &[Point]) -> Result<(), String> {
+/// A path as written: `[[x, y], …]`.
+fn path_list(path: &[Point]) -> String {
+    list(&path.iter().map(|p| list(p)).collect::<Vec<_>>())
+}
+
+fn check_path(path: &[Point]) -> Result<(), SimError> {
     if path.len() < 2 {
-        return Err(format!(
-            "path must have at least 2 points, got {}",
-            path.len()
+        return Err(SimError::setting(
+            "path",
+            path_list(path),
+            format!("a path of at least 2 points (it has {})", path.len()),
         ));
     }
     for (k, p) in path.iter().enumerate() {
@@ -460,17 +514,22 @@ fn check_path(path: &[Point]) -> Result<(), String> {
         .map(|s| ((s[1][0] - s[0][0]).powi(2) + (s[1][1] - s[0][1]).powi(2)).sqrt())
         .sum();
     if length.is_nan() || length <= 1e-9 {
-        return Err(format!(
-            "path has zero length (all {} points coincide)",
-            path.len()
+        return Err(SimError::setting(
+            "path",
+            path_list(path),
+            format!(
+                "a path of non-zero length (it has zero length: all {} points coincide)",
+                path.len()
+            ),
         ));
     }
     Ok(())
 }
 
-/// Checks one feature's parameters and that it lies on a plate of `size`; the message names the
-/// field (the caller prefixes the feature's index and kind).
-fn validate_feature(f: &Feature, size: [f64; 2]) -> Result<(), String> {
+/// Checks one feature's parameters and that it lies on a plate of `size`; a
+/// [`SimError::Setting`] names the feature's field (empty for the whole feature; the caller
+/// prefixes the feature's index and adds its kind).
+fn validate_feature(f: &Feature, size: [f64; 2]) -> Result<(), SimError> {
     match f {
         Feature::Crack {
             path,
@@ -484,8 +543,10 @@ fn validate_feature(f: &Feature, size: [f64; 2]) -> Result<(), String> {
             check_positive("depth_mm", *depth_mm)?;
             check_non_negative("edge_radius_mm", *edge_radius_mm)?;
             if !(*wall_angle_deg > 0.0 && *wall_angle_deg <= 90.0) {
-                return Err(format!(
-                    "wall_angle_deg must be in (0, 90], got {wall_angle_deg}"
+                return Err(SimError::setting(
+                    "wall_angle_deg",
+                    wall_angle_deg,
+                    "in (0, 90]",
                 ));
             }
         }
@@ -508,15 +569,16 @@ fn validate_feature(f: &Feature, size: [f64; 2]) -> Result<(), String> {
             check_point("min", *min)?;
             check_point("max", *max)?;
             if !(min[0] < max[0] && min[1] < max[1]) {
-                return Err(format!(
-                    "min must be below max in x and y, got min = [{}, {}], max = [{}, {}]",
-                    min[0], min[1], max[0], max[1]
+                return Err(SimError::setting(
+                    "min",
+                    list(min),
+                    format!("below max = {} in x and y", list(max)),
                 ));
             }
             check_non_negative("amplitude_mm", *amplitude_mm)?;
             check_positive("period_mm", *period_mm)?;
             if !direction_deg.is_finite() {
-                return Err(format!("direction_deg must be finite, got {direction_deg}"));
+                return Err(SimError::setting("direction_deg", direction_deg, "finite"));
             }
         }
         Feature::Decoy {
@@ -527,9 +589,7 @@ fn validate_feature(f: &Feature, size: [f64; 2]) -> Result<(), String> {
             check_path(path)?;
             check_non_negative("width_mm", *width_mm)?;
             if !(0.0..=1.0).contains(reflectivity) {
-                return Err(format!(
-                    "reflectivity must be in [0, 1], got {reflectivity}"
-                ));
+                return Err(SimError::setting("reflectivity", reflectivity, "in [0, 1]"));
             }
         }
         Feature::Screw {
@@ -545,9 +605,13 @@ fn validate_feature(f: &Feature, size: [f64; 2]) -> Result<(), String> {
     let (lo, hi) = f.footprint();
     let eps = 1e-9;
     if !(lo[0] >= -eps && lo[1] >= -eps && hi[0] <= size[0] + eps && hi[1] <= size[1] + eps) {
-        return Err(format!(
-            "footprint [{}, {}]–[{}, {}] mm is outside the plate [0, {}] × [0, {}]",
-            lo[0], lo[1], hi[0], hi[1], size[0], size[1]
+        return Err(SimError::setting(
+            "",
+            format!("a footprint {}–{} mm", list(&lo), list(&hi)),
+            format!(
+                "inside the plate [0, {}] × [0, {}] (this one is outside the plate)",
+                size[0], size[1]
+            ),
         ));
     }
     Ok(())
@@ -586,7 +650,23 @@ mod tests {
         let mut bad = serde_json::to_value(&scene).unwrap();
         bad["plate"]["size_mm"] = serde_json::json!([-5.0, 100.0]);
         std::fs::write(&json, bad.to_string()).unwrap();
-        let e = Scene::load(&json).unwrap_err().to_string();
-        assert!(e.contains("scene.JSON"), "{e}");
+        let err = Scene::load(&json).unwrap_err();
+        assert!(
+            matches!(
+                &err,
+                SimError::InScene { path, source }
+                    if path.ends_with("scene.JSON")
+                        && matches!(
+                            source.as_ref(),
+                            SimError::Setting { field, .. } if field == "plate.size_mm"
+                        )
+            ),
+            "{err:?}"
+        );
+        let e = err.to_string();
+        assert!(
+            e.contains("scene.JSON") && e.contains("plate.size_mm = [-5, 100]"),
+            "{e}"
+        );
     }
 }

@@ -729,12 +729,20 @@ fn energy_never_grows_without_input_dormand_prince() {
     });
 }
 
-fn invalid_message(result: Result<SlideSim, SimError>) -> String {
-    match result {
-        Err(SimError::Invalid(message)) => message,
-        Err(e) => panic!("expected SimError::Invalid, got {e}"),
-        Ok(_) => panic!("expected SimError::Invalid, got a simulation"),
-    }
+/// The field a refused simulation names, after checking that the message names it with its value.
+fn refused_field(result: Result<SlideSim, SimError>) -> String {
+    let Err(e) = result else {
+        panic!("expected SimError::Setting, got a simulation");
+    };
+    let SimError::Setting { field, value, .. } = &e else {
+        panic!("expected SimError::Setting, got {e}");
+    };
+    let message = e.to_string();
+    assert!(
+        message.contains(&format!("{field} = {value}")),
+        "{message:?} does not name {field} = {value}"
+    );
+    field.clone()
 }
 
 #[test]
@@ -748,49 +756,49 @@ fn invalid_inputs_are_refused_naming_the_field() {
     assert!(new(&good, &sensor).is_ok());
     let lines = [
         (
-            "stroke",
+            "slide.stroke_mm",
             SlideLine {
                 stroke_mm: f64::NAN,
                 ..good
             },
         ),
         (
-            "stroke",
+            "slide.stroke_mm",
             SlideLine {
                 stroke_mm: f64::INFINITY,
                 ..good
             },
         ),
         (
-            "stroke",
+            "slide.stroke_mm",
             SlideLine {
                 stroke_mm: 0.0,
                 ..good
             },
         ),
         (
-            "direction",
+            "slide.direction",
             SlideLine {
                 direction: [0.0, 0.0],
                 ..good
             },
         ),
         (
-            "direction",
+            "slide.direction",
             SlideLine {
                 direction: [f64::NAN, 1.0],
                 ..good
             },
         ),
         (
-            "speed",
+            "slide.speed_mm_s",
             SlideLine {
                 speed_mm_s: -3.89,
                 ..good
             },
         ),
         (
-            "speed",
+            "slide.speed_mm_s",
             SlideLine {
                 speed_mm_s: f64::NAN,
                 ..good
@@ -798,44 +806,40 @@ fn invalid_inputs_are_refused_naming_the_field() {
         ),
     ];
     for (field, l) in &lines {
-        let message = invalid_message(new(l, &sensor));
-        assert!(
-            message.contains(field),
-            "{l:?}: {message:?} does not name {field}"
-        );
+        assert_eq!(refused_field(new(l, &sensor)), *field, "{l:?}");
     }
     let base = sensor.finger.clone();
     let fingers = [
         (
-            "contact_stiffness_n_m",
+            "sensor.finger.contact_stiffness_n_m",
             FingerParams {
                 contact_stiffness_n_m: f64::NAN,
                 ..base.clone()
             },
         ),
         (
-            "contact_stiffness_n_m",
+            "sensor.finger.contact_stiffness_n_m",
             FingerParams {
                 contact_stiffness_n_m: f64::INFINITY,
                 ..base.clone()
             },
         ),
         (
-            "lateral_stiffness_n_mm",
+            "sensor.finger.lateral_stiffness_n_mm",
             FingerParams {
                 lateral_stiffness_n_mm: -1.0,
                 ..base.clone()
             },
         ),
         (
-            "friction",
+            "sensor.finger.friction",
             FingerParams {
                 friction: f64::NAN,
                 ..base.clone()
             },
         ),
         (
-            "tip_radius_mm",
+            "sensor.finger.tip_radius_mm",
             FingerParams {
                 tip_radius_mm: 0.0,
                 ..base
@@ -847,26 +851,31 @@ fn invalid_inputs_are_refused_naming_the_field() {
             finger,
             ..sensor.clone()
         };
-        let message = invalid_message(new(&good, &s));
-        assert!(message.contains(field), "{message:?} does not name {field}");
+        assert_eq!(refused_field(new(&good, &s)), field);
     }
     let mut s = sensor.clone();
     s.optics.proximity_peak_mm = f64::NAN;
-    let message = invalid_message(new(&good, &s));
-    assert!(message.contains("proximity_peak_mm"), "{message:?}");
+    assert_eq!(
+        refused_field(new(&good, &s)),
+        "sensor.optics.proximity_peak_mm"
+    );
     for cone in [f64::NAN, -1.0, 80.0] {
         let mut s = sensor.clone();
         s.optics.proximity_cone_deg = cone;
-        let message = invalid_message(new(&good, &s));
-        assert!(message.contains("proximity_cone_deg"), "{message:?}");
+        assert_eq!(
+            refused_field(new(&good, &s)),
+            "sensor.optics.proximity_cone_deg"
+        );
     }
     for travel in [f64::NAN, 0.0, -1.0, f64::INFINITY] {
         let mut s = sensor.clone();
         s.finger.lateral_travel_mm = Some(travel);
-        let message = invalid_message(new(&good, &s));
-        assert!(message.contains("lateral_travel_mm"), "{message:?}");
+        assert_eq!(
+            refused_field(new(&good, &s)),
+            "sensor.finger.lateral_travel_mm"
+        );
     }
-    let message = invalid_message(SlideSim::new(
+    let field = refused_field(SlideSim::new(
         &surface,
         1.0,
         &good,
@@ -874,7 +883,7 @@ fn invalid_inputs_are_refused_naming_the_field() {
         Integrator::Sdirk2 { substeps: 0 },
         0,
     ));
-    assert!(message.contains("substeps"), "{message:?}");
+    assert_eq!(field, "integrator.substeps");
 }
 
 /// A NaN or infinite slide start is refused before anything is tabulated (it once made the
@@ -887,7 +896,7 @@ fn nan_start_is_refused_naming_the_field() {
             start,
             ..line(92.0, STROKE, SPEED)
         };
-        let message = invalid_message(SlideSim::new(
+        let field = refused_field(SlideSim::new(
             &surface,
             1.0,
             &l,
@@ -895,7 +904,7 @@ fn nan_start_is_refused_naming_the_field() {
             Integrator::default(),
             0,
         ));
-        assert!(message.contains("start"), "{message:?}");
+        assert_eq!(field, "slide.start");
     }
 }
 
@@ -1172,4 +1181,37 @@ proptest! {
         prop_assert!(highest < bound, "tip flew to {} mm (bound {} mm)", highest, bound);
         prop_assert!(lateral < 2.0 * STROKE, "lateral deflection {} mm", lateral);
     }
+}
+
+/// A slide speed out of range is a [`SimError::Setting`] whose message reads field, value and
+/// allowed range.
+#[test]
+fn a_bad_slide_speed_reads_field_value_and_range() {
+    let l = SlideLine {
+        speed_mm_s: 0.0,
+        ..line(92.0, STROKE, SPEED)
+    };
+    let err = match SlideSim::new(
+        &crack(2.0, 3.0, 45.0),
+        1.0,
+        &l,
+        &calibrated_sensor(),
+        Integrator::default(),
+        0,
+    ) {
+        Err(e) => e,
+        Ok(_) => panic!("a zero slide speed was accepted"),
+    };
+    assert!(
+        matches!(
+            &err,
+            SimError::Setting { field, value, allowed }
+                if field == "slide.speed_mm_s" && value == "0" && allowed == "> 0 mm/s"
+        ),
+        "{err:?}"
+    );
+    assert_eq!(
+        err.to_string(),
+        "invalid setting slide.speed_mm_s = 0: it must be > 0 mm/s"
+    );
 }

@@ -5,6 +5,7 @@
 use crackbot_recording::{Recording, Row};
 use crackbot_sim::calibrate::{real_dark_counts, speed_quantiles, QUANTILES};
 use crackbot_sim::experiment::{Experiment, ExperimentConfig, PlateMount};
+use crackbot_sim::SimError;
 
 fn width_mounts_toml(n: usize, reflectivity: f64) -> String {
     (0..n)
@@ -27,12 +28,38 @@ fn groove(c: &ExperimentConfig, k: usize) -> Option<(f64, f64)> {
 }
 
 /// The error a width-experiment configuration with `[samples]` line `line` is refused with.
-fn refused_samples(line: &str) -> String {
+fn refused_samples(line: &str) -> SimError {
     let mut c = ExperimentConfig::paper(Experiment::Width, 7);
     c.apply_params_toml(&format!("[samples]\n{line}\n"))
         .and_then(|()| c.validate())
         .unwrap_err()
-        .to_string()
+}
+
+/// The field and allowed range of `err`, a [`SimError::Setting`] whose message names the field and
+/// the value.
+fn setting(err: &SimError) -> (&str, &str) {
+    match err {
+        SimError::Setting {
+            field,
+            value,
+            allowed,
+        } => {
+            assert!(
+                err.to_string().contains(&format!("{field} = {value}")),
+                "{err}"
+            );
+            (field, allowed)
+        }
+        other => panic!("expected SimError::Setting, got {other:?}"),
+    }
+}
+
+/// The table `err`, a [`SimError::ParameterTable`], names.
+fn table(err: &SimError) -> &str {
+    match err {
+        SimError::ParameterTable { table, .. } => table,
+        other => panic!("expected SimError::ParameterTable, got {other:?}"),
+    }
 }
 
 #[test]
@@ -68,21 +95,29 @@ fn bad_mounts_are_named() {
     let n = c.surfaces().len();
     let err = c
         .apply_params_toml("[[mounts.tank]]\noffset_counts = [0.0, 0.0, 0.0]\nreflectivity = 1.0\n")
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("mounts.tank"), "{err}");
+        .unwrap_err();
+    assert_eq!(table(&err), "mounts.tank", "{err}");
     let err = c
         .apply_params_toml(&width_mounts_toml(n - 1, 1.0))
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("plate mounts"), "{err}");
+        .unwrap_err();
+    assert_eq!(setting(&err).0, "mounts.width", "{err}");
+    assert!(
+        err.to_string().contains(&format!("{} plate mounts", n - 1)),
+        "{err}"
+    );
     let err = c
         .apply_params_toml("[[mounts.width]]\noffset_counts = [0.0, 0.0]\nreflectivity = 1.0\n")
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("mounts.width"), "{err}");
-    let err = c.apply_params_toml("mounts = 3\n").unwrap_err().to_string();
-    assert!(err.contains("[mounts]"), "{err}");
+        .unwrap_err();
+    assert_eq!(table(&err), "mounts.width", "{err}");
+    let err = c.apply_params_toml("mounts = 3\n").unwrap_err();
+    assert_eq!(table(&err), "mounts", "{err}");
+    assert!(err.to_string().contains("[mounts]"), "{err}");
+    let err = c
+        .apply_params_toml("[sensor.fingr]\nfriction = 0.1\n")
+        .unwrap_err();
+    assert_eq!(table(&err), "sensor.fingr", "{err}");
+    let err = c.apply_params_toml("[mounts\n").unwrap_err();
+    assert!(matches!(err, SimError::Parameters { .. }), "{err:?}");
 }
 
 #[test]
@@ -109,7 +144,11 @@ fn the_width_plates_have_their_own_crack_depth() {
     assert_eq!(depth_of(&common, 2), Some(1.5));
     for bad in ["-1.0", "0.0", "nan"] {
         let err = refused_samples(&format!("width_crack_depth_mm = {bad}"));
-        assert!(err.contains("width_crack_depth_mm"), "{bad}: {err}");
+        assert_eq!(
+            setting(&err).0,
+            "samples.width_crack_depth_mm",
+            "{bad}: {err}"
+        );
     }
 }
 
@@ -143,33 +182,51 @@ fn printed_slots_cut_the_grooves_and_leave_the_labels() {
         .apply_params_toml("[samples]\nprinted_slots = []\n")
         .unwrap();
     assert_eq!(groove(&drawn, 1), Some((1.0, 2.8)));
-    for (bad, names) in [
+    // (slot, field, a word of the allowed range)
+    for (bad, field, word) in [
         (
             "nominal_mm = 3.0\nwidth_mm = 1.0",
-            "not one of samples.widths_mm",
+            "samples.printed_slots[0].nominal_mm",
+            "one of samples.widths_mm",
         ),
-        ("nominal_mm = 1.0\nwidth_mm = -1.0", "width_mm"),
-        ("nominal_mm = 1.0\nwidth_mm = nan", "width_mm"),
-        ("nominal_mm = 1.0\ndepth_mm = 0.0", "depth_mm"),
-        ("nominal_mm = 1.0\ndepth_mm = inf", "depth_mm"),
+        (
+            "nominal_mm = 1.0\nwidth_mm = -1.0",
+            "samples.printed_slots[0].width_mm",
+            "≥ 0",
+        ),
+        (
+            "nominal_mm = 1.0\nwidth_mm = nan",
+            "samples.printed_slots[0].width_mm",
+            "≥ 0",
+        ),
+        (
+            "nominal_mm = 1.0\ndepth_mm = 0.0",
+            "samples.printed_slots[0].depth_mm",
+            "> 0",
+        ),
+        (
+            "nominal_mm = 1.0\ndepth_mm = inf",
+            "samples.printed_slots[0].depth_mm",
+            "> 0",
+        ),
         (
             "nominal_mm = 1.0\n[[samples.printed_slots]]\nnominal_mm = 1.0",
+            "samples.printed_slots[1].nominal_mm",
             "listed twice",
         ),
     ] {
         let err = refused_samples(&format!("[[samples.printed_slots]]\n{bad}"));
-        assert!(
-            err.contains("printed_slots") && err.contains(names),
-            "{bad}: {err}"
-        );
+        let (f, allowed) = setting(&err);
+        assert_eq!(f, field, "{bad}: {err}");
+        assert!(allowed.contains(word), "{bad}: {err}");
     }
     // A misspelt key is refused, not ignored.
     let mut c = ExperimentConfig::paper(Experiment::Width, 7);
     let err = c
         .apply_params_toml("[[samples.printed_slots]]\nnominal_mm = 1.0\nwidht_mm = 2.0\n")
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("widht_mm"), "{err}");
+        .unwrap_err();
+    assert_eq!(table(&err), "samples", "{err}");
+    assert!(err.to_string().contains("widht_mm"), "{err}");
 }
 
 #[test]
@@ -248,20 +305,16 @@ fn calibration_search_settings_name_what_is_wrong() {
         fixed: vec!["finger.stiffness".into()],
         ..SearchSettings::default()
     };
-    let err = typo.free_mask().unwrap_err().to_string();
-    assert!(
-        err.contains("finger.stiffness") && err.contains(MECHANICS[1]),
-        "{err}"
-    );
+    let err = typo.free_mask().unwrap_err();
+    let (field, allowed) = setting(&err);
+    assert_eq!(field, "fixed", "{err}");
+    assert!(allowed.contains(MECHANICS[1]), "{err}");
+    assert!(err.to_string().contains("finger.stiffness"), "{err}");
     let nan = SearchSettings {
         speed_weight: f64::NAN,
         ..SearchSettings::default()
     };
-    assert!(nan
-        .free_mask()
-        .unwrap_err()
-        .to_string()
-        .contains("tip-speed"));
+    assert_eq!(setting(&nan.free_mask().unwrap_err()).0, "speed_weight");
     let spot = SearchSettings {
         proximity: crackbot_sim::calibrate::ProximityRules {
             min_spot_mm: -1.0,
@@ -269,7 +322,10 @@ fn calibration_search_settings_name_what_is_wrong() {
         },
         ..SearchSettings::default()
     };
-    assert!(spot.free_mask().unwrap_err().to_string().contains("spot"));
+    assert_eq!(
+        setting(&spot.free_mask().unwrap_err()).0,
+        "proximity.min_spot_mm"
+    );
 }
 
 #[test]
@@ -368,28 +424,29 @@ fn printed_decoys_are_flat_plates_with_a_dark_line_labelled_no_crack() {
         min_p(&a)
     );
 
-    for (bad, names) in [
+    for (bad, field) in [
         (
             "width_mm = 0.0\nreflectivity = 0.3",
-            "printed_decoys[0].width_mm",
+            "samples.printed_decoys[0].width_mm",
         ),
         (
             "width_mm = 1.0\nreflectivity = 1.5",
-            "printed_decoys[0].reflectivity",
+            "samples.printed_decoys[0].reflectivity",
         ),
         (
             "width_mm = nan\nreflectivity = 0.3",
-            "printed_decoys[0].width_mm",
+            "samples.printed_decoys[0].width_mm",
         ),
     ] {
         let mut c = ExperimentConfig::paper(Experiment::Recognition, 5);
         let err = c
             .apply_params_toml(&format!("[[samples.printed_decoys]]\n{bad}\n"))
             .and_then(|()| c.validate())
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains(names), "{bad}: {err}");
+            .unwrap_err();
+        assert_eq!(setting(&err).0, field, "{bad}: {err}");
     }
     let err = refused_samples("printed_decoys = [{ width_mm = 1.0, reflectivity = 0.3 }]");
-    assert!(err.contains("recognition experiment only"), "{err}");
+    let (field, allowed) = setting(&err);
+    assert_eq!(field, "samples.printed_decoys", "{err}");
+    assert!(allowed.contains("recognition experiment only"), "{err}");
 }

@@ -141,191 +141,336 @@ fn unknown_keys_and_kinds_are_parse_errors() {
     expect_error(&text, &["depth"]);
 }
 
+/// Parses `text` and expects it refused as a scene named `snippet.toml`: the error inside the
+/// [`SimError::InScene`], whose message starts with the snippet's name.
+fn refused(text: &str) -> SimError {
+    let err = match Scene::from_toml_str(text, "snippet.toml") {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e,
+    };
+    let message = err.to_string();
+    match err {
+        SimError::InScene { path, source } => {
+            assert_eq!(path, "snippet.toml");
+            assert_eq!(message, format!("snippet.toml: {source}"));
+            *source
+        }
+        other => panic!("expected SimError::InScene, got {other:?}\n--- snippet:\n{text}"),
+    }
+}
+
+/// Parses `text` and expects the setting `field` refused; checks that the message names the field,
+/// the value and the allowed range, and returns the value and the allowed range.
+fn refused_setting(text: &str, field: &str) -> (String, String) {
+    let err = refused(text);
+    let message = err.to_string();
+    match err {
+        SimError::Setting {
+            field: f,
+            value,
+            allowed,
+        } => {
+            assert_eq!(f, field, "{message}\n--- snippet:\n{text}");
+            assert_eq!(
+                message,
+                format!("invalid setting {field} = {value}: it must be {allowed}")
+            );
+            (value, allowed)
+        }
+        other => {
+            panic!("expected SimError::Setting of {field}, got {other:?}\n--- snippet:\n{text}")
+        }
+    }
+}
+
 #[test]
 fn bad_features_are_named_by_index_and_kind() {
     let good = crack("[[10.0, 10.0], [50.0, 20.0]]", "1.0", "1.0");
-    let cases: Vec<(String, Vec<&str>)> = vec![
+    // (feature, field, kind, a word of the value or the allowed range)
+    let cases: Vec<(String, &str, &str, &str)> = vec![
         (
             crack("[[190.0, 50.0], [210.0, 50.0]]", "1.0", "1.0"),
-            vec!["features[1] (crack)", "outside the plate"],
+            "features[1]",
+            "crack",
+            "outside the plate",
         ),
         (
             crack("[[10.0, 10.0], [50.0, 20.0]]", "-1.0", "1.0"),
-            vec!["features[1] (crack): width_mm must be ≥ 0, got -1"],
+            "features[1].width_mm",
+            "crack",
+            "-1",
         ),
         (
             crack("[[10.0, 10.0], [50.0, 20.0]]", "nan", "1.0"),
-            vec!["features[1] (crack)", "width_mm", "NaN"],
+            "features[1].width_mm",
+            "crack",
+            "NaN",
         ),
         (
             crack("[[10.0, 10.0], [nan, 20.0]]", "1.0", "1.0"),
-            vec!["features[1] (crack)", "path[1]", "finite"],
+            "features[1].path[1]",
+            "crack",
+            "finite",
         ),
         (
             crack("[[10.0, 10.0], [50.0, 20.0]]", "1.0", "0.0"),
-            vec!["features[1] (crack)", "depth_mm must be > 0"],
+            "features[1].depth_mm",
+            "crack",
+            "> 0",
         ),
         (
             crack("[[10.0, 10.0], [10.0, 10.0]]", "1.0", "1.0"),
-            vec!["features[1] (crack)", "zero length"],
+            "features[1].path",
+            "crack",
+            "zero length",
         ),
         (
             crack("[[10.0, 10.0]]", "1.0", "1.0"),
-            vec!["features[1] (crack)", "at least 2 points"],
+            "features[1].path",
+            "crack",
+            "at least 2 points",
         ),
         (
             "[[features]]\nkind = \"crack\"\npath = [[10.0, 10.0], [50.0, 20.0]]\nwidth_mm = 1.0\ndepth_mm = 1.0\nedge_radius_mm = -0.1\n".into(),
-            vec!["features[1] (crack)", "edge_radius_mm"],
+            "features[1].edge_radius_mm",
+            "crack",
+            "-0.1",
         ),
         (
             "[[features]]\nkind = \"bump\"\ncentre = [50.0, 50.0]\nradius_mm = -5.0\nheight_mm = 2.0\n".into(),
-            vec!["features[1] (bump)", "radius_mm must be > 0"],
+            "features[1].radius_mm",
+            "bump",
+            "> 0",
         ),
         (
             "[[features]]\nkind = \"bump\"\ncentre = [50.0, 50.0]\nradius_mm = 5.0\nheight_mm = 0.0\n".into(),
-            vec!["features[1] (bump)", "height_mm must be > 0"],
+            "features[1].height_mm",
+            "bump",
+            "> 0",
         ),
         (
             "[[features]]\nkind = \"bump\"\ncentre = [198.0, 50.0]\nradius_mm = 5.0\nheight_mm = 1.0\n".into(),
-            vec!["features[1] (bump)", "outside the plate"],
+            "features[1]",
+            "bump",
+            "outside the plate",
         ),
         (
             "[[features]]\nkind = \"wavy\"\nmin = [60.0, 10.0]\nmax = [50.0, 40.0]\n".into(),
-            vec!["features[1] (wavy)", "min must be below max"],
+            "features[1].min",
+            "wavy",
+            "below max",
         ),
         (
             "[[features]]\nkind = \"wavy\"\nmin = [10.0, 10.0]\nmax = [50.0, 40.0]\nperiod_mm = 0.0\n".into(),
-            vec!["features[1] (wavy)", "period_mm must be > 0"],
+            "features[1].period_mm",
+            "wavy",
+            "> 0",
         ),
         (
             "[[features]]\nkind = \"wavy\"\nmin = [10.0, 10.0]\nmax = [50.0, 40.0]\namplitude_mm = -1.0\n".into(),
-            vec!["features[1] (wavy)", "amplitude_mm must be ≥ 0"],
+            "features[1].amplitude_mm",
+            "wavy",
+            "≥ 0",
         ),
         (
             "[[features]]\nkind = \"decoy\"\npath = [[10.0, 50.0], [60.0, 50.0]]\nwidth_mm = 2.0\nreflectivity = 1.5\n".into(),
-            vec!["features[1] (decoy)", "reflectivity must be in [0, 1]"],
+            "features[1].reflectivity",
+            "decoy",
+            "in [0, 1]",
         ),
         (
             "[[features]]\nkind = \"decoy\"\npath = [[10.0, 50.0]]\nwidth_mm = 2.0\n".into(),
-            vec!["features[1] (decoy)", "at least 2 points"],
+            "features[1].path",
+            "decoy",
+            "at least 2 points",
         ),
         (
             "[[features]]\nkind = \"screw\"\ncentre = [50.0, 50.0]\nhead_diameter_mm = 0.0\n".into(),
-            vec!["features[1] (screw)", "head_diameter_mm must be > 0"],
+            "features[1].head_diameter_mm",
+            "screw",
+            "> 0",
         ),
         (
             "[[features]]\nkind = \"screw\"\ncentre = [50.0, 50.0]\nheight_mm = -3.0\n".into(),
-            vec!["features[1] (screw)", "height_mm must be > 0"],
+            "features[1].height_mm",
+            "screw",
+            "> 0",
         ),
     ];
-    for (feature, needles) in cases {
-        expect_error(&format!("{PLATE}{good}{feature}"), &needles);
+    for (feature, field, kind, word) in cases {
+        let text = format!("{PLATE}{good}{feature}");
+        let (value, allowed) = refused_setting(&text, field);
+        assert!(
+            allowed.ends_with(&format!("for a {kind}")),
+            "{field}: {allowed:?} does not name the {kind}"
+        );
+        assert!(
+            value.contains(word) || allowed.contains(word),
+            "{field} = {value}, {allowed:?} lacks {word:?}"
+        );
     }
 }
 
 #[test]
 fn bad_plates_manipulators_and_sensors_are_named() {
-    let cases: Vec<(String, Vec<&str>)> = vec![
+    // (snippet, field, a word of the value or the allowed range)
+    let cases: Vec<(String, &str, &str)> = vec![
         (
             "[plate]\nsize_mm = [-200.0, 100.0]\n".into(),
-            vec!["plate.size_mm must be positive"],
+            "plate.size_mm",
+            "-200",
         ),
         (
             "[plate]\nsize_mm = [nan, 100.0]\n".into(),
-            vec!["plate.size_mm", "NaN"],
+            "plate.size_mm",
+            "NaN",
         ),
         (
             format!("{PLATE}[plate.material]\nreflectivity = 1.2\n"),
-            vec!["plate.material.reflectivity"],
+            "plate.material.reflectivity",
+            "in [0, 1]",
         ),
         (
             format!("{PLATE}[manipulator]\nslide_speed_mm_s = 0.0\n"),
-            vec!["manipulator.slide_speed_mm_s must be positive"],
+            "manipulator.slide_speed_mm_s",
+            "> 0",
         ),
         (
             format!("{PLATE}[manipulator]\nstroke_mm = nan\n"),
-            vec!["manipulator.stroke_mm", "NaN"],
+            "manipulator.stroke_mm",
+            "NaN",
         ),
         (
             format!("{PLATE}[manipulator]\nworkspace_max_mm = [150.0, 100.0, 150.0]\n"),
-            vec!["manipulator workspace must cover the plate in x"],
+            "manipulator.workspace_max_mm",
+            "cover the plate",
         ),
         (
             format!("{PLATE}[manipulator]\nworkspace_min_mm = [0.0, 0.0, 200.0]\n"),
-            vec!["manipulator.workspace_min_mm", "in z"],
+            "manipulator.workspace_min_mm",
+            "in z",
         ),
         (
             format!("{PLATE}[sensor.finger]\ntip_radius_mm = -1.0\n"),
-            vec!["sensor.finger.tip_radius_mm"],
+            "sensor.finger.tip_radius_mm",
+            "-1",
         ),
     ];
-    for (text, needles) in cases {
-        expect_error(&text, &needles);
+    for (text, field, word) in cases {
+        let (value, allowed) = refused_setting(&text, field);
+        assert!(
+            value.contains(word) || allowed.contains(word),
+            "{field} = {value}, {allowed:?} lacks {word:?}"
+        );
     }
 }
 
 #[test]
 fn bad_cameras_are_named() {
     let camera = |replace: &str, with: &str| format!("{PLATE}{}", CAMERA.replace(replace, with));
-    let cases: Vec<(String, Vec<&str>)> = vec![
+    // (snippet, field, a word of the value or the allowed range)
+    let cases: Vec<(String, &str, &str)> = vec![
         (
             camera(
                 "position_mm = [100.0, 50.0, 250.0]",
                 "position_mm = [100.0, 50.0, -10.0]",
             ),
-            vec!["camera.position_mm", "above the plate"],
+            "camera.position_mm",
+            "above the plate",
         ),
         (
             camera("look_at_mm = [100.0, 50.0]", "look_at_mm = [300.0, 50.0]"),
-            vec!["camera.look_at_mm", "looks away from the plate"],
+            "camera.look_at_mm",
+            "looks away from the plate",
         ),
         (
             camera(
                 "position_mm = [100.0, 50.0, 250.0]",
                 "position_mm = [100.0, -2000.0, 10.0]",
             ),
-            vec!["edge-on"],
+            "camera.position_mm",
+            "edge-on",
         ),
         (
             camera("resolution = [640, 480]", "resolution = [0, 480]"),
-            vec!["camera.resolution"],
+            "camera.resolution",
+            "[0, 480]",
         ),
         (
             camera("focal_px = [700.0, 700.0]", "focal_px = [-700.0, 700.0]"),
-            vec!["camera.focal_px"],
-        ),
-        (
-            camera(
-                "focal_px = [700.0, 700.0]",
-                "focal_px = [700.0, 700.0]\nprincipal_px = [5000.0, 5000.0]",
-            ),
-            vec!["camera does not see the plate"],
+            "camera.focal_px",
+            "[-700, 700]",
         ),
         (
             camera(
                 "focal_px = [700.0, 700.0]",
                 "focal_px = [700.0, 700.0]\nlighting_variation = 2.0",
             ),
-            vec!["camera.lighting_variation"],
+            "camera.lighting_variation",
+            "in [0, 1]",
         ),
         (
             camera(
                 "focal_px = [700.0, 700.0]",
                 "focal_px = [700.0, 700.0]\nnoise_sigma = nan",
             ),
-            vec!["camera.noise_sigma", "NaN"],
+            "camera.noise_sigma",
+            "NaN",
         ),
         (
             camera(
                 "position_mm = [100.0, 50.0, 250.0]",
                 "position_mm = [100.0, 50.0, nan]",
             ),
-            vec!["camera.position_mm"],
+            "camera.position_mm",
+            "NaN",
         ),
     ];
-    for (text, needles) in cases {
-        expect_error(&text, &needles);
+    for (text, field, word) in cases {
+        let (value, allowed) = refused_setting(&text, field);
+        assert!(
+            value.contains(word) || allowed.contains(word),
+            "{field} = {value}, {allowed:?} lacks {word:?}"
+        );
     }
+    // A camera that sees none of the plate is not one setting out of range.
+    let text = camera(
+        "focal_px = [700.0, 700.0]",
+        "focal_px = [700.0, 700.0]\nprincipal_px = [5000.0, 5000.0]",
+    );
+    let err = refused(&text);
+    assert!(matches!(err, SimError::CameraMissesPlate), "{err:?}");
+    assert!(err.to_string().contains("does not see the plate"), "{err}");
+}
+
+#[test]
+fn a_setting_error_reads_field_value_and_range() {
+    let text = format!(
+        "{PLATE}{}",
+        CAMERA.replace(
+            "focal_px = [700.0, 700.0]",
+            "focal_px = [700.0, 700.0]\nnoise_sigma = -2.5"
+        )
+    );
+    let err = Scene::from_toml_str(&text, "snippet.toml").unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "snippet.toml: invalid setting camera.noise_sigma = -2.5: it must be ≥ 0"
+    );
+    // Validating the scene itself gives the setting without the file.
+    let mut scene = Scene::builtin_default();
+    if let Some(camera) = scene.camera.as_mut() {
+        camera.noise_sigma = -2.5;
+    }
+    let err = scene.validate().unwrap_err();
+    assert!(
+        matches!(
+            &err,
+            SimError::Setting { field, value, allowed }
+                if field == "camera.noise_sigma" && value == "-2.5" && allowed == "≥ 0"
+        ),
+        "{err:?}"
+    );
 }
 
 #[test]

@@ -230,11 +230,8 @@ impl RobotService {
                 }
                 Err(e) => {
                     tracing::warn!("refused a mission: {e}");
-                    self.publish_logged_failure(&e);
-                    done(
-                        self.missions.load(Ordering::SeqCst),
-                        Err(MissionError::Invalid(e)),
-                    );
+                    self.publish_logged_failure(&e.to_string());
+                    done(self.missions.load(Ordering::SeqCst), Err(*e));
                 }
             }
         }
@@ -254,16 +251,24 @@ impl RobotService {
 }
 
 /// A station's mode and scene on top of the robot's settings.
-fn start_config(config: &mut InspectConfig, start: &StartRequest) -> Result<(), String> {
-    config.mode = start
-        .mode
-        .parse()
-        .map_err(|e: String| format!("mode {:?}: {e}", start.mode))?;
+/// Applies a station's start request to `config` (boxed: the mission's error is large and this
+/// is the rare path).
+fn start_config(config: &mut InspectConfig, start: &StartRequest) -> Result<(), Box<MissionError>> {
+    config.mode = start.mode.parse().map_err(|e: String| {
+        Box::new(MissionError::StartRequest {
+            field: "mode",
+            reason: format!("{:?}: {e}", start.mode),
+        })
+    })?;
     if let Some(toml) = &start.scene_toml {
-        config.set_scene(
-            crackbot_sim::Scene::from_toml_str(toml, "<scene from the station>")
-                .map_err(|e| e.to_string())?,
-        );
+        let scene =
+            crackbot_sim::Scene::from_toml_str(toml, "<scene from the station>").map_err(|e| {
+                MissionError::StartRequest {
+                    field: "scene_toml",
+                    reason: e.to_string(),
+                }
+            })?;
+        config.set_scene(scene);
     }
     Ok(())
 }

@@ -91,62 +91,80 @@ impl Default for ClassicalParams {
 impl ClassicalParams {
     /// Checks every value is finite and in range.
     pub fn validate(&self) -> Result<(), VisionError> {
-        let checks: [(&str, f32, bool); 10] = [
+        let checks: [(&str, f32, bool, &str); 10] = [
             (
                 "min_length_fraction",
                 self.min_length_fraction,
                 (0.0..=1.0).contains(&self.min_length_fraction),
+                "in [0, 1]",
             ),
             (
                 "response_quantile",
                 self.response_quantile,
                 (0.0..=1.0).contains(&self.response_quantile),
+                "in [0, 1]",
             ),
             (
                 "blur_sigma",
                 self.blur_sigma,
                 self.blur_sigma >= 0.0 && self.blur_sigma <= 50.0,
+                "in [0, 50]",
             ),
-            ("min_response", self.min_response, self.min_response >= 0.0),
+            (
+                "min_response",
+                self.min_response,
+                self.min_response >= 0.0,
+                "≥ 0",
+            ),
             (
                 "min_component_fraction",
                 self.min_component_fraction,
                 (0.0..=1.0).contains(&self.min_component_fraction),
+                "in [0, 1]",
             ),
             (
                 "min_elongation",
                 self.min_elongation,
                 self.min_elongation >= 0.0,
+                "≥ 0",
             ),
             (
                 "merge_fraction",
                 self.merge_fraction,
                 (0.0..=1.0).contains(&self.merge_fraction),
+                "in [0, 1]",
             ),
             (
                 "min_box_fraction",
                 self.min_box_fraction,
                 (0.0..=1.0).contains(&self.min_box_fraction),
+                "in [0, 1]",
             ),
             (
                 "contrast_half",
                 self.contrast_half,
                 self.contrast_half > 0.0,
+                "> 0",
             ),
-            ("extent_half", self.extent_half, self.extent_half > 0.0),
+            (
+                "extent_half",
+                self.extent_half,
+                self.extent_half > 0.0,
+                "> 0",
+            ),
         ];
-        for (name, value, ok) in checks {
+        for (name, value, ok, allowed) in checks {
             if !value.is_finite() || !ok {
-                return Err(VisionError::Invalid(format!(
-                    "classical detector: {name} = {value} is out of range"
-                )));
+                return Err(VisionError::setting(name, f64::from(value), allowed));
             }
         }
-        if self.line_radius == 0 || self.line_radius > 64 || self.close_radius > 64 {
-            return Err(VisionError::Invalid(format!(
-                "classical detector: line_radius must be 1..=64 and close_radius 0..=64, got {} and {}",
-                self.line_radius, self.close_radius
-            )));
+        if self.line_radius == 0 || self.line_radius > 64 {
+            let value = self.line_radius as f64;
+            return Err(VisionError::setting("line_radius", value, "in 1..=64"));
+        }
+        if self.close_radius > 64 {
+            let value = self.close_radius as f64;
+            return Err(VisionError::setting("close_radius", value, "in 0..=64"));
         }
         Ok(())
     }

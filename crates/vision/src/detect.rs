@@ -116,10 +116,11 @@ pub fn detect_images(
     config: &DetectConfig,
 ) -> Result<DetectReport, VisionError> {
     if !(0.0..=1.0).contains(&config.threshold) {
-        return Err(VisionError::Invalid(format!(
-            "threshold must be in [0, 1], got {}",
-            config.threshold
-        )));
+        return Err(VisionError::setting(
+            "threshold",
+            f64::from(config.threshold),
+            "in [0, 1]",
+        ));
     }
     if let Some(p) = &config.fuse {
         p.validate()?;

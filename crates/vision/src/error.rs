@@ -30,9 +30,72 @@ pub enum VisionError {
         /// What is wrong.
         message: String,
     },
-    /// Input that cannot be used (degenerate geometry, non-finite values, bad parameters…).
-    #[error("{0}")]
-    Invalid(String),
+    /// A setting is out of range (a threshold, a tolerance, a detector parameter).
+    #[error("invalid setting {field} = {value}: it must be {allowed}")]
+    Setting {
+        /// The setting, as the config type or command-line option names it.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it may be.
+        allowed: &'static str,
+    },
+    /// Point pairs from which no homography can be fitted (too few, non-finite, duplicate or
+    /// collinear points, an ill-conditioned system, a fit through infinity).
+    #[error("{reason}")]
+    Homography {
+        /// What is degenerate, naming the side (pixel or surface) and the point.
+        reason: String,
+    },
+    /// An input has the wrong number of values (a model's input tensor, a crack map or mask
+    /// that does not fit its image).
+    #[error("{what} has {got} values, expected {expected}")]
+    Shape {
+        /// The input.
+        what: &'static str,
+        /// Its length.
+        got: usize,
+        /// The length it must have.
+        expected: usize,
+    },
+    /// An image with no pixels.
+    #[error("image of {width}×{height} pixels: nothing to detect in")]
+    EmptyImage {
+        /// Width, px.
+        width: u32,
+        /// Height, px.
+        height: u32,
+    },
+    /// A crack-map value that is not a probability.
+    #[error("crack map value {value} is not a probability in [0, 1]")]
+    NotProbability {
+        /// The value.
+        value: f32,
+    },
+    /// A model asked for an output it does not have (a crack map of a box model).
+    #[error("{model} returns {has}, not {wanted}")]
+    WrongOutput {
+        /// The model's name.
+        model: String,
+        /// What it returns.
+        has: &'static str,
+        /// What was asked for.
+        wanted: &'static str,
+    },
+    /// A features file lacks a frame the COCO file lists.
+    #[error("the features file has no frame {file_name:?}")]
+    MissingFrame {
+        /// The frame's file name.
+        file_name: String,
+    },
+    /// Results could not be encoded as JSON.
+    #[error("cannot encode {what}: {message}")]
+    Encode {
+        /// What was being encoded.
+        what: &'static str,
+        /// The encoder's message.
+        message: String,
+    },
     /// A homography calibration file is malformed or degenerate.
     #[error("calibration {path}: {message}")]
     Calibration {
@@ -57,6 +120,15 @@ pub enum VisionError {
 }
 
 impl VisionError {
+    /// [`VisionError::Setting`] for `field = value`, which must be `allowed`.
+    pub(crate) fn setting(field: &'static str, value: f64, allowed: &'static str) -> VisionError {
+        VisionError::Setting {
+            field,
+            value,
+            allowed,
+        }
+    }
+
     /// Maps an I/O failure on `path` (for `map_err`).
     pub(crate) fn io(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> VisionError + '_ {
         move |source| VisionError::Io {
@@ -74,8 +146,10 @@ impl From<crackbot_imaging::ImagingError> for VisionError {
         match e {
             E::Io { path, source } => VisionError::Io { path, source },
             E::Coco { path, message } => VisionError::Coco { path, message },
-            E::Homography(message) => VisionError::Invalid(message),
-            other => VisionError::Invalid(other.to_string()),
+            E::Homography(reason) => VisionError::Homography { reason },
+            other => VisionError::Homography {
+                reason: other.to_string(),
+            },
         }
     }
 }

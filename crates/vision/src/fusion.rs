@@ -38,10 +38,11 @@ impl FusionParams {
     /// Checks `iou` is in `[0, 1]`.
     pub fn validate(&self) -> Result<(), VisionError> {
         if !(0.0..=1.0).contains(&self.iou) {
-            return Err(VisionError::Invalid(format!(
-                "fusion: iou must be in [0, 1], got {}",
-                self.iou
-            )));
+            return Err(VisionError::setting(
+                "fusion iou",
+                f64::from(self.iou),
+                "in [0, 1]",
+            ));
         }
         Ok(())
     }

@@ -16,7 +16,7 @@
 //!   the image side in px (`|H⁻¹(surface) − pixel|`).
 //! * Degenerate input (fewer than 4 pairs, non-finite values, duplicate points, (almost) all points
 //!   on one line, an ill-conditioned system, a fit that sends an input point to infinity) is
-//!   rejected with [`VisionError::Invalid`]; nothing here panics on user data.
+//!   rejected with [`VisionError::Homography`]; nothing here panics on user data.
 
 use std::path::Path;
 
@@ -36,7 +36,9 @@ const GEOMETRY_EPS: f64 = 1e-9;
 const CONDITION_EPS: f64 = 1e-7;
 
 fn invalid(message: impl Into<String>) -> VisionError {
-    VisionError::Invalid(message.into())
+    VisionError::Homography {
+        reason: message.into(),
+    }
 }
 
 /// Hartley normalisation: `T` with centroid → origin and mean distance → √2. `None` when all
@@ -298,12 +300,14 @@ pub fn fit_ransac(
 ) -> Result<RansacFit, VisionError> {
     let usable = threshold_mm > 0.0 && threshold_mm.is_finite();
     if !usable {
-        return Err(invalid(format!(
-            "RANSAC threshold must be positive, got {threshold_mm} mm"
-        )));
+        return Err(VisionError::setting(
+            "RANSAC threshold_mm",
+            threshold_mm,
+            "a positive number of mm",
+        ));
     }
     if iterations == 0 {
-        return Err(invalid("RANSAC needs at least one iteration"));
+        return Err(VisionError::setting("RANSAC iterations", 0.0, "≥ 1"));
     }
     let (pixels, surface) = checked_sides(pairs)?;
     let pixel_scale = principal_spread(&pixels).0;

@@ -236,10 +236,11 @@ impl OnnxDetector {
     pub fn run_tensor(&mut self, tensor: &[f32]) -> Result<Vec<f32>, VisionError> {
         let s = self.size;
         if tensor.len() != 3 * s * s {
-            return Err(VisionError::Invalid(format!(
-                "input tensor has {} values, the model takes 3×{s}×{s}",
-                tensor.len()
-            )));
+            return Err(VisionError::Shape {
+                what: "the input tensor",
+                got: tensor.len(),
+                expected: 3 * s * s,
+            });
         }
         let name = self.name.clone();
         let fail = |e: ort::Error| VisionError::Runtime(format!("{name}: {e}"));
@@ -274,10 +275,11 @@ impl OnnxDetector {
     /// The crack map of `image` (crack-map models only).
     pub fn crack_map(&mut self, image: &image::RgbImage) -> Result<CrackMap, VisionError> {
         if self.output != ModelOutput::CrackMap {
-            return Err(VisionError::Invalid(format!(
-                "{} returns boxes, not a crack map",
-                self.name
-            )));
+            return Err(VisionError::WrongOutput {
+                model: self.name.clone(),
+                has: "boxes",
+                wanted: "a crack map",
+            });
         }
         let (tensor, lb) = self.preprocess(image)?;
         CrackMap::new(self.run_tensor(&tensor)?, lb)

@@ -138,9 +138,11 @@ impl PixelEvaluator {
     /// An evaluator with a tolerance of `tolerance_px` pixels (≥ 0, finite).
     pub fn new(tolerance_px: f64) -> Result<Self, VisionError> {
         if !(tolerance_px.is_finite() && (0.0..=50.0).contains(&tolerance_px)) {
-            return Err(VisionError::Invalid(format!(
-                "pixel tolerance must be between 0 and 50 px, got {tolerance_px}"
-            )));
+            return Err(VisionError::setting(
+                "pixel tolerance_px",
+                tolerance_px,
+                "in [0, 50] px",
+            ));
         }
         let r = tolerance_px.floor() as isize;
         let offsets = (-r..=r)
@@ -164,20 +166,21 @@ impl PixelEvaluator {
         width: usize,
         height: usize,
     ) -> Result<(), VisionError> {
-        if prob.len() != width * height || truth.len() != width * height {
-            return Err(VisionError::Invalid(format!(
-                "crack map has {} values and mask {} for a {width}×{height} image",
-                prob.len(),
-                truth.len()
-            )));
+        for (what, got) in [("the crack map", prob.len()), ("the mask", truth.len())] {
+            if got != width * height {
+                let expected = width * height;
+                return Err(VisionError::Shape {
+                    what,
+                    got,
+                    expected,
+                });
+            }
         }
         if let Some(v) = prob
             .iter()
             .find(|v| !(v.is_finite() && (0.0..=1.0).contains(*v)))
         {
-            return Err(VisionError::Invalid(format!(
-                "crack map value {v} is not a probability in [0, 1]"
-            )));
+            return Err(VisionError::NotProbability { value: *v });
         }
         let mut near_truth = vec![false; truth.len()];
         let mut max_near = vec![0f32; prob.len()];

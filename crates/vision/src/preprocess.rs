@@ -37,12 +37,10 @@ impl Letterbox {
     /// The letterbox of a `width × height` image into `size × size`.
     pub fn new(width: u32, height: u32, size: usize) -> Result<Self, VisionError> {
         if width == 0 || height == 0 {
-            return Err(VisionError::Invalid(format!(
-                "image of {width}×{height} pixels: nothing to detect in"
-            )));
+            return Err(VisionError::EmptyImage { width, height });
         }
         if size == 0 {
-            return Err(VisionError::Invalid("input size 0".into()));
+            return Err(VisionError::setting("input size", 0.0, "≥ 1 px"));
         }
         let scale = size as f32 / width.max(height) as f32;
         let fit = |v: u32| ((v as f32 * scale + 0.5).floor() as usize).clamp(1, size);

@@ -173,11 +173,8 @@ pub fn scene_recall(
             .images
             .iter()
             .find(|f| f.file_name == image.file_name)
-            .ok_or_else(|| {
-                VisionError::Invalid(format!(
-                    "the features file has no frame {:?}",
-                    image.file_name
-                ))
+            .ok_or_else(|| VisionError::MissingFrame {
+                file_name: image.file_name.clone(),
             })?;
         let dets: Vec<BoundingBox> = results
             .iter()

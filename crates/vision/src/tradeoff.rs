@@ -144,8 +144,10 @@ impl TradeoffReport {
         let md_path = dir.join("tradeoff.md");
         std::fs::write(&md_path, &md).map_err(VisionError::io(&md_path))?;
         let json_path = dir.join("tradeoff.json");
-        let json = serde_json::to_string_pretty(&self.rows)
-            .map_err(|e| VisionError::Invalid(format!("cannot encode the trade-off rows: {e}")))?;
+        let json = serde_json::to_string_pretty(&self.rows).map_err(|e| VisionError::Encode {
+            what: "the trade-off rows",
+            message: e.to_string(),
+        })?;
         std::fs::write(&json_path, json).map_err(VisionError::io(&json_path))?;
         Ok((md, md_path, json_path))
     }

@@ -55,16 +55,22 @@ impl Integrator {
             | Integrator::BackwardEuler { substeps }
             | Integrator::SymplecticEuler { substeps } => {
                 if substeps == 0 || substeps > 1_000_000 {
-                    return Err(SimError::Invalid(format!(
-                        "integrator substeps must be in 1..=1000000, got {substeps}"
-                    )));
+                    return Err(SimError::setting(
+                        "integrator.substeps",
+                        substeps,
+                        "in 1..=1000000",
+                    ));
                 }
             }
             Integrator::DormandPrince { rtol, atol } => {
-                if !(rtol.is_finite() && rtol > 0.0 && atol.is_finite() && atol > 0.0) {
-                    return Err(SimError::Invalid(format!(
-                        "Dormand-Prince tolerances must be positive, got rtol {rtol}, atol {atol}"
-                    )));
+                for (name, v) in [("integrator.rtol", rtol), ("integrator.atol", atol)] {
+                    if !(v.is_finite() && v > 0.0) {
+                        return Err(SimError::setting(
+                            name,
+                            v,
+                            "> 0 (a Dormand-Prince tolerance)",
+                        ));
+                    }
                 }
             }
         }

@@ -103,23 +103,24 @@ impl FingerParams {
         ];
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
-                return Err(SimError::Invalid(format!(
-                    "{name} must be a positive number, got {v}"
-                )));
+                return Err(SimError::setting(name, v, "> 0"));
             }
         }
         if let Some(t) = self.lateral_travel_mm {
             if !(t.is_finite() && t > 0.0) {
-                return Err(SimError::Invalid(format!(
-                    "sensor.finger.lateral_travel_mm must be a positive number, got {t}"
-                )));
+                return Err(SimError::setting(
+                    "sensor.finger.lateral_travel_mm",
+                    t,
+                    "> 0 mm (or left out)",
+                ));
             }
         }
         if self.tip_radius_mm > 50.0 {
-            return Err(SimError::Invalid(format!(
-                "sensor.finger.tip_radius_mm must be at most 50 mm, got {}",
-                self.tip_radius_mm
-            )));
+            return Err(SimError::setting(
+                "sensor.finger.tip_radius_mm",
+                self.tip_radius_mm,
+                "at most 50 mm",
+            ));
         }
         let non_negative = [
             (
@@ -139,9 +140,7 @@ impl FingerParams {
         ];
         for (name, v) in non_negative {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(SimError::Invalid(format!(
-                    "{name} must be a non-negative number, got {v}"
-                )));
+                return Err(SimError::setting(name, v, "≥ 0"));
             }
         }
         Ok(())

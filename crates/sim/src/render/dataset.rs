@@ -40,12 +40,12 @@ pub fn render_dataset(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<RenderSummary, SimError> {
     if scene.camera.is_none() {
-        return Err(SimError::Invalid(
-            "the scene has no camera: nothing to render (add a [camera] table)".into(),
-        ));
+        return Err(SimError::NoCamera {
+            scene: scene.name.clone(),
+        });
     }
     if frames == 0 {
-        return Err(SimError::Invalid("render at least one frame".into()));
+        return Err(SimError::setting("frames", frames, "≥ 1"));
     }
     let start = Instant::now();
     let mut rendered = Vec::with_capacity(frames as usize);

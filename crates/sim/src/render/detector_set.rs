@@ -124,17 +124,22 @@ pub fn write_detector_set(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<DetectorSetSummary, SimError> {
     if scenes == 0 {
-        return Err(SimError::Invalid("draw at least one scene".into()));
+        return Err(SimError::setting("scenes", scenes, "≥ 1"));
     }
     if frames_per_scene == 0 {
-        return Err(SimError::Invalid(
-            "render at least one frame per scene".into(),
+        return Err(SimError::setting(
+            "frames_per_scene",
+            frames_per_scene,
+            "≥ 1",
         ));
     }
-    if first_seed.checked_add(u64::from(scenes) - 1).is_none() {
-        return Err(SimError::Invalid(format!(
-            "scene seeds {first_seed} + {scenes} overflow u64"
-        )));
+    let last_first_seed = u64::MAX - (u64::from(scenes) - 1);
+    if first_seed > last_first_seed {
+        return Err(SimError::setting(
+            "first_seed",
+            first_seed,
+            format!("≤ {last_first_seed}, so that the seeds of {scenes} scenes fit in u64"),
+        ));
     }
     params.validate()?;
     let images_dir = out.join("images");

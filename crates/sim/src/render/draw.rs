@@ -5,7 +5,7 @@ use image::{GrayImage, RgbImage};
 use nalgebra::Matrix3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
+use rand_distr::StandardNormal;
 
 use super::assets::{pick_strip, CrackAssets};
 use super::frame::{BoxAcc, BoxKind, Frame, GroundTruthBox};
@@ -60,23 +60,23 @@ struct Light {
 impl Light {
     /// Draws the light from `rng` for a lighting variation `lighting` (the order of the draws
     /// is part of the frame's determinism).
-    fn draw(rng: &mut ChaCha8Rng, lighting: f64) -> Result<Light, SimError> {
+    fn draw(rng: &mut ChaCha8Rng, lighting: f64) -> Light {
         let az: f64 = rng.random_range(0.0..std::f64::consts::TAU);
         let el: f64 = rng.random_range(40f64..65.0).to_radians();
         let dir = [el.cos() * az.cos(), el.cos() * az.sin(), el.sin()];
-        let std_normal = Normal::new(0.0f64, 1.0).map_err(|e| SimError::Invalid(e.to_string()))?;
-        let gain = (1.0 + 0.5 * lighting * std_normal.sample(rng)).clamp(0.4, 1.6);
+        let z: f64 = rng.sample(StandardNormal);
+        let gain = (1.0 + 0.5 * lighting * z).clamp(0.4, 1.6);
         let grad_strength = lighting * rng.random::<f64>();
         let grad_angle: f64 = rng.random_range(0.0..std::f64::consts::TAU);
         let vignette = 0.8 * lighting * rng.random::<f64>();
-        Ok(Light {
+        Light {
             dir,
             elevation: el,
             gain,
             grad_strength,
             grad_angle,
             vignette,
-        })
+        }
     }
 }
 
@@ -119,11 +119,8 @@ pub fn render(
     seed: u64,
 ) -> Result<Frame, SimError> {
     scene.validate()?;
-    let spec = scene.camera.as_ref().ok_or_else(|| {
-        SimError::Invalid(format!(
-            "scene {:?} has no camera: nothing to render",
-            scene.name
-        ))
+    let spec = scene.camera.as_ref().ok_or_else(|| SimError::NoCamera {
+        scene: scene.name.clone(),
     })?;
     let cam = Camera::from_spec(spec)?;
     let has_lines = scene
@@ -131,25 +128,30 @@ pub fn render(
         .iter()
         .any(|f| matches!(f, Feature::Crack { .. } | Feature::Decoy { .. }));
     if has_lines && assets.strips().is_empty() {
-        return Err(SimError::Invalid(
-            "no crack photo strips loaded: cannot draw cracks".into(),
-        ));
+        return Err(SimError::NoCrackPhotos);
     }
     let noise_sigma = opts.noise_sigma.unwrap_or(spec.noise_sigma);
     let lighting = opts.lighting_variation.unwrap_or(spec.lighting_variation);
+    // Named as the option that set it, or the scene's camera field.
     if !(noise_sigma.is_finite() && noise_sigma >= 0.0) {
-        return Err(SimError::Invalid(format!(
-            "render noise_sigma must be ≥ 0, got {noise_sigma}"
-        )));
+        let field = if opts.noise_sigma.is_some() {
+            "noise_sigma"
+        } else {
+            "camera.noise_sigma"
+        };
+        return Err(SimError::setting(field, noise_sigma, "≥ 0"));
     }
     if !(lighting.is_finite() && lighting >= 0.0) {
-        return Err(SimError::Invalid(format!(
-            "render lighting_variation must be ≥ 0, got {lighting}"
-        )));
+        let field = if opts.lighting_variation.is_some() {
+            "lighting_variation"
+        } else {
+            "camera.lighting_variation"
+        };
+        return Err(SimError::setting(field, lighting, "≥ 0"));
     }
     let appearance = opts.appearance_seed.unwrap_or(seed);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let light = Light::draw(&mut rng, lighting)?;
+    let light = Light::draw(&mut rng, lighting);
     let mut noise_gen = NoiseGen {
         state: rng.random(),
     };
@@ -172,7 +174,7 @@ pub fn render(
         ctx.cam.height(),
         std::mem::take(&mut canvas.crack_mask),
     )
-    .ok_or_else(|| SimError::Invalid("crack mask buffer of the wrong size".into()))?;
+    .ok_or(SimError::Buffer { what: "crack mask" })?;
     let image = develop(&ctx, canvas, noise_sigma, &mut noise_gen)?;
     Ok(Frame {
         image,
@@ -555,5 +557,5 @@ fn develop(
         }
     }
     RgbImage::from_raw(ctx.cam.width(), ctx.cam.height(), raw)
-        .ok_or_else(|| SimError::Invalid("image buffer of the wrong size".into()))
+        .ok_or(SimError::Buffer { what: "image" })
 }
