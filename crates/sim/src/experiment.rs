@@ -186,6 +186,15 @@ impl ExperimentConfig {
                 "> 0 Hz",
             ));
         }
+        self.validate_samples()?;
+        self.validate_mounts()?;
+        self.sensor.finger.validate()?;
+        self.sensor.optics.validate()?;
+        self.integrator.validate()
+    }
+
+    /// Checks the plates' depths, printed slots and printed decoys.
+    fn validate_samples(&self) -> Result<(), SimError> {
         let s = &self.samples;
         // Every depth the plates are cut to, named as a parameter file names it.
         let slot_depths = s.printed_slots.iter().enumerate().map(|(k, slot)| {
@@ -258,7 +267,12 @@ impl ExperimentConfig {
                 ));
             }
         }
-        let n = self.surfaces().len() - s.printed_decoys.len();
+        Ok(())
+    }
+
+    /// Checks the plate mounts: one per plate (or none), finite offsets, reflectivity ≥ 0.
+    fn validate_mounts(&self) -> Result<(), SimError> {
+        let n = self.surfaces().len() - self.samples.printed_decoys.len();
         // The mounts are this experiment's table of a parameter file.
         let mounts = match self.experiment {
             Experiment::Recognition => "mounts.recognition",
@@ -287,9 +301,7 @@ impl ExperimentConfig {
                 ));
             }
         }
-        self.sensor.finger.validate()?;
-        self.sensor.optics.validate()?;
-        self.integrator.validate()
+        Ok(())
     }
 
     /// The mount of plate `k` (neutral when none is given). The printed decoys, which follow the
