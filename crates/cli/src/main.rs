@@ -56,7 +56,7 @@ enum Command {
     Demo(DemoArgs),
     /// Record a sensor's serial stream to CSV.
     Record(RecordArgs),
-    /// Play a CSV recording back as a stream and summarise it.
+    /// Play a recording (CSV, or an MCAP log) back as a stream and summarise it.
     Replay(ReplayArgs),
     /// Calibration files.
     #[command(subcommand)]
@@ -124,6 +124,10 @@ struct RecordArgs {
     /// Stop after this many seconds (default: until Ctrl-C or the port goes away).
     #[arg(long)]
     seconds: Option<f64>,
+    /// Also write the samples as an MCAP log (Foxglove, PlotJuggler; the `/tactile` channel,
+    /// each sample stamped with the host's clock), beside the CSV.
+    #[arg(long, value_name = "FILE")]
+    mcap: Option<PathBuf>,
     /// Label written in column 8 (surface class, or crack width in mm).
     #[arg(long, default_value_t = 0.0)]
     label: f64,
@@ -137,7 +141,8 @@ struct RecordArgs {
 
 #[derive(Debug, Args)]
 struct ReplayArgs {
-    /// CSV recording.
+    /// CSV recording, or an MCAP log (`mission.mcap`, `crackbot record --mcap`): its
+    /// `/tactile` samples.
     file: PathBuf,
     /// Speed-up factor (1 = original rate).
     #[arg(long, default_value_t = 1.0, conflicts_with = "unpaced")]
@@ -284,8 +289,32 @@ async fn record(args: RecordArgs) -> Result<()> {
     } else {
         progress(None)
     };
-    let report = session.run(ctrl_c(), |_| bar.inc(1)).await;
+    let log = match &args.mcap {
+        Some(path) => Some(crackbot_mcap::LogWriter::create(
+            path,
+            crackbot_mcap::unix_ns(std::time::SystemTime::now()),
+        )?),
+        None => None,
+    };
+    let mut log_error = None;
+    let report = session
+        .run(ctrl_c(), |s| {
+            bar.inc(1);
+            if let Some(log) = &log {
+                if let Err(e) = log_sample(log, s) {
+                    log_error.get_or_insert(e);
+                }
+            }
+        })
+        .await;
     bar.finish_and_clear();
+    if let Some(log) = log {
+        let path = log.finish()?;
+        if let Some(e) = log_error {
+            return Err(e.into());
+        }
+        eprintln!("logged the samples to {}", path.display());
+    }
     let report = report?;
     if matches!(report.ended_by, RecordEnd::Stopped) {
         eprintln!("interrupted: the recording is flushed");
@@ -367,8 +396,55 @@ async fn demo(args: DemoArgs) -> Result<()> {
     Ok(())
 }
 
+/// One recorded sample on the log's `/tactile` channel (its time: since the port opened).
+fn log_sample(
+    log: &crackbot_mcap::LogWriter,
+    s: &crackbot_acquisition::Sample,
+) -> Result<(), crackbot_mcap::LogError> {
+    let t_s = s.host_time.as_secs_f64();
+    let v = serde_json::json!({
+        "t_s": t_s, "d1": s.raw[0], "d2": s.raw[1], "d3": s.raw[2], "p": s.raw[3],
+        "slide": null, "along_mm": null,
+    });
+    log.json(crackbot_mcap::JsonTopic::Tactile, t_s, &v)
+}
+
+/// A CSV recording, or the `/tactile` channel of an MCAP log (a mission's `mission.mcap`, or
+/// `crackbot record --mcap`) as one.
+fn recording_of(path: &std::path::Path) -> Result<crackbot_recording::Recording> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+    {
+        let log = crackbot_mcap::read_log(path)?;
+        let rows = crackbot_mcap::tactile_rows(&log)
+            .with_context(|| format!("{}: the /tactile channel", path.display()))?;
+        if rows.is_empty() {
+            bail!("{}: no /tactile samples in this log", path.display());
+        }
+        return Ok(crackbot_recording::Recording {
+            rows: rows
+                .iter()
+                .map(|r| crackbot_recording::Row {
+                    x_mm: r.along_mm.unwrap_or(0.0),
+                    d1: f64::from(r.raw[0]),
+                    d2: f64::from(r.raw[1]),
+                    d3: f64::from(r.raw[2]),
+                    p: f64::from(r.raw[3]),
+                    direction: 0,
+                    slide: r.slide.unwrap_or(0),
+                    label: 0.0,
+                    repetition: 1,
+                })
+                .collect(),
+            extra: None,
+        });
+    }
+    Ok(crackbot_recording::read_csv(path)?)
+}
+
 async fn replay(args: ReplayArgs) -> Result<()> {
-    let recording = crackbot_recording::read_csv(&args.file)?;
+    let recording = recording_of(&args.file)?;
     let speed = if args.unpaced {
         ReplaySpeed::Unpaced
     } else if args.speed.is_finite() && args.speed > 0.0 {

@@ -105,6 +105,15 @@ pub struct RunArgs {
     /// also have that line on the map but for their gap plus this much. Negative: off.
     #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_TRACE_GAP_MM, allow_negative_numbers = true)]
     pub piece_trace_gap_mm: f64,
+    /// Do not write the mission's log, `mission.mcap` (for Foxglove and other MCAP readers;
+    /// written by default beside the report).
+    #[arg(long)]
+    pub no_mcap: bool,
+    /// Serve the mission live over the Foxglove WebSocket protocol, on ADDR (default
+    /// 127.0.0.1:8765; port 0 picks a free one): open it in Foxglove with "Open connection".
+    #[cfg(feature = "foxglove")]
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = crackbot_mcap_live_addr())]
+    pub foxglove: Option<std::net::SocketAddr>,
     /// Deployed recognition model.
     #[arg(long)]
     pub recognition_model: Option<PathBuf>,
@@ -251,6 +260,11 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
         config.width_model = p.clone();
     }
     config.detector_model = args.detector.clone();
+    config.mcap = !args.no_mcap;
+    #[cfg(feature = "foxglove")]
+    {
+        config.foxglove = args.foxglove;
+    }
     if args.loss > 0.0 || args.reorder > 0.0 || args.duplicate > 0.0 {
         let faults = crackbot_link::FaultConfig {
             drop: args.loss,
@@ -265,6 +279,12 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
         config.host_link_faults = Some(crackbot_link::FaultConfig { seed: 2, ..faults });
     }
     Ok(config)
+}
+
+/// `--foxglove`'s address when none is given.
+#[cfg(feature = "foxglove")]
+fn crackbot_mcap_live_addr() -> &'static str {
+    crackbot_mission::inspect::DEFAULT_LIVE_ADDR
 }
 
 /// The hardware the flags name (`--serial`, `--controller` and `--key` together).
@@ -367,7 +387,11 @@ fn show(bar: &indicatif::ProgressBar, p: &Progress) {
                 100.0 * f.confidence
             ));
         }
-        Progress::Frame(_) | Progress::Samples { .. } | Progress::Health(_) => {}
+        Progress::Frame(_)
+        | Progress::Samples { .. }
+        | Progress::Poses { .. }
+        | Progress::Stroked { .. }
+        | Progress::Health(_) => {}
     }
 }
 

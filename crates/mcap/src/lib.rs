@@ -26,7 +26,7 @@ mod writer;
 
 #[cfg(feature = "live")]
 pub use live::DEFAULT_LIVE_ADDR;
-pub use reader::{read_log, LoggedMessage, MissionLog, Payload};
+pub use reader::{read_log, tactile_rows, LoggedMessage, MissionLog, Payload, TactileRow};
 pub use topics::{JsonTopic, Topic};
 pub use writer::{Label, LogLevel, LogWriter, Polyline, SceneLine};
 

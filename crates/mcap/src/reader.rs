@@ -223,3 +223,50 @@ fn decode(topic: &str, data: &[u8]) -> Result<Payload, String> {
         }
     })
 }
+
+/// One sample of the `/tactile` channel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TactileRow {
+    /// Mission (or recording) time, s.
+    pub t_s: f64,
+    /// When it was logged, Unix ns.
+    pub log_time_ns: u64,
+    /// D1, D2, D3, P, counts.
+    pub raw: [u16; 4],
+    /// The slide the finger was down in.
+    pub slide: Option<u32>,
+    /// Where it was along the stroke, mm.
+    pub along_mm: Option<f64>,
+}
+
+/// The `/tactile` channel's samples, in order; a sample missing a field, or with a count
+/// outside 0–65535, is an error naming it.
+pub fn tactile_rows(log: &MissionLog) -> Result<Vec<TactileRow>, LogError> {
+    let bad = |index: usize, detail: String| LogError::BadMessage {
+        path: log.path.clone(),
+        topic: JsonTopic::Tactile.topic().into(),
+        index,
+        detail,
+    };
+    log.json(JsonTopic::Tactile)
+        .enumerate()
+        .map(|(i, (log_time_ns, v))| {
+            let count = |k: &str| {
+                v.get(k)
+                    .and_then(Value::as_u64)
+                    .and_then(|c| u16::try_from(c).ok())
+                    .ok_or_else(|| bad(i, format!("{k} is not a count (0–65535): {}", v[k])))
+            };
+            Ok(TactileRow {
+                t_s: v["t_s"].as_f64().ok_or_else(|| bad(i, "no t_s".into()))?,
+                log_time_ns,
+                raw: [count("d1")?, count("d2")?, count("d3")?, count("p")?],
+                slide: v
+                    .get("slide")
+                    .and_then(Value::as_u64)
+                    .and_then(|s| u32::try_from(s).ok()),
+                along_mm: v.get("along_mm").and_then(Value::as_f64),
+            })
+        })
+        .collect()
+}

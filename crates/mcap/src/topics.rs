@@ -55,6 +55,9 @@ pub enum JsonTopic {
     /// One sensor sample: time, the four channels (counts), the slide and the finger's position
     /// along its stroke when it is down in one (400 Hz).
     Tactile,
+    /// One sample of a recorded stroke, as its pass was judged from it: time, the four
+    /// channels, the slide and the position along the stroke interpolated from the arm's states.
+    Slide,
     /// The arm's pose in surface mm and what it is doing (100 Hz).
     ArmPose,
     /// A slide pass judged (the report's pass record).
@@ -71,8 +74,9 @@ pub enum JsonTopic {
 
 impl JsonTopic {
     /// Every one, in the order the log creates them.
-    pub const ALL: [JsonTopic; 7] = [
+    pub const ALL: [JsonTopic; 8] = [
         JsonTopic::Tactile,
+        JsonTopic::Slide,
         JsonTopic::ArmPose,
         JsonTopic::Verdict,
         JsonTopic::Feeling,
@@ -85,6 +89,7 @@ impl JsonTopic {
     pub fn topic(self) -> &'static str {
         match self {
             JsonTopic::Tactile => "/tactile",
+            JsonTopic::Slide => "/slide",
             JsonTopic::ArmPose => "/arm/pose",
             JsonTopic::Verdict => "/verdicts",
             JsonTopic::Feeling => "/feeling",
@@ -103,6 +108,7 @@ impl JsonTopic {
     pub fn schema(self) -> &'static str {
         match self {
             JsonTopic::Tactile => "crackbot.TactileSample",
+            JsonTopic::Slide => "crackbot.StrokeSample",
             JsonTopic::ArmPose => "crackbot.ArmPose",
             JsonTopic::Verdict => "crackbot.PassRecord",
             JsonTopic::Feeling => "crackbot.Feeling",
@@ -127,6 +133,19 @@ impl JsonTopic {
                     ("along_mm", "number"),
                 ],
                 &["t_s", "d1", "d2", "d3", "p"],
+            ),
+            JsonTopic::Slide => (
+                "One sample of a recorded stroke",
+                &[
+                    ("t_s", "number"),
+                    ("slide", "integer"),
+                    ("along_mm", "number"),
+                    ("d1", "integer"),
+                    ("d2", "integer"),
+                    ("d3", "integer"),
+                    ("p", "integer"),
+                ],
+                &["t_s", "slide", "along_mm", "d1", "d2", "d3", "p"],
             ),
             JsonTopic::ArmPose => (
                 "The arm's pose over the surface, mm",

@@ -331,7 +331,7 @@ impl LogWriter {
     pub fn finish(mut self) -> Result<PathBuf, LogError> {
         #[cfg(feature = "live")]
         if let Some(s) = self.server.take() {
-            s.stop();
+            s.stop().detach_all();
         }
         if let Some(m) = self.mcap.take() {
             let mut w = m.close().map_err(sdk("closing the MCAP file"))?;

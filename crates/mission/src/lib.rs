@@ -51,6 +51,9 @@ pub enum MissionError {
         /// What went wrong.
         source: std::io::Error,
     },
+    /// The mission's log (`mission.mcap`) could not be written.
+    #[error("the mission log: {0}")]
+    Log(#[from] crackbot_mcap::LogError),
     /// A mission on hardware lacks an input it needs.
     #[error("a {mode} mission needs {what}")]
     Missing {

@@ -377,7 +377,10 @@ pub fn from_progress(p: &Progress) -> Result<Option<Telemetry>, WireError> {
         ),
         Progress::Slid { pass, .. } => Telemetry::Verdict(PassVerdict::from(pass.as_ref())),
         Progress::Feeling(f) => Telemetry::Feeling(Feeling::from(f)),
-        Progress::Health(_) | Progress::Starting => return Ok(None),
+        Progress::Health(_)
+        | Progress::Poses { .. }
+        | Progress::Stroked { .. }
+        | Progress::Starting => return Ok(None),
     }))
 }
 

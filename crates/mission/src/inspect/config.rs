@@ -177,6 +177,13 @@ pub struct InspectConfig {
     pub faults: Faults,
     /// Link packet faults injected on the host's side.
     pub host_link_faults: Option<crackbot_link::FaultConfig>,
+    /// Write the mission's log, `mission.mcap` in [`out_dir`](Self::out_dir) (on by default):
+    /// every channel a front end sees, stamped with the host's clock (`crackbot-mcap`).
+    pub mcap: bool,
+    /// Serve the log's channels live over the Foxglove WebSocket protocol on this address
+    /// (port 0: any free one; the feature `foxglove`). `None`: no live server.
+    #[cfg(feature = "foxglove")]
+    pub foxglove: Option<std::net::SocketAddr>,
 }
 
 /// Shortest stroke across a candidate by default, mm (or the scene's manipulator stroke, if
@@ -324,6 +331,9 @@ impl InspectConfig {
             #[cfg(feature = "sim")]
             faults: Faults::default(),
             host_link_faults: None,
+            mcap: true,
+            #[cfg(feature = "foxglove")]
+            foxglove: None,
         }
     }
 

@@ -58,6 +58,8 @@ mod arm;
 mod config;
 mod feel;
 mod judge;
+mod live;
+mod log;
 mod mission;
 mod passes;
 mod perceive;
@@ -76,8 +78,11 @@ pub use config::{
     InspectMode, DOUBTED_DIP_CONFIDENCE, MIN_DIP_COUNTS, PRINT_CHECK_HEIGHT_MM, TOUCH_MARGIN_MM,
     TOUCH_MIN_STROKE_MM,
 };
+#[cfg(feature = "foxglove")]
+pub use crackbot_mcap::DEFAULT_LIVE_ADDR;
 pub use feel::Feeling;
 pub use judge::{shallowest_crack_ratio, IMPLAUSIBLE_RATIO_SHARE, WEAK_NO_CRACK_CONFIDENCE};
+pub use log::LOG_FILE;
 pub use passes::{
     own_dip, SEPARATE_DIPS_BACK_SHARE, SEPARATE_DIPS_EXCESS_MM, SEPARATE_DIPS_GAP_MM,
 };
@@ -90,8 +95,9 @@ pub use raised::{
     RAISED_PASS_GUARD_COUNTS, SURFACE_RISE_TOLERANCE_MM,
 };
 pub use report::{
-    CrackDoubt, Dip, Evidence, FrameInfo, InspectReport, LinkCounters, LiveSample, PassDoubt,
-    PassRecord, Progress, RejectedCandidate, ReportedCrack, StageTimes, StreamHealth, NOT_JUDGED,
+    ArmPose, CrackDoubt, Dip, Evidence, FrameInfo, InspectReport, LinkCounters, LiveSample,
+    PassDoubt, PassRecord, Progress, RejectedCandidate, ReportedCrack, StageTimes, StreamHealth,
+    StrokeSample, NOT_JUDGED,
 };
 pub use rig::{rig_of, Connection, HardwareRig, RigBackend};
 #[cfg(feature = "sim")]
@@ -139,9 +145,25 @@ pub fn run_inspection_on(
         }
     };
     let setup_s = started.elapsed().as_secs_f64();
-
+    let mut log = match log::MissionLog::open(config, arm.t0) {
+        Ok(log) => log,
+        Err(e) => {
+            drop(sensor);
+            backend.shutdown();
+            return Err(e);
+        }
+    };
+    if let Some(l) = log.as_mut() {
+        l.record(&Progress::Starting);
+    }
     let result = {
-        let mut rig = Rig::new(config, &mut arm, &mut sensor, backend, stop, &mut progress);
+        let mut logged = |p: &Progress| {
+            if let Some(l) = log.as_mut() {
+                l.record(p);
+            }
+            progress(p);
+        };
+        let mut rig = Rig::new(config, &mut arm, &mut sensor, backend, stop, &mut logged);
         mission::mission(&mut rig, (&recognition, &width), started, setup_s)
     };
     if result.is_err() {
@@ -156,9 +178,23 @@ pub fn run_inspection_on(
     };
     drop(sensor);
     backend.shutdown();
-    let mut report = result?;
+    let mut report = match result {
+        Ok(r) => r,
+        Err(e) => {
+            if let Some(l) = log {
+                // The mission's own error is the one to report; a log that fails too says so.
+                if let Err(le) = l.finish(Err(&e)) {
+                    tracing::warn!("{le}");
+                }
+            }
+            return Err(e);
+        }
+    };
     report.link = counters;
     save_report(&config.out_dir.join("report.json"), &report)?;
+    if let Some(l) = log {
+        l.finish(Ok(&report))?;
+    }
     Ok(report)
 }
 

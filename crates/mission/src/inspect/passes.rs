@@ -12,8 +12,9 @@ use crackbot_tactile::print_check;
 use super::arm::{down_at, mapped_states, pose, position_at, Arm};
 use super::config::InspectConfig;
 use super::feel::Feel;
+use super::live::{live_samples, new_poses, Stroke};
 use super::perceive::io_err;
-use super::report::{CrackDoubt, LiveSample, Progress, StreamHealth};
+use super::report::{CrackDoubt, Progress, StreamHealth, StrokeSample};
 use super::rig::RigBackend;
 use super::sensor::Sensor;
 use crate::MissionError;
@@ -109,8 +110,12 @@ pub(super) struct Rig<'a> {
     pub(super) backend: &'a mut dyn RigBackend,
     pub(super) stop: &'a AtomicBool,
     pub(super) progress: &'a mut dyn FnMut(&Progress),
+    /// The line the finger is moving along, for what is shown.
+    pub(super) stroke: Option<Stroke>,
     /// Samples already shown to the front end.
     shown: usize,
+    /// The controller time of the last arm state shown.
+    pose_shown_us: Option<u64>,
     last_shown: Instant,
     /// Samples and time at the last health event.
     health_at: (usize, Instant),
@@ -137,7 +142,9 @@ impl<'a> Rig<'a> {
             backend,
             stop,
             progress,
+            stroke: None,
             shown: 0,
+            pose_shown_us: None,
             last_shown: Instant::now(),
             health_at: (0, Instant::now()),
         }
@@ -150,13 +157,14 @@ impl<'a> Rig<'a> {
         let n = self.sensor.drain()?;
         if self.sensor.samples.len() > self.shown && self.last_shown.elapsed() >= SHOW_SAMPLES_EVERY
         {
-            let samples = self.sensor.samples[self.shown..]
-                .iter()
-                .map(|s| LiveSample {
-                    t_s: self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us) / 1e6,
-                    raw: s.raw,
-                })
-                .collect();
+            let stroke = self.stroke;
+            let stroke = stroke.as_ref();
+            let poses = new_poses(self.arm, self.pose_shown_us, stroke);
+            if let Some(last) = poses.last() {
+                self.pose_shown_us = Some(last.controller_us);
+                (self.progress)(&Progress::Poses { poses });
+            }
+            let samples = live_samples(self.arm, self.sensor, self.shown, stroke);
             (self.progress)(&Progress::Samples { samples });
             self.shown = self.sensor.samples.len();
             self.last_shown = Instant::now();
@@ -274,6 +282,7 @@ impl<'a> Rig<'a> {
         let config = self.config;
         let first_sample = self.sensor.samples.len();
         feel.begin(id, (a, b), dir, first_sample);
+        self.stroke = Some(Stroke::new(Some(id), a, b));
         self.arm.errors.clear();
         // A retried slide keeps its id: forget the first attempt's end.
         self.arm.done.retain(|&d| d != id);
@@ -342,6 +351,7 @@ impl<'a> Rig<'a> {
         // A silence of the sensor inside the stroke (a stall the stroke outlasted): slide again.
         let nominal_us: f64 = 2500.0 / config.speedup;
         let mut last_down: Option<f64> = None;
+        let mut shown = Vec::new();
         for s in &self.sensor.samples[first_sample..] {
             let host = self.sensor.sync.to_host(s.device_us).unwrap_or(s.host_us);
             let Some(p) = down_at(&mapped, host, id) else {
@@ -357,6 +367,11 @@ impl<'a> Rig<'a> {
             last_down = Some(host);
             samples.push(s.raw.map(f64::from));
             positions.push(along(a, u, p));
+            shown.push(StrokeSample {
+                t_s: host / 1e6,
+                raw: s.raw,
+                along_mm: along(a, u, p),
+            });
         }
         // Frames lost to a stall that lasted past the stroke's end: too few samples for the stroke.
         let expected =
@@ -370,6 +385,10 @@ impl<'a> Rig<'a> {
                 ),
             });
         }
+        (self.progress)(&Progress::Stroked {
+            slide: id,
+            samples: shown,
+        });
         Ok((samples, positions))
     }
 }
@@ -411,6 +430,7 @@ impl Rig<'_> {
         guard: Option<f64>,
     ) -> Result<(Recorded, Option<Obstruction>), MissionError> {
         let first_sample = self.sensor.samples.len();
+        self.stroke = Some(Stroke::new(None, line_start, to));
         let mut reference: Option<f64> = None;
         let mut obstruction: Option<Obstruction> = None;
         self.arm.errors.clear();
@@ -477,6 +497,7 @@ impl Rig<'_> {
         }
         // The sensor's samples lag the arm's states: wait (100 ms at most) until one taken
         // after the arm arrived (or was stopped) has come in.
+        self.stroke = None;
         let arrived_us = mapped_states(self.arm).last().map(|(h, _)| *h);
         let wait_until = Instant::now() + Duration::from_millis(100);
         while let Some(t) = arrived_us {

@@ -38,6 +38,19 @@ pub enum Progress {
         /// The new samples, oldest first.
         samples: Vec<LiveSample>,
     },
+    /// The arm's states as they arrive (100 Hz, shown every 25 ms or so with the samples).
+    Poses {
+        /// The new states, oldest first.
+        poses: Vec<ArmPose>,
+    },
+    /// A stroke recorded: the samples its pass is judged from, each with its position along
+    /// the stroke interpolated from the arm's states (what `slide-NNN.csv` holds, with times).
+    Stroked {
+        /// The slide's id on the link (the pass's `id`).
+        slide: u32,
+        /// Its samples, oldest first.
+        samples: Vec<StrokeSample>,
+    },
     /// The sensor stream's and the link's counters (every 0.5 s).
     Health(StreamHealth),
     /// What the finger feels so far in the stroke under way (every 0.1 s while it is down):
@@ -103,6 +116,38 @@ pub struct LiveSample {
     pub t_s: f64,
     /// D1, D2, D3, P, counts.
     pub raw: [u16; 4],
+    /// The slide the finger was down in, if any.
+    pub slide: Option<u32>,
+    /// Where the finger was along the stroke under way (a slide, or a raised pass of the print
+    /// check), mm from its start, by the arm's states around the sample; `None` between strokes.
+    pub along_mm: Option<f64>,
+}
+
+/// One sample of a recorded stroke.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StrokeSample {
+    /// Time since the mission's link started, s (the host's clock).
+    pub t_s: f64,
+    /// D1, D2, D3, P, counts.
+    pub raw: [u16; 4],
+    /// Where the finger was along the stroke, mm from its start.
+    pub along_mm: f64,
+}
+
+/// One state of the arm as it arrived.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ArmPose {
+    /// Time since the mission's link started, s (the host's clock, from the controller's
+    /// through the clock fit).
+    pub t_s: f64,
+    /// The controller's own clock, µs.
+    pub controller_us: u64,
+    /// Where the finger is, mm on the surface (z above it).
+    pub pose_mm: [f64; 3],
+    /// The slide it is in, if any.
+    pub slide: Option<u32>,
+    /// Where it is along the stroke under way, mm from its start.
+    pub along_mm: Option<f64>,
 }
 
 /// What the finger found for one slide pass.
