@@ -14,26 +14,8 @@ cache="${CRACKBOT_CACHE_DIR:-$HOME/.cache/crackbot}"
 venv="$cache/forest-onnx-venv"
 req="$here/forest_to_onnx.requirements.txt"
 
-pins_ok() {
-  [ -x "$venv/bin/python" ] && "$venv/bin/python" - "$req" <<'PYEOF' 2>/dev/null
-import sys
-from importlib.metadata import version
-for line in open(sys.argv[1]):
-    line = line.strip()
-    if not line or line.startswith("#"):
-        continue
-    name, want = line.split("==")
-    if version(name) != want:
-        sys.exit(1)
-PYEOF
-}
-
-if ! pins_ok; then
-  echo "forest_to_onnx: installing $(grep -v '^#' "$req" | tr '\n' ' ')into $venv" >&2
-  mkdir -p "$cache"
-  [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet --disable-pip-version-check -r "$req" >&2
-fi
+source "$here/pinned_venv.sh"
+pinned_venv "$venv" "$req" forest_to_onnx
 if [ "${1:-}" = "--setup" ]; then
   exit 0
 fi

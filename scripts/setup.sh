@@ -71,6 +71,10 @@ fi
 # and onnx, pinned in scripts/forest_to_onnx.requirements.txt, in $crackbot_cache/forest-onnx-venv.
 bash "$crackbot_root/scripts/forest_to_onnx.sh" --setup
 
+# The independent MCAP reader and Foxglove live-view client the tests use (scripts/mcap_check.sh),
+# pinned in scripts/mcap_check.requirements.txt, in $crackbot_cache/mcap-venv.
+bash "$crackbot_root/scripts/mcap_check.sh" --setup
+
 # Keep build artefacts outside the clone when CRACKBOT_TARGET_DIR is set (CI does this).
 if [ -n "${CRACKBOT_TARGET_DIR:-}" ]; then
   export CARGO_TARGET_DIR="$CRACKBOT_TARGET_DIR"

@@ -5,7 +5,7 @@
 //! * no crate depends on a binary-only crate;
 //! * the `no_std` crates stay `no_std` and pull only `no_std` dependencies;
 //! * the robot path (the headless `crackbot` binary and every library it uses) builds without
-//!   plotters, statistics, GUI or Zenoh crates by default;
+//!   plotters, statistics, GUI, Zenoh or WebSocket-server crates by default;
 //! * plotting lives in `crackbot-plots` only; a GUI toolkit only in the operator app;
 //! * libraries report errors with their own enums and progress through callbacks: no `anyhow`,
 //!   `clap` or `indicatif` in a library-only crate.
@@ -42,6 +42,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "crackbot-sim",
             "crackbot-planner",
             "crackbot-testkit",
+            "crackbot-mcap",
         ],
     ),
     (
@@ -136,6 +137,8 @@ const HEAVY: &[&str] = &[
     "wgpu",
     "glow",
     "zenoh",
+    // The Foxglove live view's WebSocket server (feature `foxglove`).
+    "tokio-tungstenite",
 ];
 
 /// Direct dependencies allowed in one crate only: (dependency, the crate that may have it).
@@ -147,6 +150,7 @@ const ONLY_IN: &[(&str, &str)] = &[
     ("winit", "crackbot-operator"),
     ("statrs", "crackbot-tactile"),
     ("zenoh", "crackbot-telemetry"),
+    ("foxglove", "crackbot-mcap"),
 ];
 
 /// Dependencies of binaries, not of library-only crates.
@@ -229,6 +233,16 @@ fn tree_lines(package: &str, edges: &str) -> Vec<String> {
 /// The crates `package` compiles for its normal build with default features.
 fn normal_tree(package: &str) -> BTreeSet<String> {
     tree_lines(package, "normal")
+        .iter()
+        .filter_map(|l| l.split_whitespace().next())
+        .map(str::to_string)
+        .collect()
+}
+
+/// The crates linked into `package`'s normal build (what its proc macros use to run at compile
+/// time left out: `prost-derive` runs on `anyhow`, and nothing of it is in the library).
+fn linked_tree(package: &str) -> BTreeSet<String> {
+    tree_lines(package, "normal,no-proc-macro")
         .iter()
         .filter_map(|l| l.split_whitespace().next())
         .map(str::to_string)
@@ -404,32 +418,50 @@ fn the_research_cli_builds_without_gui_or_fleet_crates() {
     assert!(found.is_empty(), "crackbot-lab compiles {found:?}");
 }
 
-#[test]
-fn the_robots_telemetry_feature_brings_zenoh_and_only_through_the_telemetry_crate() {
+/// The crates that depend directly on `dep` in `crackbot-cli` built with `features`.
+fn dependants_in_the_robot(features: &str, dep: &str) -> BTreeSet<String> {
     let with = run(cargo().args([
         "tree",
         "-p",
         "crackbot-cli",
         "--features",
-        "telemetry",
+        features,
         "-e",
         "normal",
         "--prefix",
         "none",
         "-i",
-        "zenoh",
+        dep,
         "--depth",
         "1",
     ]));
-    let users: BTreeSet<&str> = with
-        .lines()
+    with.lines()
         .skip(1)
         .filter_map(|l| l.split_whitespace().next())
-        .collect();
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn the_robots_telemetry_feature_brings_zenoh_and_only_through_the_telemetry_crate() {
     assert_eq!(
-        users,
-        BTreeSet::from(["crackbot-telemetry"]),
-        "zenoh's dependants in crackbot-cli --features telemetry:\n{with}"
+        dependants_in_the_robot("telemetry", "zenoh"),
+        BTreeSet::from(["crackbot-telemetry".to_string()]),
+        "zenoh's dependants in crackbot-cli --features telemetry"
+    );
+}
+
+#[test]
+fn the_robots_foxglove_feature_brings_the_websocket_server_only_through_the_log_crate() {
+    assert_eq!(
+        dependants_in_the_robot("foxglove", "tokio-tungstenite"),
+        BTreeSet::from(["foxglove".to_string()]),
+        "tokio-tungstenite's dependants in crackbot-cli --features foxglove"
+    );
+    assert_eq!(
+        dependants_in_the_robot("foxglove", "foxglove"),
+        BTreeSet::from(["crackbot-mcap".to_string()]),
+        "the Foxglove SDK's dependants in crackbot-cli --features foxglove"
     );
 }
 
@@ -477,7 +509,7 @@ fn libraries_leave_errors_text_and_progress_bars_to_binaries() {
         if p.has_bin {
             continue;
         }
-        for dep in normal_tree(name) {
+        for dep in linked_tree(name) {
             if BINARY_ONLY_DEPS.contains(&dep.as_str()) {
                 problems.push(format!(
                     "the library {name} compiles {dep} by default (through a dependency's \

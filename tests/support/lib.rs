@@ -8,7 +8,8 @@ use std::sync::{Mutex, OnceLock};
 
 /// Path of a workspace binary, built (once per test process) with the profile of the running
 /// test, so `cargo test` alone is enough. Every test gets the binaries built with the robot's
-/// fleet telemetry (`crackbot-cli/telemetry`: it only adds flags), so that no two tests rebuild
+/// fleet telemetry and Foxglove live view (`crackbot-cli/telemetry,foxglove`: they only add
+/// flags), so that no two tests rebuild
 /// them with different features. `crackbot` comes with `crackbot-lab` beside it, which
 /// runs the research commands `crackbot` hands on.
 pub fn binary(name: &str) -> PathBuf {
@@ -42,7 +43,7 @@ pub fn binary(name: &str) -> PathBuf {
             "--bin",
             name,
         ]);
-        cmd.args(["--features", "crackbot-cli/telemetry"]);
+        cmd.args(["--features", "crackbot-cli/telemetry,crackbot-cli/foxglove"]);
         if name == "crackbot" {
             cmd.args(["--bin", "crackbot-lab"]);
         }

@@ -165,10 +165,15 @@ impl LogWriter {
         &self.ctx
     }
 
-    /// Unix nanoseconds of mission time `t_s` (clamped at the clock's zero).
+    /// Unix nanoseconds of mission time `t_s` (before the clock's zero too: the first samples
+    /// of a stream can be older than the link; a time that is not finite is the zero).
     pub fn ns(&self, t_s: f64) -> u64 {
-        let dt = if t_s.is_finite() { t_s.max(0.0) } else { 0.0 };
-        self.origin_ns.saturating_add((dt * 1e9) as u64)
+        let dt = if t_s.is_finite() {
+            (t_s * 1e9).round() as i64
+        } else {
+            0
+        };
+        self.origin_ns.saturating_add_signed(dt)
     }
 
     fn stamp(&self, t_s: f64) -> (Option<Timestamp>, PartialMetadata) {

@@ -118,9 +118,13 @@ fn main() -> anyhow::Result<()> {
             let dir = args.replay_dir.clone().context(
                 "--source replay needs the mission's folder: crackbot-operator --source replay DIR",
             )?;
-            if !dir.join("report.json").is_file() {
+            let is_log = dir
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
+            if !(is_log && dir.is_file()) && !dir.join("report.json").is_file() {
                 bail!(
-                    "{}: no report.json there (a folder written by `crackbot run --out DIR`)",
+                    "{}: no report.json there (a folder written by `crackbot run --out DIR`, \
+                     or its mission.mcap)",
                     dir.display()
                 );
             }

@@ -1,9 +1,11 @@
-//! Replays a saved mission (the folder `crackbot run --out DIR` writes: `report.json`,
-//! `frame.png`, `slide-NNN.csv`) as the telemetry a live robot would have sent, so a replay
-//! shows in the same views.
+//! Replays a saved mission (the folder `crackbot run --out DIR` writes: `mission.mcap`,
+//! `report.json`, `frame.png`, `slide-NNN.csv`) as the telemetry a live robot would have sent,
+//! so a replay shows in the same views.
 //!
-//! The slide recordings carry no clock: their samples are laid end to end at 400 Hz, with half
-//! a second between slides. The report carries no camera homography: the plan's workspace is
+//! From the mission's log (`mission.mcap`, `crackbot-mcap`), every sample and verdict comes at
+//! the time it was logged. A folder without one (written before the log existed) is read from
+//! its slide recordings, which carry no clock: their samples are laid end to end at 400 Hz, with
+//! half a second between slides. The report carries no camera homography: the plan's workspace is
 //! drawn over the whole frame (an approximation; the app says so).
 
 use std::path::{Path, PathBuf};
@@ -46,34 +48,64 @@ fn point(v: &Value, key: &str) -> Option<[f64; 2]> {
     Some([a.first()?.as_f64()?, a.get(1)?.as_f64()?])
 }
 
-/// Reads the mission saved in `dir`.
+/// Reads the mission saved in `dir`: its `mission.mcap` when it has one (real timestamps), else
+/// its report and slide recordings. `dir` may also be an MCAP file.
 pub fn load(dir: &Path) -> Result<Replay, OperatorError> {
-    let report_path = dir.join("report.json");
-    let text = std::fs::read_to_string(&report_path).map_err(|e| bad(&report_path, e))?;
-    let report: Value = serde_json::from_str(&text).map_err(|e| bad(&report_path, e))?;
-    if !report.is_object() {
-        return Err(bad(&report_path, "not a mission report (a JSON object)"));
+    if dir
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+    {
+        return load_mcap(dir);
     }
+    let log = dir.join(LOG_FILE);
+    if log.is_file() {
+        return load_mcap(&log);
+    }
+    load_folder(dir)
+}
+
+/// The log a mission writes in its folder.
+pub const LOG_FILE: &str = "mission.mcap";
+
+/// A mission's status message.
+fn status_of(mode: &str, scene: &str, phase: Phase, report_json: Option<String>) -> Telemetry {
+    Telemetry::Mission(MissionStatus {
+        mission: 1,
+        mode: mode.to_string(),
+        scene: scene.to_string(),
+        phase,
+        report_json,
+    })
+}
+
+/// What a replay shows before the first slide: the statuses, the frame (`png`), the candidates
+/// and the plan, from the report.
+struct Header {
+    out: Vec<Telemetry>,
+    approximate_overlay: bool,
+    /// Slides planned.
+    of: u32,
+    mode: String,
+    scene: String,
+}
+
+fn header(
+    report: &Value,
+    png: Option<Vec<u8>>,
+    frame_path: &Path,
+) -> Result<Header, OperatorError> {
     let mode = report["mode"].as_str().unwrap_or("fused").to_string();
     let scene = report["scene"].as_str().unwrap_or("?").to_string();
-    let status = |phase: Phase, report_json: Option<String>| {
-        Telemetry::Mission(MissionStatus {
-            mission: 1,
-            mode: mode.clone(),
-            scene: scene.clone(),
-            phase,
-            report_json,
-        })
-    };
+    let status =
+        |phase: Phase, report_json: Option<String>| status_of(&mode, &scene, phase, report_json);
     let mut out = vec![status(Phase::Starting, None)];
 
     let workspace = report["plan"]["workspace"].as_object().map(|w| {
         let g = |k: &str| w.get(k).and_then(Value::as_f64).unwrap_or(0.0);
         [g("x_min_mm"), g("x_max_mm"), g("y_min_mm"), g("y_max_mm")]
     });
-    let frame_path = dir.join("frame.png");
     let mut approximate_overlay = false;
-    if let Ok(png) = std::fs::read(&frame_path) {
+    if let Some(png) = png {
         let (width, height) = image::ImageReader::new(std::io::Cursor::new(&png))
             .with_guessed_format()
             .map_err(|e| bad(&frame_path, e))?
@@ -126,6 +158,99 @@ pub fn load(dir: &Path) -> Result<Replay, OperatorError> {
         }));
     }
 
+    Ok(Header {
+        out,
+        approximate_overlay,
+        of,
+        mode,
+        scene,
+    })
+}
+
+/// Reads a mission log (`mission.mcap`): the frame, the report's candidates and plan, and the
+/// samples and verdicts at the times they were logged.
+fn load_mcap(path: &Path) -> Result<Replay, OperatorError> {
+    use crackbot_mcap::JsonTopic;
+    let log = crackbot_mcap::read_log(path).map_err(|e| bad(path, e))?;
+    let report = log
+        .json(JsonTopic::Report)
+        .next()
+        .map(|(_, v)| v.clone())
+        .ok_or_else(|| {
+            bad(
+                path,
+                "no /mission/report in the log: the mission did not finish",
+            )
+        })?;
+    let text = report.to_string();
+    let png = log.frame().map(|(_, data)| data.to_vec());
+    let Header {
+        mut out,
+        approximate_overlay,
+        of,
+        mode,
+        scene,
+    } = header(&report, png, path)?;
+    let rows = crackbot_mcap::tactile_rows(&log).map_err(|e| bad(path, e))?;
+    // The samples in chunks of 25 ms, as the robot sends them, and the verdicts, by log time.
+    let mut events: Vec<(u64, Telemetry)> = rows
+        .chunks(10)
+        .map(|c| {
+            let samples = c
+                .iter()
+                .map(|r| TactileSample {
+                    t_s: r.t_s,
+                    raw: r.raw,
+                })
+                .collect();
+            (c[0].log_time_ns, Telemetry::Tactile(samples))
+        })
+        .collect();
+    events.extend(
+        log.json(JsonTopic::Verdict)
+            .filter_map(|(t, v)| Some((t, Telemetry::Verdict(verdict(v)?)))),
+    );
+    events.sort_by_key(|(t, _)| *t);
+    let mut done = 0u32;
+    for (_, e) in events {
+        let judged = matches!(e, Telemetry::Verdict(_));
+        out.push(e);
+        if judged {
+            done += 1;
+            let phase = Phase::Exploring {
+                done,
+                of: of.max(done),
+            };
+            out.push(status_of(&mode, &scene, phase, None));
+        }
+    }
+    out.push(status_of(&mode, &scene, Phase::Finished, Some(text)));
+    Ok(Replay {
+        telemetry: out,
+        approximate_overlay,
+    })
+}
+
+/// Reads the folder `crackbot run --out DIR` wrote without a log: the report, `frame.png` and
+/// the slide recordings, laid end to end at 400 Hz.
+fn load_folder(dir: &Path) -> Result<Replay, OperatorError> {
+    let report_path = dir.join("report.json");
+    let text = std::fs::read_to_string(&report_path).map_err(|e| bad(&report_path, e))?;
+    let report: Value = serde_json::from_str(&text).map_err(|e| bad(&report_path, e))?;
+    if !report.is_object() {
+        return Err(bad(&report_path, "not a mission report (a JSON object)"));
+    }
+    let frame_path = dir.join("frame.png");
+    let png = std::fs::read(&frame_path).ok();
+    let Header {
+        mut out,
+        approximate_overlay,
+        of,
+        mode,
+        scene,
+    } = header(&report, png, &frame_path)?;
+    let status =
+        |phase: Phase, report_json: Option<String>| status_of(&mode, &scene, phase, report_json);
     let passes = report["passes"].as_array().cloned().unwrap_or_default();
     let mut t = 0.0;
     for (i, pass) in passes.iter().enumerate() {

@@ -341,6 +341,13 @@ fn a_simulated_mission_streams_is_stopped_by_the_estop_and_replays() {
     assert_eq!(robot.verdicts.len(), passes);
     assert_eq!(robot.phase(), Some(&Phase::Finished));
     assert!(robot.tactile.len() > 100);
+    // Replayed from the mission's log: the samples at the times they were logged, the last one
+    // the log's last (not laid end to end from the slide recordings).
+    let log = crackbot_mcap::read_log(&saved.join("mission.mcap")).unwrap();
+    let rows = crackbot_mcap::tactile_rows(&log).unwrap();
+    let last = robot.tactile.back().unwrap();
+    assert_eq!(last.t_s, rows.last().unwrap().t_s);
+    assert_eq!(last.raw, rows.last().unwrap().raw);
     // The overlay is the mission's own: the report keeps the frame's homography.
     assert_eq!(
         robot.camera.as_ref().unwrap().surface_to_image,

@@ -1,0 +1,150 @@
+//! A mission's MCAP log (`mission.mcap`), checked by an independent reader (the Python `mcap`
+//! package, `scripts/mcap_check.py`), watched live over the Foxglove WebSocket protocol
+//! (`--foxglove`, a Python client: `scripts/foxglove_live_check.py`), replayed by `crackbot
+//! replay`, and refused with a clear error when it is cut short or corrupt.
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+use crackbot_tests::{binary, crackbot, text};
+
+/// Runs `bash scripts/mcap_check.sh ARGS` (the venv `scripts/setup.sh` made) and returns its
+/// exit status and JSON line.
+fn python_check(args: &[&str]) -> (bool, serde_json::Value) {
+    let out = Command::new("bash")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mcap_check.sh"))
+        .args(args)
+        .output()
+        .expect("running scripts/mcap_check.sh");
+    let stdout = text(&out.stdout);
+    let json = serde_json::from_str(stdout.trim())
+        .unwrap_or_else(|e| panic!("{e}: stdout {stdout}\nstderr {}", text(&out.stderr)));
+    (out.status.success(), json)
+}
+
+/// A fused mission on the built-in default scene at 8× real time, into `dir`.
+fn default_scene_mission(dir: &Path, extra: &[&str]) -> serde_json::Value {
+    let out = Command::new(binary("crackbot-robot"))
+        .args(["--speedup", "8", "--json", "--out"])
+        .arg(dir)
+        .args(extra)
+        .output()
+        .expect("running crackbot-robot");
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    serde_json::from_str(&text(&out.stdout)).expect("the report")
+}
+
+#[test]
+fn a_default_scene_mission_writes_an_mcap_the_python_reader_validates() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = default_scene_mission(dir.path(), &[]);
+    let (ok, check) = python_check(&[dir.path().to_str().unwrap(), "--json"]);
+    assert!(ok, "{check}");
+    let channels = check["channels"].as_object().unwrap();
+    for topic in [
+        "/camera/image",
+        "/camera/detections",
+        "/plan",
+        "/tf",
+        "/log",
+        "/tactile",
+        "/slide",
+        "/arm/pose",
+        "/verdicts",
+        "/feeling",
+        "/health",
+        "/mission/status",
+        "/mission/report",
+    ] {
+        assert!(
+            channels.get(topic).is_some_and(|n| n.as_u64() > Some(0)),
+            "{topic}: {check}"
+        );
+    }
+    let passes = report["passes"].as_array().unwrap();
+    assert!(!passes.is_empty());
+    assert_eq!(channels["/verdicts"].as_u64(), Some(passes.len() as u64));
+    let judged: u64 = passes.iter().map(|p| p["samples"].as_u64().unwrap()).sum();
+    assert_eq!(channels["/slide"].as_u64(), Some(judged));
+
+    // The robot's own reader agrees, and `crackbot replay` takes the log.
+    let log = crackbot_mcap::read_log(&dir.path().join("mission.mcap")).unwrap();
+    let rows = crackbot_mcap::tactile_rows(&log).unwrap();
+    assert_eq!(rows.len() as u64, channels["/tactile"].as_u64().unwrap());
+    assert!(rows
+        .windows(2)
+        .all(|w| w[0].log_time_ns <= w[1].log_time_ns));
+    let file = dir.path().join("mission.mcap");
+    let out = crackbot(&["replay", file.to_str().unwrap(), "--unpaced", "--json"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let replay: serde_json::Value = serde_json::from_str(&text(&out.stdout)).unwrap();
+    assert_eq!(
+        replay["samples"].as_u64(),
+        Some(rows.len() as u64),
+        "{replay}"
+    );
+}
+
+#[test]
+fn a_log_cut_short_or_corrupt_is_refused_by_replay_with_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    default_scene_mission(dir.path(), &["--mode", "vision"]);
+    let whole = std::fs::read(dir.path().join("mission.mcap")).unwrap();
+    let cut = dir.path().join("cut.mcap");
+    std::fs::write(&cut, &whole[..whole.len() * 2 / 3]).unwrap();
+    let garbage = dir.path().join("garbage.mcap");
+    std::fs::write(&garbage, b"\x89MCAP0\r\nnot really").unwrap();
+    for file in [&cut, &garbage] {
+        let out = crackbot(&["replay", file.to_str().unwrap(), "--unpaced"]);
+        let err = text(&out.stderr);
+        assert!(!out.status.success());
+        assert!(err.contains("not a complete MCAP file"), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    // And the independent reader fails on the cut file too.
+    std::fs::rename(&cut, dir.path().join("mission.mcap")).unwrap();
+    let (ok, check) = python_check(&[dir.path().to_str().unwrap(), "--json"]);
+    assert!(!ok, "{check}");
+}
+
+#[test]
+fn no_mcap_writes_no_log() {
+    let dir = tempfile::tempdir().unwrap();
+    default_scene_mission(dir.path(), &["--mode", "vision", "--no-mcap"]);
+    assert!(dir.path().join("report.json").is_file());
+    assert!(!dir.path().join("mission.mcap").exists());
+}
+
+#[test]
+fn a_mission_is_watched_live_over_the_foxglove_websocket_protocol() {
+    let dir = tempfile::tempdir().unwrap();
+    let port = crackbot_testkit::free_tcp_port();
+    let addr = format!("127.0.0.1:{port}");
+    let mut robot = Command::new(binary("crackbot-robot"))
+        .args(["--speedup", "2", "--json", "--foxglove", &addr, "--out"])
+        .arg(dir.path())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawning crackbot-robot");
+    let url = format!("ws://{addr}");
+    let (ok, live) = python_check(&["--live", &url, "--seconds", "120", "--until-verdicts", "2"]);
+    let status = robot.wait().unwrap();
+    assert!(ok, "{live}");
+    assert!(status.success());
+    assert_eq!(
+        live["advertised"]["/tactile"], "crackbot.TactileSample",
+        "{live}"
+    );
+    assert_eq!(
+        live["advertised"]["/camera/image"], "foxglove.CompressedImage",
+        "{live}"
+    );
+    let received = &live["received"];
+    assert!(received["/tactile"].as_u64() > Some(100), "{live}");
+    assert!(received["/verdicts"].as_u64() >= Some(2), "{live}");
+    let first = &live["first"]["/tactile"]["message"];
+    for k in ["d1", "d2", "d3", "p"] {
+        assert!(first[k].as_u64().is_some_and(|c| c < 1024), "{live}");
+    }
+}
