@@ -13,7 +13,7 @@ fn png() -> Vec<u8> {
 }
 
 fn write_all(path: &std::path::Path) {
-    let log = LogWriter::create(path, ORIGIN_NS).unwrap();
+    let log = LogWriter::create(path, ORIGIN_NS).expect("the log");
     log.frame(0.5, &png());
     log.detections(
         0.5,
@@ -43,15 +43,15 @@ fn write_all(path: &std::path::Path) {
             t,
             &serde_json::json!({"t_s": t, "d1": i, "d2": 2, "d3": 3, "p": 4, "slide": 1, "along_mm": null}),
         )
-        .unwrap();
+        .expect("a sample");
         if i % 4 == 0 {
             log.finger_at(t, [f64::from(i) * 0.01, 5.0, 0.0]);
         }
     }
     log.log(3.6, LogLevel::Info, "mission finished");
     log.json(JsonTopic::Report, 3.7, &serde_json::json!({"cracks": []}))
-        .unwrap();
-    log.finish().unwrap();
+        .expect("the report");
+    log.finish().expect("closing the log");
 }
 
 #[test]

@@ -121,7 +121,8 @@ fn main() -> anyhow::Result<()> {
             let is_log = dir
                 .extension()
                 .is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
-            if !(is_log && dir.is_file()) && !dir.join("report.json").is_file() {
+            let saved = dir.join("report.json").is_file() || (is_log && dir.is_file());
+            if !saved {
                 bail!(
                     "{}: no report.json there (a folder written by `crackbot run --out DIR`, \
                      or its mission.mcap)",

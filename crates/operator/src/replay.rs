@@ -108,9 +108,9 @@ fn header(
     if let Some(png) = png {
         let (width, height) = image::ImageReader::new(std::io::Cursor::new(&png))
             .with_guessed_format()
-            .map_err(|e| bad(&frame_path, e))?
+            .map_err(|e| bad(frame_path, e))?
             .into_dimensions()
-            .map_err(|e| bad(&frame_path, e))?;
+            .map_err(|e| bad(frame_path, e))?;
         // The mission's own homography (reports since the frame was saved in them), else the
         // workspace fitted to the frame.
         let saved = report["frame"]["surface_to_image"]

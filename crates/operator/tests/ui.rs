@@ -327,7 +327,7 @@ fn a_simulated_mission_streams_is_stopped_by_the_estop_and_replays() {
 
     // 3. Its replay shows the same candidates and verdicts.
     let mut r = harness(OperatorApp::new(
-        Backend::replay(saved),
+        Backend::replay(saved.clone()),
         dir.path().join("replay-out"),
     ));
     step_until(&mut r, "the replay", Duration::from_secs(20), |a| {
