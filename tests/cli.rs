@@ -51,8 +51,12 @@ fn demo_streams_records_and_summarises() {
     assert_eq!(replayed["mean"], summary["mean"]);
 }
 
-/// Starts `crackbot record` on a fresh emulator; returns both.
-fn start_recording(out: &std::path::Path) -> (Emulator, std::process::Child) {
+/// Starts `crackbot record` on a fresh emulator, also logging to `mcap` when given; returns
+/// both.
+fn start_recording(
+    out: &std::path::Path,
+    mcap: Option<&std::path::Path>,
+) -> (Emulator, std::process::Child) {
     let mut emulator = Emulator::spawn(&[]);
     let recorder = Command::new(binary("crackbot"))
         .args([
@@ -63,6 +67,11 @@ fn start_recording(out: &std::path::Path) -> (Emulator, std::process::Child) {
             "--out",
             out.to_str().expect("utf-8"),
         ])
+        .args(
+            mcap.map(|m| ["--mcap", m.to_str().expect("utf-8")])
+                .into_iter()
+                .flatten(),
+        )
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -95,7 +104,8 @@ fn finish(mut child: std::process::Child) -> (std::process::ExitStatus, String, 
 fn interrupted_recording_keeps_every_sample_received() {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("rec.csv");
-    let (emulator, recorder) = start_recording(&out);
+    let log = dir.path().join("rec.mcap");
+    let (emulator, recorder) = start_recording(&out, Some(&log));
     kill(Pid::from_raw(recorder.id() as i32), Signal::SIGINT).expect("SIGINT");
     let (status, stdout, stderr) = finish(recorder);
     emulator.kill();
@@ -117,13 +127,25 @@ fn interrupted_recording_keeps_every_sample_received() {
         stderr.contains(&format!("recorded {frames} rows")),
         "{stderr}"
     );
+    // The MCAP log beside it is whole and holds the same samples, stamped in order.
+    let read = crackbot_mcap::read_log(&log).expect("the MCAP log");
+    let rows = crackbot_mcap::tactile_rows(&read).expect("its /tactile samples");
+    assert_eq!(rows.len() as u64, frames);
+    assert!(rows
+        .windows(2)
+        .all(|w| w[0].log_time_ns <= w[1].log_time_ns));
+    let csv = crackbot_recording::read_csv(&out).expect("the CSV");
+    for (r, c) in rows.iter().zip(&csv.rows) {
+        assert_eq!(r.raw.map(f64::from), [c.d1, c.d2, c.d3, c.p]);
+    }
 }
 
 #[test]
 fn recording_survives_the_port_vanishing() {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("rec.csv");
-    let (emulator, recorder) = start_recording(&out);
+    let log = dir.path().join("rec.mcap");
+    let (emulator, recorder) = start_recording(&out, Some(&log));
     let pty = emulator.pty.clone();
     emulator.kill();
     let (status, stdout, stderr) = finish(recorder);
@@ -136,6 +158,10 @@ fn recording_survives_the_port_vanishing() {
     let frames = summary["link"]["frames"].as_u64().expect("frames");
     assert!(frames > 300);
     assert_eq!(csv_rows(&out) as u64, frames, "nothing received was lost");
+    // Nor from the MCAP log, which was closed whole.
+    let read = crackbot_mcap::read_log(&log).expect("the MCAP log");
+    let logged = crackbot_mcap::tactile_rows(&read).expect("its /tactile samples");
+    assert_eq!(logged.len() as u64, frames);
     // The file is complete, not cut mid-line: it reads back.
     let replay = crackbot(&[
         "replay",

@@ -2,6 +2,10 @@
 //! sample with the finger's position along the stroke under way, and each arm state as a pose
 //! on the host's clock. Shown and logged only; the passes' verdicts use their own positions,
 //! interpolated when a stroke ends ([`super::passes`]).
+//!
+//! Times never go back within a stream: each is mapped through the clock fit as it is then,
+//! and a fit that moves (drift re-estimated under load) could put a later state before an
+//! earlier one; such a time is held at the last one shown (`floor`).
 
 use crackbot_link::{Mode, State};
 
@@ -65,6 +69,7 @@ pub(super) fn live_samples(
     sensor: &mut Sensor,
     from: usize,
     stroke: Option<&Stroke>,
+    floor: &mut f64,
 ) -> Vec<LiveSample> {
     let states = stroke.map(|_| recent_states(arm)).unwrap_or_default();
     let (samples, sync) = (&sensor.samples, &mut sensor.sync);
@@ -76,8 +81,9 @@ pub(super) fn live_samples(
                 let (p, mode) = position_at(&states, host_us)?;
                 st.along(p, mode)
             });
+            *floor = floor.max(host_us / 1e6);
             LiveSample {
-                t_s: host_us / 1e6,
+                t_s: *floor,
                 raw: s.raw,
                 slide: stroke
                     .and_then(|st| st.slide)
@@ -93,6 +99,7 @@ pub(super) fn new_poses(
     arm: &mut Arm,
     after_us: Option<u64>,
     stroke: Option<&Stroke>,
+    floor: &mut f64,
 ) -> Vec<ArmPose> {
     let (states, sync) = (&arm.states, &mut arm.sync);
     let newer = states
@@ -107,8 +114,9 @@ pub(super) fn new_poses(
             let host = sync.to_host(s.state.controller_time_us as f64)?;
             let p = pose(&s.state);
             let along_mm = stroke.and_then(|st| st.along(p, s.state.mode));
+            *floor = floor.max(host / 1e6);
             Some(ArmPose {
-                t_s: host / 1e6,
+                t_s: *floor,
                 controller_us: s.state.controller_time_us,
                 pose_mm: p,
                 slide: match s.state.mode {

@@ -116,6 +116,8 @@ pub(super) struct Rig<'a> {
     shown: usize,
     /// The controller time of the last arm state shown.
     pose_shown_us: Option<u64>,
+    /// The times of the last pose and sample shown, s (neither stream goes back).
+    shown_t_s: (f64, f64),
     last_shown: Instant,
     /// Samples and time at the last health event.
     health_at: (usize, Instant),
@@ -145,6 +147,7 @@ impl<'a> Rig<'a> {
             stroke: None,
             shown: 0,
             pose_shown_us: None,
+            shown_t_s: (f64::NEG_INFINITY, f64::NEG_INFINITY),
             last_shown: Instant::now(),
             health_at: (0, Instant::now()),
         }
@@ -159,12 +162,18 @@ impl<'a> Rig<'a> {
         {
             let stroke = self.stroke;
             let stroke = stroke.as_ref();
-            let poses = new_poses(self.arm, self.pose_shown_us, stroke);
+            let poses = new_poses(self.arm, self.pose_shown_us, stroke, &mut self.shown_t_s.0);
             if let Some(last) = poses.last() {
                 self.pose_shown_us = Some(last.controller_us);
                 (self.progress)(&Progress::Poses { poses });
             }
-            let samples = live_samples(self.arm, self.sensor, self.shown, stroke);
+            let samples = live_samples(
+                self.arm,
+                self.sensor,
+                self.shown,
+                stroke,
+                &mut self.shown_t_s.1,
+            );
             (self.progress)(&Progress::Samples { samples });
             self.shown = self.sensor.samples.len();
             self.last_shown = Instant::now();
