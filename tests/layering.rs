@@ -230,23 +230,24 @@ fn tree_lines(package: &str, edges: &str) -> Vec<String> {
     text.lines().map(str::to_string).collect()
 }
 
-/// The crates `package` compiles for its normal build with default features.
-fn normal_tree(package: &str) -> BTreeSet<String> {
-    tree_lines(package, "normal")
+/// The crate names of `cargo tree -p package -e edges`.
+fn tree_names(package: &str, edges: &str) -> BTreeSet<String> {
+    tree_lines(package, edges)
         .iter()
         .filter_map(|l| l.split_whitespace().next())
         .map(str::to_string)
         .collect()
 }
 
+/// The crates `package` compiles for its normal build with default features.
+fn normal_tree(package: &str) -> BTreeSet<String> {
+    tree_names(package, "normal")
+}
+
 /// The crates linked into `package`'s normal build (what its proc macros use to run at compile
 /// time left out: `prost-derive` runs on `anyhow`, and nothing of it is in the library).
 fn linked_tree(package: &str) -> BTreeSet<String> {
-    tree_lines(package, "normal,no-proc-macro")
-        .iter()
-        .filter_map(|l| l.split_whitespace().next())
-        .map(str::to_string)
-        .collect()
+    tree_names(package, "normal,no-proc-macro")
 }
 
 #[test]

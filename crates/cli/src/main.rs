@@ -401,12 +401,8 @@ fn log_sample(
     log: &crackbot_mcap::LogWriter,
     s: &crackbot_acquisition::Sample,
 ) -> Result<(), crackbot_mcap::LogError> {
-    let t_s = s.host_time.as_secs_f64();
-    let v = serde_json::json!({
-        "t_s": t_s, "d1": s.raw[0], "d2": s.raw[1], "d3": s.raw[2], "p": s.raw[3],
-        "slide": null, "along_mm": null,
-    });
-    log.json(crackbot_mcap::JsonTopic::Tactile, t_s, &v)
+    let m = crackbot_mcap::SampleMessage::new(s.host_time.as_secs_f64(), s.raw, None, None);
+    log.sample(crackbot_mcap::JsonTopic::Tactile, &m)
 }
 
 /// A CSV recording, or the `/tactile` channel of an MCAP log (a mission's `mission.mcap`, or

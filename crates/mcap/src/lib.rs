@@ -28,7 +28,7 @@ mod writer;
 pub use live::DEFAULT_LIVE_ADDR;
 pub use reader::{read_log, tactile_rows, LoggedMessage, MissionLog, Payload, TactileRow};
 pub use topics::{JsonTopic, Topic};
-pub use writer::{Label, LogLevel, LogWriter, Polyline, SceneLine};
+pub use writer::{Label, LogLevel, LogWriter, Polyline, SampleMessage, SceneLine};
 
 use std::path::PathBuf;
 

@@ -56,6 +56,41 @@ pub struct SceneLine {
     pub rgba: [f64; 4],
 }
 
+/// One sensor sample as the `/tactile` and `/slide` channels carry it (their JSON Schemas).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SampleMessage {
+    /// Mission (or recording) time, s.
+    pub t_s: f64,
+    /// D1, counts.
+    pub d1: u16,
+    /// D2, counts.
+    pub d2: u16,
+    /// D3, counts.
+    pub d3: u16,
+    /// P, counts.
+    pub p: u16,
+    /// The slide the finger was down in.
+    pub slide: Option<u32>,
+    /// Where it was along the stroke, mm.
+    pub along_mm: Option<f64>,
+}
+
+impl SampleMessage {
+    /// The sample `raw` (D1, D2, D3, P) at `t_s`.
+    pub fn new(t_s: f64, raw: [u16; 4], slide: Option<u32>, along_mm: Option<f64>) -> Self {
+        let [d1, d2, d3, p] = raw;
+        SampleMessage {
+            t_s,
+            d1,
+            d2,
+            d3,
+            p,
+            slide,
+            along_mm,
+        }
+    }
+}
+
 /// How much a log line matters (`foxglove.Log`'s levels).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LogLevel {
@@ -312,6 +347,11 @@ impl LogWriter {
             c.log_with_meta(&bytes, meta);
         }
         Ok(())
+    }
+
+    /// A sample on `topic` (`/tactile` or `/slide`), stamped with its own time.
+    pub fn sample(&self, topic: JsonTopic, s: &SampleMessage) -> Result<(), LogError> {
+        self.json(topic, s.t_s, s)
     }
 
     /// A log line at `t_s`.

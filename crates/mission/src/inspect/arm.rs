@@ -109,13 +109,19 @@ impl Arm {
 
 /// The arm's states on the host's clock, oldest first (mapped with the current clock fit).
 pub(super) fn mapped_states(arm: &mut Arm) -> Vec<(f64, State)> {
-    let states: Vec<State> = arm.states.iter().map(|s| s.state).collect();
+    newest_mapped(arm, usize::MAX)
+}
+
+/// The arm's newest `n` states on the host's clock, oldest first.
+pub(super) fn newest_mapped(arm: &mut Arm, n: usize) -> Vec<(f64, State)> {
+    let skip = arm.states.len().saturating_sub(n);
+    let (states, sync) = (&arm.states, &mut arm.sync);
     states
-        .into_iter()
+        .iter()
+        .skip(skip)
         .filter_map(|s| {
-            arm.sync
-                .to_host(s.controller_time_us as f64)
-                .map(|h| (h, s))
+            let host = sync.to_host(s.state.controller_time_us as f64)?;
+            Some((host, s.state))
         })
         .collect()
 }

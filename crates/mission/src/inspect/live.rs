@@ -7,9 +7,9 @@
 //! and a fit that moves (drift re-estimated under load) could put a later state before an
 //! earlier one; such a time is held at the last one shown (`floor`).
 
-use crackbot_link::{Mode, State};
+use crackbot_link::Mode;
 
-use super::arm::{pose, position_at, Arm};
+use super::arm::{newest_mapped, pose, position_at, Arm};
 use super::passes::{along, unit};
 use super::report::{ArmPose, LiveSample};
 use super::sensor::Sensor;
@@ -49,20 +49,6 @@ impl Stroke {
     }
 }
 
-/// The arm's newest states on the host's clock (at most [`RECENT_STATES`]), oldest first.
-fn recent_states(arm: &mut Arm) -> Vec<(f64, State)> {
-    let skip = arm.states.len().saturating_sub(RECENT_STATES);
-    let (states, sync) = (&arm.states, &mut arm.sync);
-    states
-        .iter()
-        .skip(skip)
-        .filter_map(|s| {
-            let host = sync.to_host(s.state.controller_time_us as f64)?;
-            Some((host, s.state))
-        })
-        .collect()
-}
-
 /// The sensor's samples from index `from` on, as shown, each placed on `stroke`.
 pub(super) fn live_samples(
     arm: &mut Arm,
@@ -71,7 +57,9 @@ pub(super) fn live_samples(
     stroke: Option<&Stroke>,
     floor: &mut f64,
 ) -> Vec<LiveSample> {
-    let states = stroke.map(|_| recent_states(arm)).unwrap_or_default();
+    let states = stroke
+        .map(|_| newest_mapped(arm, RECENT_STATES))
+        .unwrap_or_default();
     let (samples, sync) = (&sensor.samples, &mut sensor.sync);
     samples[from.min(samples.len())..]
         .iter()

@@ -3,7 +3,7 @@
 
 use std::time::{Instant, SystemTime};
 
-use crackbot_mcap::{JsonTopic, Label, LogLevel, LogWriter, Polyline, SceneLine};
+use crackbot_mcap::{JsonTopic, Label, LogLevel, LogWriter, Polyline, SampleMessage, SceneLine};
 use crackbot_planner::{Candidate, Plan};
 use serde::Serialize;
 
@@ -77,6 +77,12 @@ impl MissionLog {
         }
     }
 
+    fn sample(&mut self, topic: JsonTopic, m: &SampleMessage) {
+        if let Err(e) = self.writer.sample(topic, m) {
+            self.failed.get_or_insert(e);
+        }
+    }
+
     fn stage(&mut self, stage: &str, detail: String) {
         let t = self.now_s();
         self.writer
@@ -103,20 +109,14 @@ impl MissionLog {
             }
             Progress::Samples { samples } => {
                 for s in samples {
-                    let v = serde_json::json!({
-                        "t_s": s.t_s, "d1": s.raw[0], "d2": s.raw[1], "d3": s.raw[2],
-                        "p": s.raw[3], "slide": s.slide, "along_mm": s.along_mm,
-                    });
-                    self.json(JsonTopic::Tactile, s.t_s, &v);
+                    let m = SampleMessage::new(s.t_s, s.raw, s.slide, s.along_mm);
+                    self.sample(JsonTopic::Tactile, &m);
                 }
             }
             Progress::Stroked { slide, samples } => {
                 for s in samples {
-                    let v = serde_json::json!({
-                        "t_s": s.t_s, "slide": slide, "along_mm": s.along_mm,
-                        "d1": s.raw[0], "d2": s.raw[1], "d3": s.raw[2], "p": s.raw[3],
-                    });
-                    self.json(JsonTopic::Slide, s.t_s, &v);
+                    let m = SampleMessage::new(s.t_s, s.raw, Some(*slide), Some(s.along_mm));
+                    self.sample(JsonTopic::Slide, &m);
                 }
             }
             Progress::Poses { poses } => {
