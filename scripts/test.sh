@@ -7,4 +7,11 @@ python3 crates/protocol/golden/generate.py --check
 python3 crates/link/golden/generate.py --check
 # The robot's fleet telemetry and Foxglove live-view features are on for the whole run: the end-to-end tests build the
 # binaries with it (tests/support), and one feature set means everything compiles once.
-cargo test --workspace --features crackbot-cli/telemetry,crackbot-cli/foxglove --locked "$@"
+features=crackbot-cli/telemetry,crackbot-cli/foxglove
+# cargo-nextest runs the tests of every binary side by side (settings: .config/nextest.toml);
+# arguments go to it, e.g. `bash scripts/test.sh -p crackbot-link` or `-E 'test(stop)'`.
+cargo nextest run --workspace --features "$features" --locked "$@"
+# nextest does not run doctests; cargo does, when the whole workspace was asked for.
+if [ "$#" -eq 0 ]; then
+  cargo test --doc --workspace --features "$features" --locked
+fi

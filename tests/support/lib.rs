@@ -52,11 +52,40 @@ pub fn binary(name: &str) -> PathBuf {
             cmd.arg("--release");
         }
         cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
+        clear_test_env(&mut cmd);
         let status = cmd.status().expect("running cargo build");
         assert!(status.success(), "cargo build --bin {name} failed");
         built.push(name.to_string());
     }
     profile_dir.join(name)
+}
+
+/// Removes the variables cargo (or nextest) sets for a running test, so that the nested `cargo
+/// build` sees the environment `scripts/test.sh`'s own build saw. Build scripts watch some of them
+/// (`ring`'s watches `CARGO_MANIFEST_DIR`): inherited, they made this build rerun `ring` and
+/// rebuild everything above it (rustls, Zenoh, the robot) once per test run, and the test run's
+/// next build rebuild it all back.
+fn clear_test_env(cmd: &mut Command) {
+    const SET_FOR_TESTS: &[&str] = &[
+        "CARGO_MANIFEST_DIR",
+        "CARGO_MANIFEST_PATH",
+        "CARGO_CRATE_NAME",
+        "CARGO_BIN_NAME",
+        "CARGO_PRIMARY_PACKAGE",
+        "CARGO_TARGET_TMPDIR",
+        "CARGO_RUSTC_CURRENT_DIR",
+        "OUT_DIR",
+    ];
+    for (key, _) in std::env::vars_os() {
+        let Some(key) = key.to_str() else { continue };
+        if SET_FOR_TESTS.contains(&key)
+            || key.starts_with("CARGO_PKG_")
+            || key.starts_with("CARGO_BIN_EXE_")
+            || key.starts_with("NEXTEST")
+        {
+            cmd.env_remove(key);
+        }
+    }
 }
 
 /// A running `crackbot-sensor-emulator --pty --wait-for-start`.

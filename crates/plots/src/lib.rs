@@ -47,12 +47,20 @@ pub enum PlotError {
         /// Its folder.
         dir: PathBuf,
     },
-    /// Drawing or writing the PNG failed.
-    #[error("{}: could not write the plot: {reason}", path.display())]
+    /// Drawing the plot failed.
+    #[error("{}: could not draw the plot: {reason}", path.display())]
     Draw {
         /// The target.
         path: PathBuf,
         /// What the drawing library said.
+        reason: String,
+    },
+    /// Encoding or writing the PNG failed.
+    #[error("{}: could not write the plot: {reason}", path.display())]
+    Write {
+        /// The target.
+        path: PathBuf,
+        /// What the PNG encoder or the file system said.
         reason: String,
     },
     /// The class names do not match the confusion matrix.
@@ -172,14 +180,29 @@ pub(crate) fn render(
         }
     }
     load_font()?;
+    // Drawn into memory and encoded by the workspace's own `image` (plotters' PNG encoder would
+    // bring a second, older version of it into every build).
+    let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
     let result = (|| -> DrawResult {
-        let root = BitMapBackend::new(path, size).into_drawing_area();
+        let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
         root.fill(&WHITE)?;
         draw(&root)?;
         root.present()?;
         Ok(())
     })();
     result.map_err(|e| PlotError::Draw {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    image::save_buffer_with_format(
+        path,
+        &rgb,
+        size.0,
+        size.1,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| PlotError::Write {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })
