@@ -9,7 +9,7 @@ python3 crates/link/golden/generate.py --check
 # binaries with it (tests/support), and one feature set means everything compiles once.
 features=crackbot-cli/telemetry,crackbot-cli/foxglove
 # cargo-nextest runs the tests of every binary side by side (settings: .config/nextest.toml);
-# arguments go to it, e.g. `bash scripts/test.sh -p crackbot-link` or `-E 'test(stop)'`.
+# arguments go to it, e.g. `bash scripts/test.sh -E 'package(crackbot-link)'` or `-E 'test(stop)'`.
 cargo nextest run --workspace --features "$features" --locked "$@"
 # nextest does not run doctests; cargo does, when the whole workspace was asked for.
 if [ "$#" -eq 0 ]; then
