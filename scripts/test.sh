@@ -10,7 +10,9 @@ python3 crates/link/golden/generate.py --check
 features=crackbot-cli/telemetry,crackbot-cli/foxglove
 # cargo-nextest runs the tests of every binary side by side (settings: .config/nextest.toml);
 # arguments go to it, e.g. `bash scripts/test.sh -E 'package(crackbot-link)'` or `-E 'test(stop)'`.
-cargo nextest run --workspace --features "$features" --locked "$@"
+# The examples are not built here (25 CPU-seconds cold, no tests in them): CI's clippy stage
+# (`--all-targets`) checks that they compile.
+cargo nextest run --workspace --lib --bins --tests --features "$features" --locked "$@"
 # nextest does not run doctests; cargo does, when the whole workspace was asked for.
 if [ "$#" -eq 0 ]; then
   cargo test --doc --workspace --features "$features" --locked

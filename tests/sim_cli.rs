@@ -310,8 +310,9 @@ fn calibrate_fits_the_cone_and_keeps_the_end_stop_of_its_start() {
         utf8(&data().join("type")),
         "--repetition",
         "1",
+        // 16 evaluations move the cone (18.6° from 20°; 10 do not yet) in 23 s, 30 took 36 s.
         "--evaluations",
-        "30",
+        "16",
         "--mechanics-evaluations",
         "1",
         "--start",

@@ -76,8 +76,8 @@ fn every_real_recording_streams_to_the_offline_rows_bit_for_bit() {
     let recs = recordings();
     assert_eq!(recs.len(), 30, "types and widths, repetitions 1–3");
     let config = ContextConfig::default();
-    // The state is updated at every sample; rows are compared at every 4th (every sample of two
-    // files, to keep the test short in debug builds).
+    // The state is updated at every sample; rows are compared at every 16th (every sample of two
+    // files, to keep the test short: each offline row reads up to 2000 samples back).
     let total: usize = recs
         .par_iter()
         .enumerate()
@@ -88,13 +88,13 @@ fn every_real_recording_streams_to_the_offline_rows_bit_for_bit() {
             for r in rec.slides() {
                 starts[r.start] = true;
             }
-            let every = if k % 15 == 0 { 1 } else { 4 };
+            let every = if k % 15 == 0 { 1 } else { 16 };
             let n = compare_all(&config, &samples, &directions, &starts, 10, every);
             assert_eq!(n, samples.len().div_ceil(every), "{}", path.display());
             n
         })
         .sum();
-    assert!(total > 250_000, "{total} rows");
+    assert!(total > 120_000, "{total} rows");
 }
 
 #[test]
