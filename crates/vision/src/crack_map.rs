@@ -24,10 +24,10 @@
 //! **Where to touch** ([`CrackShape::pieces`]). The dilation that joins a broken crack also joins
 //! cracks that run close together or cross, and a component's main axis then passes between
 //! them. For the finger, each component is split into the cracks it holds: its crack cells are
-//! thinned to a centre line ([`crackbot_imaging::thinning`]) after its holes of at most
-//! [`HOLE_CELLS`] are filled, the line is cut at its junctions into branches and at its sharp
-//! corners (two cracks meeting in a V, [`CORNER_DEG`]), spurs shorter than [`SPUR_CELLS`] are
-//! dropped, two junctions joined by a branch no longer than [`BRIDGE_CELLS`] are one crossing (lines crossing at a slant thin to two), and branches are
+//! thinned to a centre line ([`crackbot_imaging::thinning`]), the line is cut at its junctions
+//! into branches and at its sharp corners (two cracks meeting in a V, [`CORNER_DEG`]), spurs
+//! shorter than [`SPUR_CELLS`] are dropped, two junctions joined by a branch no longer than
+//! [`BRIDGE_CELLS`] are one crossing (lines crossing at a slant thin to two), and branches are
 //! joined again where a crack plainly goes on: through a junction the pair of branches that
 //! continue each other best (within [`CONTINUATION_DEG`] of straight), and across a gap no
 //! longer than the dilation joins when both ends point at each other and turn no more than
@@ -103,13 +103,6 @@ pub const CONTINUATION_DEG: f64 = 40.0;
 /// either side) is two cracks meeting at a corner: one crack of the simulated trial scenes
 /// bends by at most 34° at a vertex, and two pieces of one crack met at 33–38°.
 pub const CORNER_DEG: f64 = 60.0;
-/// Holes in a component's crack cells of at most this many map cells are filled before thinning.
-/// A wide crack whose map marks its rims more surely than its middle is hollow, and a hollow
-/// thins to a ring: two pieces side by side, or a touch beside the crack. On rendered plates
-/// (`crackbot-lab sim detector-set`, seeds 800000.. of the training family, 194 cracks, and
-/// 850000.. of `eval/unseen-layout-b.toml`, 114) cracks in one piece 161 → 165 and 102 → 103;
-/// 30 and 100 cells the same or lower (`docs/RESULTS.md`, "One crack, one candidate").
-pub const HOLE_CELLS: usize = 10;
 /// Cells along a branch over which its direction at an end is taken.
 const DIRECTION_CELLS: usize = 4;
 /// Touch points keep at least this many cells from a junction when the piece allows.

@@ -1,13 +1,13 @@
 //! Where to touch: one component's crack cells → the cracks it holds, each a [`CrackPiece`]
 //! (the steps are in the [parent's docs](super), "Where to touch"). [`pieces`] runs them in
-//! order, one function each: fill small holes, thin, find junctions, trace branches, prune
-//! (corners, spurs, bridges), pair branches through junctions and across gaps, and turn each
-//! joined run into a piece.
+//! order, one function each: thin, find junctions, trace branches, prune (corners, spurs,
+//! bridges), pair branches through junctions and across gaps, and turn each joined run into a
+//! piece.
 
 use crackbot_imaging::thinning::{neighbours, pixel, thin, NEIGHBOUR_OFFSETS};
 
 use super::{
-    CrackPiece, BRIDGE_CELLS, CONTINUATION_DEG, CORNER_DEG, DIRECTION_CELLS, HOLE_CELLS,
+    CrackPiece, BRIDGE_CELLS, CONTINUATION_DEG, CORNER_DEG, DIRECTION_CELLS,
     JUNCTION_CLEARANCE_CELLS, MIN_PIECE_CELLS, SPUR_CELLS,
 };
 
@@ -173,44 +173,6 @@ impl Patch {
             && (r as usize) < self.rows
             && (c as usize) < self.cols
             && self.crack[r as usize * self.cols + c as usize]
-    }
-}
-
-/// Fills the holes of `grid` (`rows × cols`): background regions, 4-connected, that do not
-/// reach its border and have at most `max_area` cells. A wide crack whose map marks its rims
-/// more surely than its middle has such holes, and thinned they are rings: two parallel centre
-/// lines, two pieces, or a touch beside the crack.
-fn fill_holes(grid: &mut [bool], rows: usize, cols: usize, max_area: usize) {
-    let mut seen = vec![false; rows * cols];
-    for start in 0..rows * cols {
-        if grid[start] || seen[start] {
-            continue;
-        }
-        seen[start] = true;
-        let mut region = vec![start];
-        let mut border = false;
-        let mut k = 0;
-        while k < region.len() {
-            let i = region[k];
-            k += 1;
-            let (r, c) = (i / cols, i % cols);
-            border |= r == 0 || c == 0 || r + 1 == rows || c + 1 == cols;
-            let up = (r > 0).then(|| i - cols);
-            let down = (r + 1 < rows).then_some(i + cols);
-            let left = (c > 0).then(|| i - 1);
-            let right = (c + 1 < cols).then_some(i + 1);
-            for j in [up, down, left, right].into_iter().flatten() {
-                if !grid[j] && !seen[j] {
-                    seen[j] = true;
-                    region.push(j);
-                }
-            }
-        }
-        if !border && region.len() <= max_area {
-            for i in region {
-                grid[i] = true;
-            }
-        }
     }
 }
 
@@ -615,10 +577,9 @@ fn piece(
 /// each, longest first; `max_gap` cells is the longest gap the dilation joined; `to_img` image
 /// pixels per cell.
 pub(super) fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> Vec<CrackPiece> {
-    let Some(mut patch) = Patch::new(cells) else {
+    let Some(patch) = Patch::new(cells) else {
         return Vec::new();
     };
-    fill_holes(&mut patch.crack, patch.rows, patch.cols, HOLE_CELLS);
     let mut grid = patch.crack.clone();
     thin(&mut grid, patch.cols);
     let sk = Skeleton {
@@ -638,67 +599,4 @@ pub(super) fn pieces(cells: &[(usize, usize)], max_gap: usize, to_img: f32) -> V
         .collect();
     out.sort_by(|a, b| b.length_px.total_cmp(&a.length_px));
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A grid from rows of `#` (true) and `.` (false).
-    fn grid(rows: &[&str]) -> (Vec<bool>, usize, usize) {
-        let g = rows
-            .iter()
-            .flat_map(|r| r.chars().map(|c| c == '#'))
-            .collect();
-        (g, rows.len(), rows[0].len())
-    }
-
-    #[test]
-    fn small_holes_are_filled_and_large_ones_and_open_bays_kept() {
-        let (mut g, rows, cols) = grid(&[
-            "..........",
-            ".########.",
-            ".#..#...#.",
-            ".#..#...#.",
-            ".########.",
-            "....#.....",
-            "..........",
-        ]);
-        let before = g.clone();
-        // Holes of 4 and 6 cells: a limit of 4 fills the first only.
-        fill_holes(&mut g, rows, cols, 4);
-        let filled: Vec<usize> = (0..g.len()).filter(|&i| g[i] != before[i]).collect();
-        assert_eq!(
-            filled,
-            vec![2 * cols + 2, 2 * cols + 3, 3 * cols + 2, 3 * cols + 3]
-        );
-        fill_holes(&mut g, rows, cols, 6);
-        assert_eq!(g.iter().filter(|&&v| v).count(), 8 * 4 + 1);
-        // Background touching the border is never a hole, whatever the limit.
-        fill_holes(&mut g, rows, cols, usize::MAX);
-        assert_eq!(g.iter().filter(|&&v| v).count(), 8 * 4 + 1);
-    }
-
-    #[test]
-    fn a_wide_crack_marked_only_at_its_rims_is_one_piece() {
-        // A 4-cell-wide crack along a row, 40 long, whose middle two rows the map missed in
-        // three short stretches: rings in the centre line without the filling.
-        let mut cells = Vec::new();
-        for c in 10..50 {
-            for r in 20..24 {
-                let hollow =
-                    (r == 21 || r == 22) && [15..18, 28..31, 40..43].iter().any(|s| s.contains(&c));
-                if !hollow {
-                    cells.push((r, c));
-                }
-            }
-        }
-        let p = pieces(&cells, 7, 1.0);
-        assert_eq!(p.len(), 1, "{p:?}");
-        assert!(p[0].length_px > 30.0, "{p:?}");
-        assert!(
-            (p[0].touch[1] - 22.0).abs() <= 1.5,
-            "touch on the crack's middle: {p:?}"
-        );
-    }
 }
