@@ -17,6 +17,17 @@ MAP_THRESHOLD = 0.5        # a cell at or above is a crack cell
 MAX_DETECTIONS = 100
 MIN_AREA_FRACTION = 0.001  # the dataset rule: boxes under 0.1% of the image are dropped
 DILATION_FRACTION = 0.02   # the dataset rule: dilation radius round(0.02 * max(W, H)) image px
+FULL_LENGTH_FRACTION = 0.5  # a component whose box diagonal is at least this fraction of max(W, H) ranks in full
+
+
+def component_score(mean_p: float, box_diag: float, w: int, h: int) -> float:
+    """0.5 + 0.5 * (mean probability of the crack cells) * min(1, diag / (0.5 * max(W, H)))^0.5.
+
+    Ranks long, confident components first (chosen on the photos' train split over the cells' max,
+    `analysis/linking.py`) and stays in [0.5, 1]: every component passes a threshold below 0.5 as before.
+    """
+    f = min(1.0, box_diag / (FULL_LENGTH_FRACTION * max(w, h))) ** 0.5
+    return 0.5 + 0.5 * mean_p * f
 
 
 def letterbox_params(w: int, h: int, size: int = DEFAULT_SIZE):
@@ -104,7 +115,7 @@ def map_to_detections(prob: np.ndarray, w: int, h: int, size: int, threshold: fl
         y1 = min(STRIDE * (rows.max() + 1) / s, h)
         if (x1 - x0) * (y1 - y0) < min_area:
             continue
-        score = float(p[cells].max())
+        score = component_score(float(p[cells].astype(np.float64).mean()), float(np.hypot(x1 - x0, y1 - y0)), w, h)
         out.append((float(x0), float(y0), float(x1), float(y1), score))
     order = sorted(range(len(out)), key=lambda i: -out[i][4])  # stable: ties keep raster order
     return [out[i] for i in order[:max_det]]

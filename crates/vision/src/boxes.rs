@@ -47,6 +47,11 @@ impl BoundingBox {
         self.width() * self.height()
     }
 
+    /// Length of the diagonal (0 for an empty or inverted box).
+    pub fn diagonal(&self) -> f32 {
+        (self.x1 - self.x0).max(0.0).hypot((self.y1 - self.y0).max(0.0))
+    }
+
     /// Centre point.
     pub fn centre(&self) -> (f32, f32) {
         ((self.x0 + self.x1) / 2.0, (self.y0 + self.y1) / 2.0)

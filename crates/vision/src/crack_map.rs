@@ -13,10 +13,13 @@
 //! 4. each component's box is the tight box of its *undilated* crack cells, in image pixels
 //!    (`x0 = 2·c_min / s`, `x1 = 2·(c_max + 1) / s`, clipped to the image); boxes under 0.1% of
 //!    the image are dropped (`PostprocessParams::min_area_fraction`);
-//! 5. the score is the highest probability of the component's crack cells (on the training split
-//!    it ranks components better than their mean: `models/detector/analysis/scoring.py`);
-//!    detections are sorted by score (ties keep component order) and at most `max_detections`
-//!    are kept.
+//! 5. the score is `0.5 + 0.5 · m · min(1, d / (0.5 · max(W, H)))^0.5`, with `m` the mean
+//!    probability of the component's crack cells and `d` its box's diagonal in image pixels
+//!    ([`component_score`]): long, confident cracks first. It ranks the photos' components better
+//!    than the cells' highest probability did (chosen on the photos' training split:
+//!    `models/detector/analysis/linking.py`) and stays in `[0.5, 1]`, so any threshold below 0.5
+//!    keeps every component; detections are sorted by score (ties keep component order) and at
+//!    most `max_detections` are kept.
 //!
 //! `models/detector/contract.py` is the independent (numpy + scipy) implementation of the same
 //! rule; `crates/vision/tests/onnx_reference.rs` checks the two agree on real photos.
@@ -234,7 +237,7 @@ pub fn map_detections(map: &CrackMap, params: &PostprocessParams) -> Vec<Detecti
                 x1: ((c.c1 + 1) as f32 * to_img).min(w),
                 y1: ((c.r1 + 1) as f32 * to_img).min(h),
             };
-            let score = c.max;
+            let score = component_score(c.mean(), bbox.diagonal(), w, h);
             (bbox.area() >= min_area && score >= params.score_threshold).then(|| {
                 let mut shape = c.shape(to_img);
                 let cells: Vec<(usize, usize)> = c.cells.iter().map(|&(r, c, _)| (r, c)).collect();
@@ -252,11 +255,24 @@ pub fn map_detections(map: &CrackMap, params: &PostprocessParams) -> Vec<Detecti
     dets
 }
 
+/// A box diagonal of at least this fraction of the image's longer side ranks in full
+/// ([`component_score`]).
+pub const FULL_LENGTH_FRACTION: f32 = 0.5;
+
+/// A component's score from the mean probability of its crack cells and its box's diagonal
+/// (image pixels) in a `w × h` image: `0.5 + 0.5 · mean · min(1, diagonal / (0.5 · max(w, h)))^0.5`,
+/// in `[0.5, 1]` for a mean in `[0, 1]` (step 5 of the [module docs](self)).
+pub fn component_score(mean: f32, diagonal: f32, w: f32, h: f32) -> f32 {
+    let full = FULL_LENGTH_FRACTION * w.max(h);
+    let length = if full > 0.0 { (diagonal / full).min(1.0) } else { 1.0 };
+    0.5 + 0.5 * mean * length.max(0.0).sqrt()
+}
+
 /// Crack cells of one component.
 #[derive(Default)]
 struct Component {
     cells: Vec<(usize, usize, f32)>,
-    max: f32,
+    sum: f64,
     r0: usize,
     r1: usize,
     c0: usize,
@@ -272,8 +288,13 @@ impl Component {
         self.r1 = self.r1.max(r);
         self.c0 = self.c0.min(c);
         self.c1 = self.c1.max(c);
-        self.max = self.max.max(p);
+        self.sum += f64::from(p);
         self.cells.push((r, c, p));
+    }
+
+    /// The mean probability of the crack cells.
+    fn mean(&self) -> f32 {
+        (self.sum / self.cells.len().max(1) as f64) as f32
     }
 
     /// Main axis (probability-weighted principal direction of the cell centres) and the centre
@@ -433,7 +454,9 @@ mod tests {
                 y1: 240.0
             }
         );
-        assert!((d.score - 0.9).abs() < 1e-6);
+        // Mean 0.9, a 200 × 200 px box against a full length of 320 px.
+        let expected = 0.5 + 0.5 * 0.9 * (200.0 * 2f32.sqrt() / 320.0).sqrt();
+        assert!((d.score - expected).abs() < 1e-6, "{} against {expected}", d.score);
         let shape = d.shape.as_ref().unwrap();
         // The axis runs from the first to the last cell centre, along the diagonal.
         let [a, b] = shape.axis;
@@ -458,10 +481,30 @@ mod tests {
         cells.extend((100..130).map(|c| (100, c, 0.7))); // far away: its own box, second
         let dets = map_detections(&map_with(320, 640, 480, &cells), &params());
         assert_eq!(dets.len(), 2);
-        assert!((dets[0].score - 0.8).abs() < 1e-6, "{dets:?}");
-        assert!((dets[1].score - 0.7).abs() < 1e-6);
+        // The joined pair: mean 0.7 over a 180 × 4 px box; the far one: 0.7 over 120 × 4 px.
+        let joined_score = component_score(0.7, 180f32.hypot(4.0), 640.0, 480.0);
+        assert!((dets[0].score - joined_score).abs() < 1e-6, "{dets:?}");
+        assert!((dets[1].score - component_score(0.7, 120f32.hypot(4.0), 640.0, 480.0)).abs() < 1e-6);
         let joined = &dets[0];
         assert_eq!((joined.bbox.x0, joined.bbox.x1), (40.0, 220.0));
+    }
+
+    #[test]
+    fn the_score_ranks_long_confident_cracks_first_and_stays_in_half_to_one() {
+        let (w, h) = (640.0, 480.0);
+        // Full length is half the longer side (320 px): beyond it only the mean counts.
+        assert_eq!(component_score(0.8, 320.0, w, h), 0.9);
+        assert_eq!(component_score(0.8, 900.0, w, h), 0.9);
+        assert!(component_score(0.8, 40.0, w, h) < component_score(0.8, 160.0, w, h));
+        assert!(component_score(0.6, 300.0, w, h) < component_score(0.9, 300.0, w, h));
+        for mean in [0.0, 0.5, 0.75, 1.0] {
+            for diagonal in [0.0, 1.0, 50.0, 320.0, 1e6] {
+                let s = component_score(mean, diagonal, w, h);
+                assert!((0.5..=1.0).contains(&s), "{mean} {diagonal} → {s}");
+            }
+        }
+        // Every component passes a threshold under 0.5, as with the cells' highest probability.
+        assert!(component_score(0.5, 0.0, w, h) >= 0.5);
     }
 
     #[test]
