@@ -49,7 +49,9 @@ impl BoundingBox {
 
     /// Length of the diagonal (0 for an empty or inverted box).
     pub fn diagonal(&self) -> f32 {
-        (self.x1 - self.x0).max(0.0).hypot((self.y1 - self.y0).max(0.0))
+        (self.x1 - self.x0)
+            .max(0.0)
+            .hypot((self.y1 - self.y0).max(0.0))
     }
 
     /// Centre point.

@@ -264,7 +264,11 @@ pub const FULL_LENGTH_FRACTION: f32 = 0.5;
 /// in `[0.5, 1]` for a mean in `[0, 1]` (step 5 of the [module docs](self)).
 pub fn component_score(mean: f32, diagonal: f32, w: f32, h: f32) -> f32 {
     let full = FULL_LENGTH_FRACTION * w.max(h);
-    let length = if full > 0.0 { (diagonal / full).min(1.0) } else { 1.0 };
+    let length = if full > 0.0 {
+        (diagonal / full).min(1.0)
+    } else {
+        1.0
+    };
     0.5 + 0.5 * mean * length.max(0.0).sqrt()
 }
 
@@ -456,7 +460,11 @@ mod tests {
         );
         // Mean 0.9, a 200 × 200 px box against a full length of 320 px.
         let expected = 0.5 + 0.5 * 0.9 * (200.0 * 2f32.sqrt() / 320.0).sqrt();
-        assert!((d.score - expected).abs() < 1e-6, "{} against {expected}", d.score);
+        assert!(
+            (d.score - expected).abs() < 1e-6,
+            "{} against {expected}",
+            d.score
+        );
         let shape = d.shape.as_ref().unwrap();
         // The axis runs from the first to the last cell centre, along the diagonal.
         let [a, b] = shape.axis;
@@ -484,7 +492,9 @@ mod tests {
         // The joined pair: mean 0.7 over a 180 × 4 px box; the far one: 0.7 over 120 × 4 px.
         let joined_score = component_score(0.7, 180f32.hypot(4.0), 640.0, 480.0);
         assert!((dets[0].score - joined_score).abs() < 1e-6, "{dets:?}");
-        assert!((dets[1].score - component_score(0.7, 120f32.hypot(4.0), 640.0, 480.0)).abs() < 1e-6);
+        assert!(
+            (dets[1].score - component_score(0.7, 120f32.hypot(4.0), 640.0, 480.0)).abs() < 1e-6
+        );
         let joined = &dets[0];
         assert_eq!((joined.bbox.x0, joined.bbox.x1), (40.0, 220.0));
     }
