@@ -223,7 +223,13 @@ def loss_fn(head, x, heat, size, off, mask):
 def decode(head, x, s, w, h, max_det=contract.MAX_DETECTIONS, min_score=0.02):
     with torch.no_grad():
         hl, reg = head(x[None].float())
-    p = torch.sigmoid(hl)[0, 0]
+    return decode_maps(torch.sigmoid(hl)[0, 0], reg, s, w, h, max_det, min_score)
+
+
+def decode_maps(p, reg, s, w, h, max_det=contract.MAX_DETECTIONS, min_score=0.02):
+    """Boxes (x0, y0, x1, y1, score) in image pixels from the head's centre probabilities p [n, n] and its
+    regression reg [1, 4, n, n] (log width, log height in cells; the centre's offset in its cell), letterbox
+    scale s: one box per 3 x 3 local maximum of p at or above min_score, best first."""
     peaks = (p == F.max_pool2d(p[None, None], 3, 1, 1)[0, 0]) & (p >= min_score)
     iy, ix = torch.nonzero(peaks, as_tuple=True)
     scores = p[iy, ix]
@@ -243,8 +249,13 @@ def decode(head, x, s, w, h, max_det=contract.MAX_DETECTIONS, min_score=0.02):
 
 # --------------------------------------------------------------------------------------------------------------
 
-def evaluate(head, feats, val, rule=True):
-    """pycocotools mAP@0.5 / AR@100 per set and merged, for the head (and the rule on the same maps)."""
+def evaluate(head, feats, val, rule=True, boxes_of=None):
+    """pycocotools mAP@0.5 / AR@100 per set and merged, for the head (and the rule on the same maps, and the
+    rule's boxes followed by the head's). boxes_of(cmap, f8, deep, s, w, h) gives the head's boxes of one
+    image; by default the torch head's."""
+    if boxes_of is None:
+        def boxes_of(cmap, f8, deep, s, w, h):
+            return decode(head, head_input(cmap, f8, deep), s, w, h)
     head.eval()
     res = {"head": {}, "rule": {}, "union": {}}
     merged = {"images": [], "annotations": [], "categories": [{"id": 1, "name": "crack"}]}
@@ -265,7 +276,7 @@ def evaluate(head, feats, val, rule=True):
             aid += 1
             merged["annotations"].append(a)
             per[ds]["annotations"].append(a)
-        found = {"head": decode(head, head_input(cmap, f8, deep), s, w, h)}
+        found = {"head": boxes_of(cmap, f8, deep, s, w, h)}
         if rule:
             found["rule"] = contract.map_to_detections(cmap, w, h, feats.size)
             # The rule's boxes first, then the head's below every one of them (rule scores are >= 0.5).

@@ -1,0 +1,136 @@
+"""Merges a trained box head (analysis/box_head.py) into the crack-map model: one ONNX graph, one run.
+
+The merged model keeps the input `images` and the output `crack_map` of the model it was made from, and adds
+`box_heat` [1, 1, S/8, S/8] (the probability that a box of the photos' kind is centred in the cell) and `box_reg`
+[1, 4, S/8, S/8] (log width and log height in cells, the centre's offset in its cell). This checks that the
+merged graph gives the crack map of the original exactly and the probe's boxes, evaluates the rule's boxes
+followed by the head's on the photos' val splits (pycocotools), and times both graphs on one thread.
+The step before shipping the head; the Rust side does not read the new outputs yet.
+
+  python analysis/merge_box_head.py --head analysis/box_head_weights/box_head-32.pt --channels 32 --out /tmp/m.onnx
+"""
+from __future__ import annotations
+
+import argparse
+import io
+import os
+import sys
+import time
+
+import numpy as np
+import onnx
+import onnxruntime as ort
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+from onnx import compose
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import box_head as bh  # noqa: E402
+
+HERE = bh.HERE
+
+
+class HeadOnMaps(nn.Module):
+    """The head with its input stacking (pooling the crack map, upsampling the deep feature) inside."""
+
+    def __init__(self, head: bh.BoxHead, k: int):
+        super().__init__()
+        self.head, self.k = head, k
+
+    def forward(self, crack_map, f8, deep):
+        pooled = torch.cat([F.max_pool2d(crack_map, self.k), F.avg_pool2d(crack_map, self.k)], 1)
+        up = F.interpolate(deep, size=f8.shape[-2:], mode="nearest")
+        logit, reg = self.head(torch.cat([pooled, f8, up], 1))
+        return torch.sigmoid(logit), reg
+
+
+def merged_model(model_path: str, head: bh.BoxHead, size: int) -> onnx.ModelProto:
+    raw, names, channels = bh.tapped_model(model_path, size)
+    base = onnx.load_from_string(raw)
+    n8, cells = size // bh.HEAD_STRIDE, size // 2
+    deep_side = [d.dim_value for d in base.graph.output[-1].type.tensor_type.shape.dim][-1]
+    wrapper = HeadOnMaps(head, cells // n8).eval()
+    args = (torch.zeros(1, 1, cells, cells), torch.zeros(1, channels[0], n8, n8),
+            torch.zeros(1, channels[1], deep_side, deep_side))
+    buf = io.BytesIO()
+    opset = max(o.version for o in base.opset_import if o.domain in ("", "ai.onnx"))
+    torch.onnx.export(wrapper, args, buf, input_names=["crack_map", "f8", "deep"],
+                      output_names=["box_heat", "box_reg"], opset_version=opset, dynamo=False)
+    part = onnx.load_from_string(buf.getvalue())
+    part.ir_version = base.ir_version
+    part = compose.add_prefix(part, "box_head/")
+    io_map = [("crack_map", "box_head/crack_map"), (names[0], "box_head/f8"), (names[1], "box_head/deep")]
+    merged = compose.merge_models(base, part, io_map=io_map,
+                                  outputs=["crack_map", "box_head/box_heat", "box_head/box_reg"])
+    for node in merged.graph.node:
+        node.output[:] = [o.removeprefix("box_head/") if o in ("box_head/box_heat", "box_head/box_reg") else o
+                          for o in node.output]
+    for out in merged.graph.output:
+        out.name = out.name.removeprefix("box_head/")
+    onnx.checker.check_model(merged)
+    return merged
+
+
+def session(data: bytes, threads: int = 1):
+    so = ort.SessionOptions()
+    so.intra_op_num_threads = threads
+    return ort.InferenceSession(data, so, providers=["CPUExecutionProvider"])
+
+
+def median_ms(sess, feeds, runs=200):
+    for _ in range(20):
+        sess.run(None, feeds)
+    ts = []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        sess.run(None, feeds)
+        ts.append(time.perf_counter() - t0)
+    return float(np.median(ts) * 1e3)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--model", default=os.path.join(HERE, "crack-detector-320.onnx"))
+    ap.add_argument("--size", type=int, default=320)
+    ap.add_argument("--head", required=True, help="box_head.pt written by box_head.py --out")
+    ap.add_argument("--channels", type=int, default=64)
+    ap.add_argument("--out", required=True, help="where to write the merged ONNX model")
+    a = ap.parse_args()
+    torch.set_num_threads(1)
+    feats = bh.Features(a.model, a.size)
+    head = bh.BoxHead(sum(feats.channels) + 2, a.channels)
+    head.load_state_dict(torch.load(a.head))
+    head.eval()
+    merged = merged_model(a.model, head, a.size)
+    onnx.save(merged, a.out)
+    sess, base = session(merged.SerializeToString(), 2), session(open(a.model, "rb").read(), 2)
+    val = bh.load_split("val")
+    worst = 0.0
+    for ds, iid, img, boxes in val[:10]:
+        x, s = bh.contract.letterbox(img, a.size)
+        cmap, heat, reg = sess.run(["crack_map", "box_heat", "box_reg"], {"images": x})
+        worst = max(worst, float(np.abs(cmap - base.run(["crack_map"], {"images": x})[0]).max()))
+    print(f"merged: {a.out}, outputs {[o.name for o in merged.graph.output]}; "
+          f"crack map against the original, largest difference on 10 val photos: {worst:.2e}")
+
+    # The probe's evaluation, the head's boxes decoded from the merged graph's own outputs.
+    last = {}
+
+    def feats_merged(img):
+        x, s = bh.contract.letterbox(img, a.size)
+        cmap, heat, reg = sess.run(["crack_map", "box_heat", "box_reg"], {"images": x})
+        last["heat"], last["reg"] = torch.from_numpy(heat[0, 0]), torch.from_numpy(reg)
+        return cmap[0, 0], None, None, s
+
+    feats_merged.size = a.size
+    print(bh.fmt(bh.evaluate(head, feats_merged, val,
+                             boxes_of=lambda _c, _f, _d, s, w, h: bh.decode_maps(last["heat"], last["reg"], s, w, h))))
+    x = np.zeros((1, 3, a.size, a.size), np.float32)
+    t_m = median_ms(session(merged.SerializeToString()), {"images": x})
+    t_b = median_ms(session(open(a.model, "rb").read()), {"images": x})
+    print(f"one thread, median of 200: original {t_b:.2f} ms, merged {t_m:.2f} ms ({t_m / t_b:.2f}x)")
+
+
+if __name__ == "__main__":
+    main()
