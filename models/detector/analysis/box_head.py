@@ -66,13 +66,18 @@ def tapped_model(path: str, size: int):
     return m.SerializeToString(), [s8[0], deepest[0]], [s8[1][1], deepest[1][1]]
 
 
+def session(model: bytes, threads: int):
+    """An ONNX Runtime CPU session of a serialized model on `threads` intra-op threads."""
+    import onnxruntime as ort
+    so = ort.SessionOptions()
+    so.intra_op_num_threads = threads
+    return ort.InferenceSession(model, so, providers=["CPUExecutionProvider"])
+
+
 class Features:
     def __init__(self, model: str, size: int, threads: int = 2):
-        import onnxruntime as ort
         raw, self.names, self.channels = tapped_model(model, size)
-        so = ort.SessionOptions()
-        so.intra_op_num_threads = threads
-        self.sess = ort.InferenceSession(raw, so, providers=["CPUExecutionProvider"])
+        self.sess = session(raw, threads)
         self.size = size
 
     def __call__(self, img: np.ndarray):
@@ -82,14 +87,19 @@ class Features:
         return cmap[0, 0], f8[0], deep[0], s
 
 
+def stack_inputs(cmap, f8, deep):
+    """What the head sees at stride 8, batched tensors: the crack map [B, 1, S/2, S/2] max- and mean-pooled,
+    f8 [B, C8, S/8, S/8], deep [B, Cd, S/32, S/32] upsampled. The one stacking, here and in the merged graph."""
+    k = cmap.shape[-1] // f8.shape[-1]
+    pooled = torch.cat([F.max_pool2d(cmap, k), F.avg_pool2d(cmap, k)], 1)
+    up = F.interpolate(deep, size=f8.shape[-2:], mode="nearest")
+    return torch.cat([pooled, f8, up], 1)
+
+
 def head_input(cmap, f8, deep):
-    """Stacks what the head sees at stride 8 (float16 to keep the cache small)."""
-    n = f8.shape[-1]
-    k = cmap.shape[-1] // n
-    c = torch.from_numpy(cmap)[None, None]
-    pooled = torch.cat([F.max_pool2d(c, k), F.avg_pool2d(c, k)], 1)[0]
-    up = F.interpolate(torch.from_numpy(deep)[None], size=(n, n), mode="nearest")[0]
-    return torch.cat([pooled, torch.from_numpy(f8), up], 0).half()
+    """stack_inputs of one image's numpy outputs, unbatched (float16 to keep the cache small)."""
+    t = torch.from_numpy
+    return stack_inputs(t(cmap)[None, None], t(f8)[None], t(deep)[None])[0].half()
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -326,7 +336,7 @@ def main():
     rng = np.random.default_rng(a.seed)
     feats = Features(a.model, a.size)
     if a.eval_only:
-        head = BoxHead(head_input(*feats(load_split("val")[0][2])[:3]).shape[0], a.channels)
+        head = BoxHead(sum(feats.channels) + 2, a.channels)
         head.load_state_dict(torch.load(a.eval_only))
         print(fmt(evaluate(head, feats, load_split("val"))), flush=True)
         return

@@ -19,10 +19,8 @@ import time
 
 import numpy as np
 import onnx
-import onnxruntime as ort
 import torch
 import torch.nn as nn
-import torch.nn.functional as F
 from onnx import compose
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -32,50 +30,41 @@ HERE = bh.HERE
 
 
 class HeadOnMaps(nn.Module):
-    """The head with its input stacking (pooling the crack map, upsampling the deep feature) inside."""
+    """The head with its input stacking (box_head.stack_inputs) inside, probabilities out."""
 
-    def __init__(self, head: bh.BoxHead, k: int):
+    def __init__(self, head: bh.BoxHead):
         super().__init__()
-        self.head, self.k = head, k
+        self.head = head
 
     def forward(self, crack_map, f8, deep):
-        pooled = torch.cat([F.max_pool2d(crack_map, self.k), F.avg_pool2d(crack_map, self.k)], 1)
-        up = F.interpolate(deep, size=f8.shape[-2:], mode="nearest")
-        logit, reg = self.head(torch.cat([pooled, f8, up], 1))
+        logit, reg = self.head(bh.stack_inputs(crack_map, f8, deep))
         return torch.sigmoid(logit), reg
 
 
-def merged_model(model_path: str, head: bh.BoxHead, size: int) -> onnx.ModelProto:
-    raw, names, channels = bh.tapped_model(model_path, size)
+def merged_model(tapped, head: bh.BoxHead, size: int) -> onnx.ModelProto:
+    """The tapped crack-map model (box_head.tapped_model's answer) with the head on its taps."""
+    raw, names, channels = tapped
     base = onnx.load_from_string(raw)
     n8, cells = size // bh.HEAD_STRIDE, size // 2
     deep_side = [d.dim_value for d in base.graph.output[-1].type.tensor_type.shape.dim][-1]
-    wrapper = HeadOnMaps(head, cells // n8).eval()
     args = (torch.zeros(1, 1, cells, cells), torch.zeros(1, channels[0], n8, n8),
             torch.zeros(1, channels[1], deep_side, deep_side))
     buf = io.BytesIO()
     opset = max(o.version for o in base.opset_import if o.domain in ("", "ai.onnx"))
-    torch.onnx.export(wrapper, args, buf, input_names=["crack_map", "f8", "deep"],
+    torch.onnx.export(HeadOnMaps(head).eval(), args, buf, input_names=["crack_map", "f8", "deep"],
                       output_names=["box_heat", "box_reg"], opset_version=opset, dynamo=False)
     part = onnx.load_from_string(buf.getvalue())
     part.ir_version = base.ir_version
     part = compose.add_prefix(part, "box_head/")
     io_map = [("crack_map", "box_head/crack_map"), (names[0], "box_head/f8"), (names[1], "box_head/deep")]
-    merged = compose.merge_models(base, part, io_map=io_map,
-                                  outputs=["crack_map", "box_head/box_heat", "box_head/box_reg"])
+    new_outputs = ("box_head/box_heat", "box_head/box_reg")
+    merged = compose.merge_models(base, part, io_map=io_map, outputs=["crack_map", *new_outputs])
     for node in merged.graph.node:
-        node.output[:] = [o.removeprefix("box_head/") if o in ("box_head/box_heat", "box_head/box_reg") else o
-                          for o in node.output]
+        node.output[:] = [o.removeprefix("box_head/") if o in new_outputs else o for o in node.output]
     for out in merged.graph.output:
         out.name = out.name.removeprefix("box_head/")
     onnx.checker.check_model(merged)
     return merged
-
-
-def session(data: bytes, threads: int = 1):
-    so = ort.SessionOptions()
-    so.intra_op_num_threads = threads
-    return ort.InferenceSession(data, so, providers=["CPUExecutionProvider"])
 
 
 def median_ms(sess, feeds, runs=200):
@@ -98,37 +87,35 @@ def main():
     ap.add_argument("--out", required=True, help="where to write the merged ONNX model")
     a = ap.parse_args()
     torch.set_num_threads(1)
-    feats = bh.Features(a.model, a.size)
-    head = bh.BoxHead(sum(feats.channels) + 2, a.channels)
+    tapped = bh.tapped_model(a.model, a.size)
+    head = bh.BoxHead(sum(tapped[2]) + 2, a.channels)
     head.load_state_dict(torch.load(a.head))
     head.eval()
-    merged = merged_model(a.model, head, a.size)
+    merged = merged_model(tapped, head, a.size)
     onnx.save(merged, a.out)
-    sess, base = session(merged.SerializeToString(), 2), session(open(a.model, "rb").read(), 2)
+    merged_raw, base_raw = merged.SerializeToString(), open(a.model, "rb").read()
+    sess, base = bh.session(merged_raw, 2), bh.session(base_raw, 2)
+
+    def run_merged(img):
+        """box_head.evaluate's features: the crack map, and the head's two outputs where it wants f8 and deep."""
+        x, s = bh.contract.letterbox(img, a.size)
+        cmap, heat, reg = sess.run(["crack_map", "box_heat", "box_reg"], {"images": x})
+        return cmap[0, 0], torch.from_numpy(heat[0, 0]), torch.from_numpy(reg), s
+
+    run_merged.size = a.size
     val = bh.load_split("val")
     worst = 0.0
-    for ds, iid, img, boxes in val[:10]:
-        x, s = bh.contract.letterbox(img, a.size)
-        cmap, heat, reg = sess.run(["crack_map", "box_heat", "box_reg"], {"images": x})
-        worst = max(worst, float(np.abs(cmap - base.run(["crack_map"], {"images": x})[0]).max()))
+    for _ds, _iid, img, _boxes in val[:10]:
+        x, _ = bh.contract.letterbox(img, a.size)
+        worst = max(worst, float(np.abs(sess.run(["crack_map"], {"images": x})[0]
+                                        - base.run(["crack_map"], {"images": x})[0]).max()))
     print(f"merged: {a.out}, outputs {[o.name for o in merged.graph.output]}; "
           f"crack map against the original, largest difference on 10 val photos: {worst:.2e}")
-
-    # The probe's evaluation, the head's boxes decoded from the merged graph's own outputs.
-    last = {}
-
-    def feats_merged(img):
-        x, s = bh.contract.letterbox(img, a.size)
-        cmap, heat, reg = sess.run(["crack_map", "box_heat", "box_reg"], {"images": x})
-        last["heat"], last["reg"] = torch.from_numpy(heat[0, 0]), torch.from_numpy(reg)
-        return cmap[0, 0], None, None, s
-
-    feats_merged.size = a.size
-    print(bh.fmt(bh.evaluate(head, feats_merged, val,
-                             boxes_of=lambda _c, _f, _d, s, w, h: bh.decode_maps(last["heat"], last["reg"], s, w, h))))
+    print(bh.fmt(bh.evaluate(head, run_merged, val,
+                             boxes_of=lambda _cmap, heat, reg, s, w, h: bh.decode_maps(heat, reg, s, w, h))))
     x = np.zeros((1, 3, a.size, a.size), np.float32)
-    t_m = median_ms(session(merged.SerializeToString()), {"images": x})
-    t_b = median_ms(session(open(a.model, "rb").read()), {"images": x})
+    t_m = median_ms(bh.session(merged_raw, 1), {"images": x})
+    t_b = median_ms(bh.session(base_raw, 1), {"images": x})
     print(f"one thread, median of 200: original {t_b:.2f} ms, merged {t_m:.2f} ms ({t_m / t_b:.2f}x)")
 
 
