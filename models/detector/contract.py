@@ -18,6 +18,9 @@ MAX_DETECTIONS = 100
 MIN_AREA_FRACTION = 0.001  # the dataset rule: boxes under 0.1% of the image are dropped
 DILATION_FRACTION = 0.02   # the dataset rule: dilation radius round(0.02 * max(W, H)) image px
 FULL_LENGTH_FRACTION = 0.5  # a component whose box diagonal is at least this fraction of max(W, H) ranks in full
+HEAD_STRIDE = 8            # canvas pixels per cell of the box head's outputs (box_heat, box_reg)
+HEAD_MIN_PROBABILITY = 0.02  # a box head peak below this is no box
+HEAD_SCORE_SCALE = 0.5     # a box head box scores HEAD_SCORE_SCALE * p: in [0, 0.5), below every component
 
 
 def component_score(mean_p: float, box_diag: float, w: int, h: int) -> float:
@@ -119,6 +122,46 @@ def map_to_detections(prob: np.ndarray, w: int, h: int, size: int, threshold: fl
         out.append((float(x0), float(y0), float(x1), float(y1), score))
     order = sorted(range(len(out)), key=lambda i: -out[i][4])  # stable: ties keep raster order
     return [out[i] for i in order[:max_det]]
+
+
+def head_to_detections(heat: np.ndarray, reg: np.ndarray, w: int, h: int, size: int,
+                       max_det: int = MAX_DETECTIONS):
+    """The box head's boxes (models with `box_heat` [1,1,S/8,S/8] and `box_reg` [1,4,S/8,S/8]) -> list of
+    (x0, y0, x1, y1, score), best first.
+
+    One box per cell whose probability p is at least HEAD_MIN_PROBABILITY and the largest of its 3x3
+    neighbourhood (ties included; cells outside the map do not count); best p first, ties in raster order; at most
+    max_det. The box: centre (c + reg[2], r + reg[3]) cells, width exp(reg[0]) and height exp(reg[1]) cells, times
+    HEAD_STRIDE / s image pixels, clipped to the image; empty boxes dropped. Score HEAD_SCORE_SCALE * p.
+    """
+    n = size // HEAD_STRIDE
+    p = np.asarray(heat, dtype=np.float32).reshape(n, n)
+    reg = np.asarray(reg, dtype=np.float32).reshape(4, n, n)
+    s, _, _ = letterbox_params(w, h, size)
+    padded = np.pad(p, 1, constant_values=-np.inf)
+    neighbourhood = np.max([padded[dy:dy + n, dx:dx + n] for dy in range(3) for dx in range(3)], axis=0)
+    rows, cols = np.nonzero((p == neighbourhood) & (p >= np.float32(HEAD_MIN_PROBABILITY)))
+    order = np.argsort(-p[rows, cols], kind="stable")[:max_det]
+    f = HEAD_STRIDE / s
+    out = []
+    for k in order:
+        r, c = rows[k], cols[k]
+        bw, bh = float(np.exp(np.float64(reg[0, r, c]))), float(np.exp(np.float64(reg[1, r, c])))
+        cx, cy = c + float(reg[2, r, c]), r + float(reg[3, r, c])
+        x0, y0 = max((cx - bw / 2) * f, 0.0), max((cy - bh / 2) * f, 0.0)
+        x1, y1 = min((cx + bw / 2) * f, float(w)), min((cy + bh / 2) * f, float(h))
+        if x1 > x0 and y1 > y0:
+            out.append((x0, y0, x1, y1, HEAD_SCORE_SCALE * float(p[r, c])))
+    return out
+
+
+def detections(outputs: dict, w: int, h: int, size: int, max_det: int = MAX_DETECTIONS):
+    """Every detection of a model's outputs (name -> array): the crack map's components by the rule, then, for a
+    model with a box head, the head's boxes below them (scores < 0.5 <= every component's); at most max_det."""
+    out = map_to_detections(outputs["crack_map"], w, h, size, max_det=max_det)
+    if "box_heat" in outputs and "box_reg" in outputs:
+        out += head_to_detections(outputs["box_heat"], outputs["box_reg"], w, h, size, max_det)
+    return out[:max_det]
 
 
 def map_to_image(prob: np.ndarray, w: int, h: int, size: int) -> np.ndarray:

@@ -3,7 +3,8 @@
   python eval.py --model crack-detector-320.onnx --ann ../shared/data/cracks/val_all.json \
       --root ../shared/data/cracks [--results out/dets.json] [--json-metrics out/m.json]
 
-Boxes come from the crack map by the dataset rule (contract.map_to_detections). The project's own evaluator is
+Boxes come from the crack map by the dataset rule (contract.map_to_detections), then, for a model with a box head,
+the head's boxes below them (contract.detections). The project's own evaluator is
 `crackbot eval-detector` (Rust); this script is its independent cross-check and what train.sh records.
 """
 from __future__ import annotations
@@ -27,13 +28,13 @@ def load_rgb(path: str) -> np.ndarray:
 
 
 def detect_all(run_fn, coco: dict, root: str, size: int):
-    """run_fn: float32 [1,3,S,S] -> crack map [1,1,S/2,S/2]. Returns a COCO results list."""
+    """run_fn: float32 [1,3,S,S] -> the model's outputs by name (ort_outputs). Returns a COCO results list."""
     results = []
     for im in coco["images"]:
         img = load_rgb(os.path.join(root, im["file_name"]))
         h, w = img.shape[:2]
         x, _ = contract.letterbox(img, size)
-        for x0, y0, x1, y1, sc in contract.map_to_detections(run_fn(x)[0, 0], w, h, size):
+        for x0, y0, x1, y1, sc in contract.detections(run_fn(x), w, h, size):
             results.append({"image_id": im["id"], "category_id": 1,
                             "bbox": [x0, y0, x1 - x0, y1 - y0], "score": sc})
     return results
@@ -62,13 +63,25 @@ def coco_metrics(coco: dict, results: list, verbose: bool = False) -> dict:
             "images": len(coco["images"]), "boxes": len(coco["annotations"]), "detections": len(results)}
 
 
-def ort_runner(model_path: str, threads: int = 2):
+def ort_session(model_path: str, threads: int = 2):
     import onnxruntime as ort
     so = ort.SessionOptions()
     so.intra_op_num_threads = threads
     sess = ort.InferenceSession(model_path, so, providers=["CPUExecutionProvider"])
-    size = sess.get_inputs()[0].shape[2]
+    return sess, sess.get_inputs()[0].shape[2]
+
+
+def ort_runner(model_path: str, threads: int = 2):
+    """(x -> the crack map [1,1,S/2,S/2], S)."""
+    sess, size = ort_session(model_path, threads)
     return (lambda x: sess.run(["crack_map"], {"images": x})[0]), size
+
+
+def ort_outputs(model_path: str, threads: int = 2):
+    """(x -> every output of the model by name: crack_map, and box_heat and box_reg where it has a box head, S)."""
+    sess, size = ort_session(model_path, threads)
+    names = [o.name for o in sess.get_outputs()]
+    return (lambda x: dict(zip(names, sess.run(names, {"images": x})))), size
 
 
 def main():
@@ -83,7 +96,7 @@ def main():
     root = a.root or os.path.dirname(os.path.abspath(a.ann))
     with open(a.ann) as f:
         coco = json.load(f)
-    run, size = ort_runner(a.model)
+    run, size = ort_outputs(a.model)
     res = detect_all(run, coco, root, size)
     if a.results:
         os.makedirs(os.path.dirname(os.path.abspath(a.results)), exist_ok=True)

@@ -1,5 +1,6 @@
 """Reference outputs for the Rust side: 3 val images (one per dataset) as PNG, their letterboxed input checksums,
-crack maps and detections from the 320 model via onnxruntime + contract.py, and a synthetic-input check per size."""
+crack maps, box-head outputs (models that have them) and detections from the 320 model via onnxruntime +
+contract.py, and a synthetic-input check per size."""
 from __future__ import annotations
 
 import argparse
@@ -13,7 +14,7 @@ from PIL import Image
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import contract  # noqa: E402
-from eval import ort_runner  # noqa: E402
+from eval import ort_outputs, ort_runner  # noqa: E402
 
 # The crack photos beside the clone (../shared/data/cracks from the repository root); CRACKS_DATA overrides.
 DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(HERE, "../../../shared/data/cracks")))
@@ -33,7 +34,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(HERE, "reference"))
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
-    run320, size = ort_runner(os.path.join(a.models, "crack-detector-320.onnx"), threads=1)
+    run320, size = ort_outputs(os.path.join(a.models, "crack-detector-320.onnx"), threads=1)
     assert size == 320
     ref = {"contract": {"S": 320, "pad": 0.5, "map_threshold": contract.MAP_THRESHOLD,
                         "max_det": contract.MAX_DETECTIONS,
@@ -49,8 +50,15 @@ def main():
         img = np.asarray(Image.open(os.path.join(a.out, png)).convert("RGB"))  # round-trip (lossless)
         h, w = img.shape[:2]
         x, s = contract.letterbox(img, 320)
-        prob = run320(x)[0, 0]
-        dets = contract.map_to_detections(prob, w, h, 320)
+        outputs = run320(x)
+        prob = outputs["crack_map"][0, 0]
+        dets = contract.detections(outputs, w, h, 320)
+        head = {}
+        if "box_heat" in outputs:
+            head = {"box_heat_sum": float(outputs["box_heat"].astype(np.float64).sum()),
+                    "box_reg_sum": float(outputs["box_reg"].astype(np.float64).sum()),
+                    "box_head_detections": len(contract.head_to_detections(outputs["box_heat"], outputs["box_reg"],
+                                                                           w, h, 320))}
         gts = [a_["bbox"] for a_ in coco["annotations"] if a_["image_id"] == im["id"]]
         ref["images"].append({
             "file": png, "dataset": ds, "source_file": f"{ds}/{im['file_name']}", "W": w, "H": h, "S": 320,
@@ -58,7 +66,9 @@ def main():
                                            "first8_row0_R": [float(v) for v in x[0, 0, 0, :8]]},
             "map_sum": float(prob.astype(np.float64).sum()),
             "map_cells_at_least_threshold": int((prob >= contract.MAP_THRESHOLD).sum()),
-            "detections": [{"bbox": [d[0], d[1], d[2], d[3]], "score": d[4]} for d in dets],
+            **head,
+            "detections": [{"bbox": [d[0], d[1], d[2], d[3]], "score": d[4],
+                            "source": "crack_map" if d[4] >= 0.5 else "box_head"} for d in dets],
             "ground_truth_xywh": gts})
         print(f"{png}: {w}x{h}, {len(dets)} detections, top: {dets[:1]}")
     for S in (256, 320, 416):

@@ -37,7 +37,7 @@ from eval import coco_metrics, load_rgb  # noqa: E402
 
 DATA = os.environ.get("CRACKS_DATA", os.path.normpath(os.path.join(HERE, "../../../shared/data/cracks")))
 SETS = ("crackforest", "uav75", "quaywall")
-HEAD_STRIDE = 8
+HEAD_STRIDE = contract.HEAD_STRIDE
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -230,31 +230,19 @@ def loss_fn(head, x, heat, size, off, mask):
     return l_heat + 0.5 * l_size + l_off
 
 
-def decode(head, x, s, w, h, max_det=contract.MAX_DETECTIONS, min_score=0.02):
+def decode(head, x, s, w, h, max_det=contract.MAX_DETECTIONS):
     with torch.no_grad():
         hl, reg = head(x[None].float())
-    return decode_maps(torch.sigmoid(hl)[0, 0], reg, s, w, h, max_det, min_score)
+    return decode_maps(torch.sigmoid(hl)[0, 0], reg, s, w, h, max_det)
 
 
-def decode_maps(p, reg, s, w, h, max_det=contract.MAX_DETECTIONS, min_score=0.02):
-    """Boxes (x0, y0, x1, y1, score) in image pixels from the head's centre probabilities p [n, n] and its
-    regression reg [1, 4, n, n] (log width, log height in cells; the centre's offset in its cell), letterbox
-    scale s: one box per 3 x 3 local maximum of p at or above min_score, best first."""
-    peaks = (p == F.max_pool2d(p[None, None], 3, 1, 1)[0, 0]) & (p >= min_score)
-    iy, ix = torch.nonzero(peaks, as_tuple=True)
-    scores = p[iy, ix]
-    order = torch.argsort(-scores)[:max_det]
-    out = []
-    for k in order.tolist():
-        y, xk = iy[k].item(), ix[k].item()
-        bw, bh = math.exp(reg[0, 0, y, xk].item()), math.exp(reg[0, 1, y, xk].item())
-        cx, cy = xk + reg[0, 2, y, xk].item(), y + reg[0, 3, y, xk].item()
-        f = HEAD_STRIDE / s
-        x0, y0 = max((cx - bw / 2) * f, 0.0), max((cy - bh / 2) * f, 0.0)
-        x1, y1 = min((cx + bw / 2) * f, w), min((cy + bh / 2) * f, h)
-        if x1 > x0 and y1 > y0:
-            out.append((x0, y0, x1, y1, scores[k].item()))
-    return out
+def decode_maps(p, reg, s, w, h, max_det=contract.MAX_DETECTIONS):
+    """Boxes (x0, y0, x1, y1, p) in image pixels from the head's centre probabilities p [n, n] and its regression
+    reg [1, 4, n, n], by the contract's decoding (contract.head_to_detections), with the head's own probability as
+    the score. s, the letterbox scale, is implied by w, h and the map's side."""
+    size = p.shape[-1] * HEAD_STRIDE
+    found = contract.head_to_detections(p.numpy(), reg.numpy(), w, h, size, max_det)
+    return [(x0, y0, x1, y1, sc / contract.HEAD_SCORE_SCALE) for x0, y0, x1, y1, sc in found]
 
 
 # --------------------------------------------------------------------------------------------------------------

@@ -5,9 +5,12 @@ The merged model keeps the input `images` and the output `crack_map` of the mode
 [1, 4, S/8, S/8] (log width and log height in cells, the centre's offset in its cell). This checks that the
 merged graph gives the crack map of the original exactly and the probe's boxes, evaluates the rule's boxes
 followed by the head's on the photos' val splits (pycocotools), and times both graphs on one thread.
-The step before shipping the head; the Rust side does not read the new outputs yet.
+The shipped models are made this way (train.sh); crates/vision decodes the new outputs (`box_head.rs`) as
+contract.head_to_detections does.
 
   python analysis/merge_box_head.py --head analysis/box_head_weights/box_head-32.pt --channels 32 --out /tmp/m.onnx
+  python analysis/merge_box_head.py --model crack-detector-256.onnx --size 256 --head … --channels 32 \
+      --out crack-detector-256.onnx --skip-eval      # in place, no val evaluation or timing
 """
 from __future__ import annotations
 
@@ -84,16 +87,20 @@ def main():
     ap.add_argument("--size", type=int, default=320)
     ap.add_argument("--head", required=True, help="box_head.pt written by box_head.py --out")
     ap.add_argument("--channels", type=int, default=64)
-    ap.add_argument("--out", required=True, help="where to write the merged ONNX model")
+    ap.add_argument("--out", required=True, help="where to write the merged ONNX model (may be --model itself)")
+    ap.add_argument("--skip-eval", action="store_true", help="only the crack-map check: no val boxes, no timing")
     a = ap.parse_args()
     torch.set_num_threads(1)
+    base_raw = open(a.model, "rb").read()
+    if any(o.name == "box_heat" for o in onnx.load_from_string(base_raw).graph.output):
+        sys.exit(f"{a.model} already has a box head (output `box_heat`): merge into the crack-map model alone")
     tapped = bh.tapped_model(a.model, a.size)
     head = bh.BoxHead(sum(tapped[2]) + 2, a.channels)
     head.load_state_dict(torch.load(a.head))
     head.eval()
     merged = merged_model(tapped, head, a.size)
     onnx.save(merged, a.out)
-    merged_raw, base_raw = merged.SerializeToString(), open(a.model, "rb").read()
+    merged_raw = merged.SerializeToString()
     sess, base = bh.session(merged_raw, 2), bh.session(base_raw, 2)
 
     def run_merged(img):
@@ -105,12 +112,16 @@ def main():
     run_merged.size = a.size
     val = bh.load_split("val")
     worst = 0.0
-    for _ds, _iid, img, _boxes in val[:10]:
+    for _ds, _iid, img, _boxes in val[:: max(1, len(val) // 10)]:
         x, _ = bh.contract.letterbox(img, a.size)
         worst = max(worst, float(np.abs(sess.run(["crack_map"], {"images": x})[0]
                                         - base.run(["crack_map"], {"images": x})[0]).max()))
     print(f"merged: {a.out}, outputs {[o.name for o in merged.graph.output]}; "
           f"crack map against the original, largest difference on 10 val photos: {worst:.2e}")
+    if worst > 0.0:
+        sys.exit("the merged graph changed the crack map: not a model to ship")
+    if a.skip_eval:
+        return
     print(bh.fmt(bh.evaluate(head, run_merged, val,
                              boxes_of=lambda _cmap, heat, reg, s, w, h: bh.decode_maps(heat, reg, s, w, h))))
     x = np.zeros((1, 3, a.size, a.size), np.float32)
