@@ -325,6 +325,56 @@ fn detect_finds_each_crack_of_the_default_scene() {
 }
 
 #[test]
+fn detect_adds_the_box_heads_boxes_after_the_crack_maps_only_when_asked() {
+    let image = format!("{REFERENCE}/ref_quaywall.png");
+    let source_of = |r: &Value| -> Vec<(f64, bool)> {
+        r["images"][0]["detections"]
+            .as_array()
+            .expect("detections")
+            .iter()
+            .map(|d| {
+                (
+                    d["score"].as_f64().expect("score"),
+                    d["source"] == "box_head",
+                )
+            })
+            .collect()
+    };
+    let plain = source_of(&ok_json(&[
+        "detect",
+        &image,
+        "--threshold",
+        "0.05",
+        "--json",
+    ]));
+    let with = ok_json(&[
+        "detect",
+        &image,
+        "--threshold",
+        "0.05",
+        "--box-head",
+        "--json",
+    ]);
+    let both = source_of(&with);
+    assert!(plain.iter().all(|(_, head)| !head), "{plain:?}");
+    let heads = both.iter().filter(|(_, head)| *head).count();
+    assert!(heads > 0, "{both:?}");
+    // The crack map's detections first and unchanged, then the head's, under 0.5, best first.
+    assert_eq!(&both[..plain.len()], &plain[..]);
+    assert!(both[plain.len()..].iter().all(|&(s, head)| head && s < 0.5));
+    assert!(both[plain.len()..].windows(2).all(|w| w[0].0 >= w[1].0));
+    for d in &with["images"][0]["detections"]
+        .as_array()
+        .expect("detections")[plain.len()..]
+    {
+        assert!(
+            d.get("polyline_px").is_none() && d.get("pieces_px").is_none(),
+            "{d}"
+        );
+    }
+}
+
+#[test]
 fn bad_input_is_a_named_error() {
     let dir = tempfile::tempdir().expect("tempdir");
     let missing = dir.path().join("missing.png");

@@ -8,18 +8,21 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::coco::{
-    detect_dataset_with_maps, evaluate, CocoDataset, CocoImage, CocoMetrics, CocoResult, Progress,
+    coco_result, detect_dataset_with_maps, evaluate, CocoDataset, CocoImage, CocoMetrics,
+    CocoResult, Progress,
 };
 use crate::crack_map::{CrackMap, CrackPiece};
 use crate::pixel::{PixelEvaluator, PixelMetrics};
 use crate::preprocess::PostprocessParams;
 use crate::scene_recall::{scene_recall, SceneRecall, SceneTruth};
-use crate::{Detection, Detector, VisionError};
+use crate::{Detection, DetectionSource, Detector, VisionError};
 
-/// Post-processing for mAP: every candidate down to a score of 0.001, as COCO evaluations do.
+/// Post-processing for mAP: every candidate down to a score of 0.001, as COCO evaluations do,
+/// with a crack-map model's box-head boxes after the crack map's.
 pub fn map_params() -> PostprocessParams {
     PostprocessParams {
         score_threshold: 0.001,
+        box_head: true,
         ..PostprocessParams::default()
     }
 }
@@ -182,11 +185,20 @@ impl Benchmark {
         let root = &self.root;
         let threshold = PostprocessParams::default().score_threshold;
         let mut pieces: HashMap<u64, Vec<CrackPiece>> = HashMap::new();
+        // The robot's proposals: the box head's boxes are for box metrics, never touched.
+        let mut proposals: Vec<CocoResult> = Vec::new();
         let on_frame = |image: &CocoImage,
                         detections: &[crate::Detection],
                         map: Option<&CrackMap>|
          -> Result<(), VisionError> {
-            let counted = detections.iter().filter(|d| d.score >= threshold);
+            let counted = detections
+                .iter()
+                .filter(|d| d.score >= threshold && d.source == DetectionSource::Primary);
+            proposals.extend(
+                counted
+                    .clone()
+                    .map(|d| coco_result(image.id, self.category, d)),
+            );
             let own = counted
                 .filter_map(|d| d.shape.as_ref())
                 .flat_map(|s| s.pieces.iter().cloned());
@@ -214,7 +226,7 @@ impl Benchmark {
             Some(truth) => Some(scene_recall(
                 &self.gt,
                 truth,
-                &results,
+                &proposals,
                 threshold,
                 (!pieces.values().all(Vec::is_empty)).then_some(&pieces),
             )?),
@@ -294,6 +306,7 @@ mod tests {
                 bbox: crate::BoundingBox::from_xywh(0.0, 0.0, w as f32, h as f32),
                 score: 0.9,
                 shape: None,
+                source: crate::DetectionSource::Primary,
             }])
         }
     }

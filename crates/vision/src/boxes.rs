@@ -88,6 +88,27 @@ impl BoundingBox {
     }
 }
 
+/// Which part of a detector found a detection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DetectionSource {
+    /// The detector's own boxes: a crack-map component by the datasets' rule (with its centre
+    /// line), a box model's row, the edge baseline's box.
+    #[default]
+    Primary,
+    /// A crack-map model's box head ([`crate::box_head`]): a box in the crack photos' own
+    /// convention, with no centre line, scored below every component. For box metrics and
+    /// reports; the robot does not touch it (it was never checked on the rendered scenes).
+    BoxHead,
+}
+
+impl DetectionSource {
+    /// Whether this is [`DetectionSource::Primary`] (for `skip_serializing_if`).
+    pub fn is_primary(&self) -> bool {
+        *self == DetectionSource::Primary
+    }
+}
+
 /// One candidate crack.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Detection {
@@ -99,6 +120,9 @@ pub struct Detection {
     /// detectors).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape: Option<crate::crack_map::CrackShape>,
+    /// Which part of the detector found it.
+    #[serde(default, skip_serializing_if = "DetectionSource::is_primary")]
+    pub source: DetectionSource,
 }
 
 impl Detection {
@@ -108,6 +132,7 @@ impl Detection {
             bbox,
             score,
             shape: None,
+            source: DetectionSource::Primary,
         }
     }
 }
@@ -137,11 +162,7 @@ pub fn nms(
 /// A detection from its corners and score (shared by the crate's tests).
 #[cfg(test)]
 pub(crate) fn det(x0: f32, y0: f32, x1: f32, y1: f32, score: f32) -> Detection {
-    Detection {
-        bbox: BoundingBox { x0, y0, x1, y1 },
-        score,
-        shape: None,
-    }
+    Detection::boxed(BoundingBox { x0, y0, x1, y1 }, score)
 }
 
 #[cfg(test)]

@@ -545,6 +545,7 @@ fn detect(image: &image::RgbImage, p: &ClassicalParams) -> Vec<Detection> {
                 },
                 score: score as f32,
                 shape: None,
+                source: crate::DetectionSource::Primary,
             })
         })
         .collect();

@@ -246,6 +246,7 @@ pub fn map_detections(map: &CrackMap, params: &PostprocessParams) -> Vec<Detecti
                     bbox,
                     score,
                     shape: Some(shape),
+                    source: crate::DetectionSource::Primary,
                 }
             })
         })

@@ -42,6 +42,10 @@ pub struct DetectionReport {
     /// Frames the detection was seen in (fused detections only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frames_seen: Option<usize>,
+    /// `"box_head"` for the model's box head (a box only, scored under 0.5); absent for the
+    /// detector's own detections ([`crate::DetectionSource`]).
+    #[serde(skip_serializing_if = "crate::DetectionSource::is_primary")]
+    pub source: crate::DetectionSource,
     /// The crack's main axis, its two ends in pixels (detectors with a crack map).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub axis_px: Option<[[f32; 2]; 2]>,
@@ -160,6 +164,7 @@ pub fn detect_images(
             score: d.score,
             centre_mm: to_mm(d),
             frames_seen,
+            source: d.source,
             axis_px: shape.map(|s| s.axis),
             polyline_px: shape.map(|s| s.polyline.clone()),
             axis_mm: shape.and_then(|s| points_mm(&s.axis)).map(|a| [a[0], a[1]]),
@@ -326,11 +331,13 @@ mod tests {
                     bbox: crate::BoundingBox::from_xywh(2.0, 2.0, 4.0, 4.0),
                     score: 0.8,
                     shape: None,
+                    source: crate::DetectionSource::Primary,
                 },
                 Detection {
                     bbox: crate::BoundingBox::from_xywh(10.0, 1.0, 3.0, 3.0),
                     score: 0.1,
                     shape: None,
+                    source: crate::DetectionSource::Primary,
                 },
             ])
         }
@@ -358,6 +365,7 @@ mod tests {
                         width_px: 2.0,
                     }],
                 }),
+                source: crate::DetectionSource::Primary,
             }])
         }
     }

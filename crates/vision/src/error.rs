@@ -72,6 +72,17 @@ pub enum VisionError {
         /// The value.
         value: f32,
     },
+    /// A value of a box head's output that cannot be (a `box_heat` value that is not a
+    /// probability, a `box_reg` value that is not finite).
+    #[error("box head output `{output}` value {value} at index {index} is not valid")]
+    BoxHeadValue {
+        /// The output's name.
+        output: &'static str,
+        /// The value's index, row-major.
+        index: usize,
+        /// The value.
+        value: f32,
+    },
     /// A model asked for an output it does not have (a crack map of a box model).
     #[error("{model} returns {has}, not {wanted}")]
     WrongOutput {

@@ -13,7 +13,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{BoundingBox, Detection, VisionError};
+use crate::{BoundingBox, Detection, DetectionSource, VisionError};
 
 /// Parameters of [`fuse`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -129,6 +129,11 @@ pub fn fuse(frames: &[Vec<Detection>], params: &FusionParams) -> Vec<FusedDetect
                     .map(|((_, _, d), w)| f64::from(get(&d.bbox)) * w)
                     .sum::<f64>() as f32
             };
+            // The member the fused score trusts most.
+            let best = c
+                .members
+                .iter()
+                .max_by(|a, b| a.2.score.total_cmp(&b.2.score));
             FusedDetection {
                 detection: Detection {
                     bbox: BoundingBox {
@@ -138,12 +143,8 @@ pub fn fuse(frames: &[Vec<Detection>], params: &FusionParams) -> Vec<FusedDetect
                         y1: mean(|b| b.y1),
                     },
                     score: (total / n_frames as f64) as f32,
-                    // The crack's course from the member the fused score trusts most.
-                    shape: c
-                        .members
-                        .iter()
-                        .max_by(|a, b| a.2.score.total_cmp(&b.2.score))
-                        .and_then(|(_, _, d)| d.shape.clone()),
+                    shape: best.and_then(|(_, _, d)| d.shape.clone()),
+                    source: best.map_or(DetectionSource::Primary, |(_, _, d)| d.source),
                 },
                 frames_seen: c.members.len(),
                 members: c.members.iter().map(|&(f, i, _)| (f, i)).collect(),

@@ -6,6 +6,8 @@
 //!   - [`classical`]: an edge-based baseline (no model, no runtime).
 //! * [`preprocess`]: the letterbox contract shared with the model (`models/detector/MODEL_CARD.md`).
 //! * [`boxes`]: boxes, IoU, non-maximum suppression.
+//! * [`box_head`]: the boxes of a crack-map model's box head (boxes in the photos' own
+//!   convention, below the crack map's).
 //! * [`crack_map`]: detections from a segmentation detector's crack map (boxes by the crack
 //!   datasets' rule, each crack's main axis and centre line).
 //! * [`coco`]: COCO files and the COCO detection metrics (mAP@[.5:.95], mAP@0.5, AR@100), as
@@ -22,6 +24,7 @@
 //!   [`model`]: where the trained model is.
 
 pub mod benchmark;
+pub mod box_head;
 pub mod boxes;
 pub mod camera;
 pub mod classical;
@@ -41,7 +44,7 @@ pub mod scene_recall;
 #[cfg(feature = "research")]
 pub mod tradeoff;
 
-pub use boxes::{BoundingBox, Detection};
+pub use boxes::{BoundingBox, Detection, DetectionSource};
 pub use error::VisionError;
 
 /// Anything that finds cracks in an RGB frame.

@@ -17,6 +17,7 @@ use std::sync::OnceLock;
 use ort::session::Session;
 use ort::value::TensorRef;
 
+use crate::box_head::{with_head_boxes, BoxHeadMaps, HEAD_STRIDE, REG_CHANNELS};
 use crate::crack_map::{map_detections, CrackMap, MAP_STRIDE};
 use crate::preprocess::{letterbox, postprocess, Letterbox, PostprocessParams};
 use crate::{Detection, Detector, VisionError};
@@ -132,6 +133,7 @@ pub struct OnnxDetector {
     session: Session,
     size: usize,
     output: ModelOutput,
+    box_head: bool,
     params: PostprocessParams,
     name: String,
 }
@@ -142,14 +144,17 @@ impl std::fmt::Debug for OnnxDetector {
             .field("name", &self.name)
             .field("size", &self.size)
             .field("output", &self.output)
+            .field("box_head", &self.box_head)
             .field("params", &self.params)
             .finish()
     }
 }
 
 impl OnnxDetector {
-    /// Loads `model` (one input `images` `[1, 3, S, S]` f32; an output `detections` `[1, N, 5]`
-    /// or `crack_map` `[1, 1, S/2, S/2]` f32), running it on `threads` intra-op threads.
+    /// Loads `model` (one input `images` `[1, 3, S, S]` f32; a first output `detections`
+    /// `[1, N, 5]` or `crack_map` `[1, 1, S/2, S/2]` f32, and for a crack-map model with a box
+    /// head also `box_heat` and `box_reg`, [`crate::box_head`]), running it on `threads` intra-op
+    /// threads.
     pub fn load(
         model: &Path,
         params: PostprocessParams,
@@ -183,13 +188,31 @@ impl OnnxDetector {
                 )))
             }
         };
+        let names: Vec<&str> = outputs.iter().map(|o| o.name()).collect();
+        let box_head = match (names.contains(&"box_heat"), names.contains(&"box_reg")) {
+            (false, false) => false,
+            (true, true) if output == ModelOutput::CrackMap => true,
+            _ => {
+                return Err(fail(&format!(
+                    "a box head needs both outputs `box_heat` and `box_reg` beside `crack_map`, found {names:?}"
+                )))
+            }
+        };
         let shape: Vec<i64> = inputs[0]
             .dtype()
             .tensor_shape()
             .map(|s| s.iter().copied().collect())
             .unwrap_or_default();
         let size = match shape.as_slice() {
-            [1, 3, h, w] if h == w && *h > 0 && (*h as usize).is_multiple_of(MAP_STRIDE) => {
+            [1, 3, h, w]
+                if h == w
+                    && *h > 0
+                    && (*h as usize).is_multiple_of(if box_head {
+                        HEAD_STRIDE
+                    } else {
+                        MAP_STRIDE
+                    }) =>
+            {
                 *h as usize
             }
             _ => {
@@ -206,6 +229,7 @@ impl OnnxDetector {
             session,
             size,
             output,
+            box_head,
             params,
             name: format!("onnx:{stem}"),
         })
@@ -214,6 +238,11 @@ impl OnnxDetector {
     /// What the model returns.
     pub fn output(&self) -> ModelOutput {
         self.output
+    }
+
+    /// Whether the model has a box head (outputs `box_heat` and `box_reg`, [`crate::box_head`]).
+    pub fn has_box_head(&self) -> bool {
+        self.box_head
     }
 
     /// The model's input side `S` in pixels.
@@ -234,6 +263,13 @@ impl OnnxDetector {
     /// Runs the model on an input tensor (`3·S·S` values, NCHW) and returns its output: the raw
     /// `detections` rows (`N × 5`) of a box model, or the `(S/2)²` cells of a crack map.
     pub fn run_tensor(&mut self, tensor: &[f32]) -> Result<Vec<f32>, VisionError> {
+        let name = self.output.tensor_name();
+        Ok(self.run(tensor, &[name])?.remove(0))
+    }
+
+    /// Runs the model on an input tensor and returns the outputs `names`, in that order, each
+    /// checked against its expected shape.
+    fn run(&mut self, tensor: &[f32], names: &[&str]) -> Result<Vec<Vec<f32>>, VisionError> {
         let s = self.size;
         if tensor.len() != 3 * s * s {
             return Err(VisionError::Shape {
@@ -249,27 +285,34 @@ impl OnnxDetector {
             .session
             .run(ort::inputs!["images" => input])
             .map_err(fail)?;
-        let tensor_name = self.output.tensor_name();
-        let out = outputs
-            .get(tensor_name)
-            .ok_or_else(|| VisionError::Runtime(format!("{name}: no `{tensor_name}` output")))?;
-        let (shape, data) = out.try_extract_tensor::<f32>().map_err(fail)?;
-        let shape: Vec<i64> = shape.iter().copied().collect();
-        let cells = (s / MAP_STRIDE) as i64;
-        let ok = match self.output {
-            ModelOutput::Boxes => shape.len() == 3 && shape[2] == 5,
-            ModelOutput::CrackMap => shape == [1, 1, cells, cells],
-        };
-        if !ok {
-            let want = match self.output {
-                ModelOutput::Boxes => "[1, N, 5]".to_string(),
-                ModelOutput::CrackMap => format!("[1, 1, {cells}, {cells}]"),
-            };
-            return Err(VisionError::Runtime(format!(
-                "{name}: `{tensor_name}` has shape {shape:?}, expected {want}"
-            )));
+        let mut values = Vec::with_capacity(names.len());
+        for &tensor_name in names {
+            let out = outputs.get(tensor_name).ok_or_else(|| {
+                VisionError::Runtime(format!("{name}: no `{tensor_name}` output"))
+            })?;
+            let (shape, data) = out.try_extract_tensor::<f32>().map_err(fail)?;
+            let shape: Vec<i64> = shape.iter().copied().collect();
+            check_shape(&name, tensor_name, &shape, s)?;
+            values.push(data.to_vec());
         }
-        Ok(data.to_vec())
+        Ok(values)
+    }
+
+    /// The crack map of `image` and, for a model with a box head, the head's outputs.
+    fn crack_map_and_head(
+        &mut self,
+        image: &image::RgbImage,
+    ) -> Result<(CrackMap, Option<BoxHeadMaps>), VisionError> {
+        let (tensor, lb) = self.preprocess(image)?;
+        if !(self.box_head && self.params.box_head) {
+            return Ok((CrackMap::new(self.run_tensor(&tensor)?, lb)?, None));
+        }
+        let mut out = self.run(&tensor, &["crack_map", "box_heat", "box_reg"])?;
+        let (reg, heat, map) = (out.remove(2), out.remove(1), out.remove(0));
+        Ok((
+            CrackMap::new(map, lb)?,
+            Some(BoxHeadMaps::new(heat, reg, lb)?),
+        ))
     }
 
     /// The crack map of `image` (crack-map models only).
@@ -314,9 +357,69 @@ impl Detector for OnnxDetector {
                 Ok((postprocess(&rows, &lb, &self.params)?, None))
             }
             ModelOutput::CrackMap => {
-                let map = self.crack_map(image)?;
-                Ok((map_detections(&map, &self.params), Some(map)))
+                let (map, head) = self.crack_map_and_head(image)?;
+                let found = map_detections(&map, &self.params);
+                let found = match head {
+                    Some(head) if self.params.box_head => {
+                        with_head_boxes(found, &head, &self.params)
+                    }
+                    _ => found,
+                };
+                Ok((found, Some(map)))
             }
+        }
+    }
+}
+
+/// Checks that output `tensor_name` of the model `model` at input side `s` has its contract's
+/// shape: `detections` `[1, N, 5]`, `crack_map` `[1, 1, S/2, S/2]`, `box_heat` `[1, 1, S/8, S/8]`,
+/// `box_reg` `[1, 4, S/8, S/8]`.
+fn check_shape(model: &str, tensor_name: &str, shape: &[i64], s: usize) -> Result<(), VisionError> {
+    let side = |stride: usize| (s / stride) as i64;
+    let (ok, want) = match tensor_name {
+        "detections" => (shape.len() == 3 && shape[2] == 5, "[1, N, 5]".to_string()),
+        "crack_map" => {
+            let c = side(MAP_STRIDE);
+            (shape == [1, 1, c, c], format!("[1, 1, {c}, {c}]"))
+        }
+        "box_heat" | "box_reg" => {
+            let c = side(HEAD_STRIDE);
+            let k = if tensor_name == "box_heat" {
+                1
+            } else {
+                REG_CHANNELS as i64
+            };
+            (shape == [1, k, c, c], format!("[1, {k}, {c}, {c}]"))
+        }
+        _ => (true, String::new()),
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(VisionError::Runtime(format!(
+            "{model}: `{tensor_name}` has shape {shape:?}, expected {want}"
+        )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::check_shape;
+
+    #[test]
+    fn every_output_is_checked_against_its_contract_shape() {
+        assert!(check_shape("m", "crack_map", &[1, 1, 160, 160], 320).is_ok());
+        assert!(check_shape("m", "box_heat", &[1, 1, 40, 40], 320).is_ok());
+        assert!(check_shape("m", "box_reg", &[1, 4, 40, 40], 320).is_ok());
+        assert!(check_shape("m", "detections", &[1, 7, 5], 320).is_ok());
+        for (name, shape) in [
+            ("crack_map", vec![1, 1, 80, 80]),
+            ("box_heat", vec![1, 1, 160, 160]),
+            ("box_reg", vec![1, 2, 40, 40]),
+            ("detections", vec![1, 7, 4]),
+        ] {
+            let err = check_shape("m", name, &shape, 320).unwrap_err().to_string();
+            assert!(err.contains(name) && err.contains("expected"), "{err}");
         }
     }
 }

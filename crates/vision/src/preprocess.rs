@@ -107,6 +107,11 @@ pub struct PostprocessParams {
     /// running along a pixel axis has a small box however long it is; the robot, which touches
     /// each crack's centre line, sets 0 and keeps every crack with one.
     pub min_area_fraction: f32,
+    /// Add a crack-map model's box-head boxes after the crack map's ([`crate::box_head`]):
+    /// boxes in the crack photos' own convention, for box metrics (`eval-detector`,
+    /// [`crate::benchmark::map_params`]) and `crackbot detect --box-head`. Off by default: the
+    /// robot touches the crack map's cracks only, and the head was never checked on its scenes.
+    pub box_head: bool,
 }
 
 impl Default for PostprocessParams {
@@ -116,6 +121,7 @@ impl Default for PostprocessParams {
             iou_threshold: 0.5,
             max_detections: 100,
             min_area_fraction: crate::crack_map::MIN_AREA_FRACTION,
+            box_head: false,
         }
     }
 }
@@ -147,6 +153,7 @@ pub fn postprocess(
             .clipped(w, h),
             score: r[4],
             shape: None,
+            source: crate::DetectionSource::Primary,
         })
         .collect();
     Ok(nms(candidates, params.iou_threshold, params.max_detections))

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use crackbot_vision::onnx::{ModelOutput, OnnxDetector};
 use crackbot_vision::preprocess::{letterbox, PostprocessParams};
-use crackbot_vision::{Detector, VisionError};
+use crackbot_vision::{DetectionSource, Detector, VisionError};
 use serde_json::Value;
 
 fn models() -> PathBuf {
@@ -94,12 +94,14 @@ fn real_photos_match(folder: &Path) {
         &folder.join("crack-detector-320.onnx"),
         PostprocessParams {
             score_threshold: 0.0,
+            box_head: true,
             ..PostprocessParams::default()
         },
         1,
     )
     .expect("load");
     let mut compared = 0;
+    let mut head_boxes = 0;
     for im in r["images"].as_array().expect("images") {
         let file = folder
             .join("reference")
@@ -149,6 +151,14 @@ fn real_photos_match(folder: &Path) {
                 );
             }
             assert!(close(f64::from(g.score), f(&w["score"]), 1e-3, 1e-5));
+            // The box head's boxes (models that have one) come after the crack map's, box only.
+            if w["source"] == "box_head" {
+                assert_eq!(g.source, DetectionSource::BoxHead, "{}", file.display());
+                assert!(g.shape.is_none() && g.score < 0.5);
+                head_boxes += 1;
+                continue;
+            }
+            assert_eq!(g.source, DetectionSource::Primary, "{}", file.display());
             let shape = g
                 .shape
                 .as_ref()
@@ -171,6 +181,9 @@ fn real_photos_match(folder: &Path) {
         compared > 0,
         "the reference images have no detection to compare"
     );
+    // The default model has a box head, and its boxes are compared too; EffSeg has none.
+    assert_eq!(d.has_box_head(), head_boxes > 0, "{}", folder.display());
+    assert_eq!(d.has_box_head(), folder == models(), "{}", folder.display());
 }
 
 #[test]

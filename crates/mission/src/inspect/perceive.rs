@@ -3,7 +3,10 @@
 
 use std::path::Path;
 
+use crackbot_imaging::Homography;
 use crackbot_planner::Candidate;
+use crackbot_vision::preprocess::PostprocessParams;
+use crackbot_vision::{Detection, DetectionSource};
 
 use super::config::{CandidateSource, InspectConfig, InspectMode};
 use super::pieces::CrackTrace;
@@ -26,7 +29,6 @@ pub(super) fn perceive(
     rig: &mut dyn RigBackend,
 ) -> Result<Perceived, MissionError> {
     use crackbot_vision::model::{build_detector, DetectorChoice};
-    use crackbot_vision::preprocess::PostprocessParams;
 
     std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
     let (image, h) = rig.frame(config)?;
@@ -65,10 +67,40 @@ pub(super) fn perceive(
     let trace = map
         .filter(|_| config.mode == InspectMode::Fused)
         .map(|m| CrackTrace::new(&m, h));
+    let out = candidates(
+        &detections,
+        &h,
+        config,
+        image.width() as f32 * image.height() as f32,
+    );
+    Ok(Perceived {
+        candidates: out,
+        trace,
+        frame,
+    })
+}
+
+/// The candidates of `detections` (image pixels) on the surface (`h`: surface mm → pixels) for
+/// a frame of `image_area` pixels, with their detector scores: one per crack piece a detection
+/// holds (the crack map's "Where to touch"), else one along its axis or over its box. Detections
+/// under the mission's score, the box head's, and small boxes without a centre line are left out.
+fn candidates(
+    detections: &[Detection],
+    h: &Homography,
+    config: &InspectConfig,
+    image_area: f32,
+) -> Vec<(Candidate, f64)> {
+    let min_score = match config.mode {
+        InspectMode::Fused => config.proposal_min_score,
+        _ => config.min_score,
+    };
+    let min_area = PostprocessParams::default().min_area_fraction * image_area;
     let mut out = Vec::new();
     let mut id = 0u64;
-    for d in &detections {
-        if d.score < min_score {
+    for d in detections {
+        // The box head's boxes (boxes in the crack photos' convention, no centre line) were
+        // never checked on the rendered scenes: the robot touches the crack map's cracks only.
+        if d.score < min_score || d.source == DetectionSource::BoxHead {
             continue;
         }
         let to_mm = |p: [f32; 2]| h.pixel_to_surface([f64::from(p[0]), f64::from(p[1])]).ok();
@@ -81,8 +113,7 @@ pub(super) fn perceive(
             .as_ref()
             .filter(|s| config.candidates == CandidateSource::Cracks && !s.pieces.is_empty());
         // Under the datasets' box area, only a crack with a centre line of its own is kept.
-        let small = d.bbox.area()
-            < defaults.min_area_fraction * image.width() as f32 * image.height() as f32;
+        let small = d.bbox.area() < min_area;
         if small && pieces.is_none() {
             continue;
         }
@@ -122,11 +153,7 @@ pub(super) fn perceive(
         };
         out.push((c, score));
     }
-    Ok(Perceived {
-        candidates: out,
-        trace,
-        frame,
-    })
+    out
 }
 
 /// An I/O error on `path`, naming it.
@@ -175,6 +202,37 @@ mod tests {
                 near.iter().any(|&d| d < 3.0),
                 "seed {seed}: candidates' distances from the crack {near:?}"
             );
+        }
+    }
+
+    #[test]
+    fn the_box_heads_boxes_never_become_candidates() {
+        use crackbot_vision::{BoundingBox, Detection, DetectionSource};
+        let scene = crackbot_sim::random_scene(&trial_params(), 6098).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let mut config = InspectConfig::new(scene, dir.path());
+        // 0.1 mm per pixel.
+        let h =
+            Homography::from_matrix([[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 1.0]]).unwrap();
+        let boxed = Detection::boxed(BoundingBox::from_xywh(100.0, 100.0, 80.0, 60.0), 0.45);
+        let head = Detection {
+            source: DetectionSource::BoxHead,
+            ..boxed.clone()
+        };
+        for mode in [InspectMode::Fused, InspectMode::Vision] {
+            config.mode = mode;
+            config.min_score = 0.3;
+            config.proposal_min_score = 0.3;
+            let area = 640.0 * 480.0;
+            // A box detector's box is a candidate over its box, the head's is not.
+            let got = candidates(&[boxed.clone(), head.clone()], &h, &config, area);
+            assert_eq!(got.len(), 1, "{mode:?}");
+            assert!(
+                (got[0].0.centre_mm[0] - 14.0).abs() < 1e-6,
+                "{:?}",
+                got[0].0
+            );
+            assert!(candidates(std::slice::from_ref(&head), &h, &config, area).is_empty());
         }
     }
 }

@@ -78,18 +78,12 @@ pub fn detect_dataset_with_maps<D: Detector + ?Sized>(
         }
         let (detections, map) = detector.detect_with_map(&rgb)?;
         on_frame(image, &detections, map.as_ref())?;
-        for d in detections {
-            if !d.bbox.is_finite() || !d.score.is_finite() {
-                continue;
-            }
-            let [x, y, w, h] = d.bbox.to_xywh();
-            results.push(CocoResult {
-                image_id: image.id,
-                category_id,
-                bbox: [f64::from(x), f64::from(y), f64::from(w), f64::from(h)],
-                score: f64::from(d.score),
-            });
-        }
+        results.extend(
+            detections
+                .iter()
+                .filter(|d| d.bbox.is_finite() && d.score.is_finite())
+                .map(|d| coco_result(image.id, category_id, d)),
+        );
     }
     if let Some(last) = gt.images.last() {
         progress(&Progress {
@@ -99,6 +93,17 @@ pub fn detect_dataset_with_maps<D: Detector + ?Sized>(
         });
     }
     Ok(results)
+}
+
+/// `d` as a COCO result of image `image_id` in category `category_id`.
+pub fn coco_result(image_id: u64, category_id: u64, d: &crate::Detection) -> CocoResult {
+    let [x, y, w, h] = d.bbox.to_xywh();
+    CocoResult {
+        image_id,
+        category_id,
+        bbox: [f64::from(x), f64::from(y), f64::from(w), f64::from(h)],
+        score: f64::from(d.score),
+    }
 }
 
 #[cfg(test)]
@@ -119,11 +124,13 @@ mod tests {
                     bbox: crate::BoundingBox::from_xywh(1.0, 2.0, 3.0, 4.0),
                     score: 0.5,
                     shape: None,
+                    source: crate::DetectionSource::Primary,
                 },
                 crate::Detection {
                     bbox: crate::BoundingBox::from_xywh(f32::NAN, 2.0, 3.0, 4.0),
                     score: 0.5,
                     shape: None,
+                    source: crate::DetectionSource::Primary,
                 },
             ])
         }

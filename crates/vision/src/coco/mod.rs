@@ -15,5 +15,5 @@ pub use crackbot_imaging::coco::{
     load_results, parse_results, save_results, validate_results, CocoAnnotation, CocoCategory,
     CocoDataset, CocoImage, CocoResult,
 };
-pub use dataset::{detect_dataset, detect_dataset_with_maps, Progress};
+pub use dataset::{coco_result, detect_dataset, detect_dataset_with_maps, Progress};
 pub use eval::{evaluate, CocoMetrics};
