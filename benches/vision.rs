@@ -2,10 +2,12 @@
 //! (`../shared/data/cracks/*/val.json`, first image):
 //!
 //! * `detector/onnx_{256,320,416}`: one `detect` call of the trained model (letterbox + ONNX Runtime
-//!   with one thread + crack map → boxes and courses) at each input size; `detector/classical`: the
-//!   edge-based baseline.
+//!   with one thread + crack map → boxes and courses) at each input size, as the robot and `detect`
+//!   run it; `detector/onnx_320_with_box_head_boxes`: the same with the box head's boxes decoded
+//!   and added (`eval-detector`, `detect --box-head`); `detector/classical`: the edge-based baseline.
 //! * `preprocess/letterbox_*`: the letterbox alone; `postprocess/crack_map_to_boxes_*`: the crack
-//!   map → boxes (dataset rule) and centre lines.
+//!   map → boxes (dataset rule) and centre lines; `postprocess/box_head_boxes_*`: the box head's
+//!   outputs → boxes.
 //! * `homography/pixel_to_surface`: one point through a fitted homography.
 //!
 //! mAP@0.5 of each detector comes from `crackbot detector-tradeoff` (see `benches/README.md`).
@@ -14,6 +16,7 @@
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 
+use crackbot_vision::benchmark;
 use crackbot_vision::classical::{ClassicalDetector, ClassicalParams};
 use crackbot_vision::coco::CocoDataset;
 use crackbot_vision::crack_map::map_detections;
@@ -49,6 +52,18 @@ fn bench(c: &mut Criterion) {
             b.iter(|| d.detect(black_box(uav)).expect("detect"))
         });
     }
+    let mut with_head = OnnxDetector::load(
+        &Path::new(MODELS).join("crack-detector-320.onnx"),
+        PostprocessParams {
+            box_head: true,
+            ..PostprocessParams::default()
+        },
+        1,
+    )
+    .expect("model");
+    g.bench_function("onnx_320_with_box_head_boxes", |b| {
+        b.iter(|| with_head.detect(black_box(uav)).expect("detect"))
+    });
     let mut classical = ClassicalDetector::new(ClassicalParams::default()).expect("classical");
     g.bench_function("classical", |b| {
         b.iter(|| classical.detect(black_box(uav)).expect("detect"))
@@ -76,6 +91,10 @@ fn bench(c: &mut Criterion) {
         format!("crack_map_to_boxes_and_courses_{0}x{0}_cells", map.cells()),
         |b| b.iter(|| map_detections(black_box(&map), &PostprocessParams::default())),
     );
+    let head = model.box_head_maps(uav).expect("box head outputs");
+    g.bench_function(format!("box_head_boxes_{0}x{0}_cells", head.cells()), |b| {
+        b.iter(|| black_box(&head).detections(&benchmark::map_params()))
+    });
     g.finish();
 
     // A camera 400 mm above a 200 × 100 mm plate, slightly tilted: pairs from its exact projection.

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Retrain the crack detector (CrackSeg, a crack-map model) from scratch: setup, rendered training plates,
-# two training stages, export (256/320/416), reference outputs, evaluation.
-#   bash models/detector/train.sh                                   # the committed model: 20 + 55 minutes, 2 CPU cores
-#   TRAIN_MINUTES=1 STAGE2_MINUTES=2 SIM_SCENES=20 MODEL_OUT=/tmp/smoke RUNS=/tmp/smoke/runs bash models/detector/train.sh
-#                                                                   # a short smoke schedule (~8 min), models elsewhere
+# two training stages, export (256/320/416), the box head on the frozen features merged into each, reference
+# outputs, evaluation.
+#   bash models/detector/train.sh                                   # the committed model: 20 + 55 + 25 minutes, 2 CPU cores
+#   TRAIN_MINUTES=1 STAGE2_MINUTES=2 BOX_HEAD_MINUTES=1 SIM_SCENES=20 MODEL_OUT=/tmp/smoke RUNS=/tmp/smoke/runs bash models/detector/train.sh
+#                                                                   # a short smoke schedule (~12 min), models elsewhere
 # MODEL_OUT (default: this folder) receives the ONNX files, reference/ and metrics.json; RUNS (default: runs)
 # the checkpoints, logs and rendered plates.
 # Stage 1 trains on the real photos only (crackforest and uav75 masks, quaywall boxes); stage 2 restarts the cosine
@@ -18,6 +19,7 @@ DATA="${CRACKS_DATA:-$(cd "$HERE/../../../shared/data/cracks" && pwd)}"
 export CRACKS_DATA="$DATA"
 MINUTES=${TRAIN_MINUTES:-20}
 STAGE2_MINUTES=${STAGE2_MINUTES:-55}
+BOX_HEAD_MINUTES=${BOX_HEAD_MINUTES:-25}
 SIM_SCENES=${SIM_SCENES:-300}
 bash setup.sh
 PY=.venv/bin/python
@@ -36,6 +38,15 @@ nice -n 5 $PY train.py --minutes "$MINUTES" --eval-every 300 --out "$RUN" | tee 
 nice -n 5 $PY train.py --init "$RUN/best.pt" --sim "$SIM" --minutes "$STAGE2_MINUTES" --lr 2e-3 --seed 1 \
     --eval-every 300 --out "$RUN2" | tee "$RUN2/stdout.log"
 $PY export.py --ckpt "$RUN2/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
+# The box head (boxes in the photos' own convention, MODEL_CARD.md "The box head"): trained on the frozen features of
+# the 320 export on the photos' train boxes, its final weights merged into every size (crack_map unchanged).
+HEAD=$RUNS/box_head
+nice -n 5 $PY analysis/box_head.py --model "$MODEL_OUT/crack-detector-320.onnx" --minutes "$BOX_HEAD_MINUTES" \
+    --crops 2 --channels 32 --seed 0 --out "$HEAD" | tee "$RUNS/box_head.log"
+for S in 320 256 416; do
+  $PY analysis/merge_box_head.py --model "$MODEL_OUT/crack-detector-$S.onnx" --size $S --head "$HEAD/box_head.pt" \
+      --channels 32 --out "$MODEL_OUT/crack-detector-$S.onnx" --skip-eval
+done
 $PY make_reference.py --models "$MODEL_OUT" --out "$MODEL_OUT/reference"
 for S in 320 256 416; do
   M="$MODEL_OUT/crack-detector-$S.onnx"
@@ -51,4 +62,4 @@ $PY eval.py --model "$MODEL_OUT/crack-detector-320.onnx" --ann "$EVAL/augval/ann
 $PY collect_metrics.py --runs "$RUNS" --eval "$EVAL" --out "$MODEL_OUT/metrics.json"
 echo "models:     $MODEL_OUT/crack-detector-{256,320,416}.onnx"
 echo "reference:  $MODEL_OUT/reference/"
-echo "metrics:    $MODEL_OUT/metrics.json, training logs: $RUN/ and $RUN2/"
+echo "metrics:    $MODEL_OUT/metrics.json, training logs: $RUN/, $RUN2/ and $HEAD/"

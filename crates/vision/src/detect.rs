@@ -15,6 +15,8 @@ use crate::{Detection, Detector, VisionError};
 pub const DETECTION_COLOUR: [u8; 3] = [255, 40, 40];
 /// Colour of the fused detections in annotated images.
 pub const FUSED_COLOUR: [u8; 3] = [40, 220, 255];
+/// Colour of the box head's boxes in annotated images (`crackbot detect --box-head`).
+pub const BOX_HEAD_COLOUR: [u8; 3] = [255, 150, 40];
 
 /// What to do with the images.
 #[derive(Debug, Clone, Default)]
@@ -192,7 +194,7 @@ pub fn detect_images(
             let out = dir.join(format!("{stem}-detections.png"));
             let mut canvas = rgb.clone();
             for d in found {
-                draw_box(&mut canvas, d, DETECTION_COLOUR);
+                draw_box(&mut canvas, d, detection_colour(d));
             }
             for f in fused.iter().flatten() {
                 draw_box(&mut canvas, &f.detection, FUSED_COLOUR);
@@ -225,6 +227,15 @@ pub fn detect_images(
         }),
         annotated,
     })
+}
+
+/// The colour a detection is drawn in: [`DETECTION_COLOUR`], or [`BOX_HEAD_COLOUR`] for the
+/// box head's boxes.
+pub fn detection_colour(d: &Detection) -> [u8; 3] {
+    match d.source {
+        crate::DetectionSource::Primary => DETECTION_COLOUR,
+        crate::DetectionSource::BoxHead => BOX_HEAD_COLOUR,
+    }
 }
 
 /// Draws a 3-pixel rectangle outline of `d`'s box (clipped to the image), and the crack's
@@ -462,5 +473,40 @@ mod tests {
         assert!(detect_images(&mut Two, &[img], &bad).is_err());
         let err = detect_images(&mut Two, &[dir.path().join("no.png")], &config).unwrap_err();
         assert!(err.to_string().contains("no.png"), "{err}");
+    }
+
+    /// One box of a box head, at (2, 2)–(6, 6).
+    struct Headed;
+    impl Detector for Headed {
+        fn name(&self) -> String {
+            "headed".into()
+        }
+        fn detect(&mut self, _image: &image::RgbImage) -> Result<Vec<Detection>, VisionError> {
+            Ok(vec![Detection {
+                source: crate::DetectionSource::BoxHead,
+                ..Detection::boxed(crate::BoundingBox::from_xywh(2.0, 2.0, 4.0, 4.0), 0.4)
+            }])
+        }
+    }
+
+    #[test]
+    fn box_head_boxes_are_named_in_the_report_and_drawn_in_their_own_colour() {
+        let dir = tempfile::tempdir().unwrap();
+        let img = dir.path().join("f.png");
+        image::RgbImage::new(16, 8).save(&img).unwrap();
+        let config = DetectConfig {
+            threshold: 0.25,
+            annotate: Some(dir.path().join("out")),
+            ..DetectConfig::default()
+        };
+        let r = detect_images(&mut Headed, &[img], &config).unwrap();
+        let json = serde_json::to_value(&r).unwrap();
+        assert_eq!(json["images"][0]["detections"][0]["source"], "box_head");
+        let drawn = image::open(&r.annotated[0]).unwrap().to_rgb8();
+        assert_eq!(drawn.get_pixel(2, 2).0, BOX_HEAD_COLOUR);
+        // The detector's own detections carry no `source`.
+        let r = detect_images(&mut Two, &[dir.path().join("f.png")], &config).unwrap();
+        let json = serde_json::to_value(&r).unwrap();
+        assert!(json["images"][0]["detections"][0].get("source").is_none());
     }
 }

@@ -328,6 +328,21 @@ impl OnnxDetector {
         CrackMap::new(self.run_tensor(&tensor)?, lb)
     }
 
+    /// The box head's outputs for `image` (models with a box head).
+    pub fn box_head_maps(&mut self, image: &image::RgbImage) -> Result<BoxHeadMaps, VisionError> {
+        if !self.box_head {
+            return Err(VisionError::WrongOutput {
+                model: self.name.clone(),
+                has: "no box head",
+                wanted: "box head outputs",
+            });
+        }
+        let (tensor, lb) = self.preprocess(image)?;
+        let mut out = self.run(&tensor, &["box_heat", "box_reg"])?;
+        let (reg, heat) = (out.remove(1), out.remove(0));
+        BoxHeadMaps::new(heat, reg, lb)
+    }
+
     /// Letterboxes `image` for this model (see [`crate::preprocess`]).
     pub fn preprocess(
         &self,

@@ -184,6 +184,14 @@ fn real_photos_match(folder: &Path) {
     // The default model has a box head, and its boxes are compared too; EffSeg has none.
     assert_eq!(d.has_box_head(), head_boxes > 0, "{}", folder.display());
     assert_eq!(d.has_box_head(), folder == models(), "{}", folder.display());
+    let rgb = image::RgbImage::from_pixel(64, 48, image::Rgb([90, 90, 90]));
+    match d.box_head_maps(&rgb) {
+        Ok(head) => assert_eq!(head.cells(), 320 / 8),
+        Err(e) => assert!(
+            !d.has_box_head() && e.to_string().contains("no box head"),
+            "{e}"
+        ),
+    }
 }
 
 #[test]
