@@ -153,6 +153,9 @@ fn print_detection(d: &DetectionReport) {
     if let Some(n) = d.frames_seen {
         line += &format!("  in {n} frames");
     }
+    if d.source == crackbot_vision::DetectionSource::BoxHead {
+        line += "  (box head: a box only)";
+    }
     match (&d.axis_mm, d.length_mm, &d.axis_px) {
         (Some([a, b]), Some(len), _) => {
             line += &format!(
