@@ -1,8 +1,9 @@
 //! The Rust inference path (letterbox → ONNX Runtime → crack map → boxes by the dataset rule)
 //! against the Python model's own outputs, saved next to the model at export time (`models/detector/reference/`, written by
 //! `models/detector/make_reference.py` with onnxruntime in Python), for the shipped default
-//! (`models/detector/`, CrackSeg) and the pretrained-encoder alternative (`models/detector/effseg/`),
-//! and bad model files.
+//! (`models/detector/`, CrackSeg), the pretrained-encoder alternative (`models/detector/effseg/`)
+//! and CrackSeg fine-tuned with the crack tiles (`models/detector/crackseg-tiles/`), and bad
+//! model files.
 #![cfg(feature = "onnx")]
 
 use std::path::{Path, PathBuf};
@@ -16,9 +17,14 @@ fn models() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/detector")
 }
 
-/// The folders of the shipped models, each with its `reference/`.
-fn model_folders() -> [PathBuf; 2] {
-    [models(), models().join("effseg")]
+/// The folders of the shipped models, each with its `reference/`: the default (CrackSeg with a
+/// box head), EffSeg (no box head) and CrackSeg fine-tuned with the crack tiles (a box head).
+fn model_folders() -> [PathBuf; 3] {
+    [
+        models(),
+        models().join("effseg"),
+        models().join("crackseg-tiles"),
+    ]
 }
 
 fn reference(folder: &Path) -> Value {
@@ -181,9 +187,14 @@ fn real_photos_match(folder: &Path) {
         compared > 0,
         "the reference images have no detection to compare"
     );
-    // The default model has a box head, and its boxes are compared too; EffSeg has none.
+    // The CrackSeg models have a box head, and its boxes are compared too; EffSeg has none.
     assert_eq!(d.has_box_head(), head_boxes > 0, "{}", folder.display());
-    assert_eq!(d.has_box_head(), folder == models(), "{}", folder.display());
+    assert_eq!(
+        d.has_box_head(),
+        !folder.ends_with("effseg"),
+        "{}",
+        folder.display()
+    );
     let rgb = image::RgbImage::from_pixel(64, 48, image::Rgb([90, 90, 90]));
     match d.box_head_maps(&rgb) {
         Ok(head) => assert_eq!(head.cells(), 320 / 8),
