@@ -41,12 +41,7 @@ $PY export.py --ckpt "$RUN2/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
 # The box head (boxes in the photos' own convention, MODEL_CARD.md "The box head"): trained on the frozen features of
 # the 320 export on the photos' train boxes, its final weights merged into every size (crack_map unchanged).
 HEAD=$RUNS/box_head
-nice -n 5 $PY analysis/box_head.py --model "$MODEL_OUT/crack-detector-320.onnx" --minutes "$BOX_HEAD_MINUTES" \
-    --crops 2 --channels 32 --seed 0 --out "$HEAD" | tee "$RUNS/box_head.log"
-for S in 320 256 416; do
-  $PY analysis/merge_box_head.py --model "$MODEL_OUT/crack-detector-$S.onnx" --size $S --head "$HEAD/box_head.pt" \
-      --channels 32 --out "$MODEL_OUT/crack-detector-$S.onnx" --skip-eval
-done
+bash add_box_head.sh "$MODEL_OUT" "$HEAD" "$BOX_HEAD_MINUTES"
 $PY make_reference.py --models "$MODEL_OUT" --out "$MODEL_OUT/reference"
 for S in 320 256 416; do
   M="$MODEL_OUT/crack-detector-$S.onnx"

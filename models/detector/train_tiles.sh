@@ -37,12 +37,7 @@ $PY analysis/onnx_to_checkpoint.py --model "$START" --out "$RUN/start.pt"
 nice -n 5 $PY train.py --init "$RUN/start.pt" --tiles --sim "$SIM" --minutes "$MINUTES" --lr 1e-3 --seed 2 \
     --eval-every 300 --out "$RUN" | tee "$RUN/stdout.log"
 $PY export.py --ckpt "$RUN/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
-nice -n 5 $PY analysis/box_head.py --model "$MODEL_OUT/crack-detector-320.onnx" --minutes "$BOX_HEAD_MINUTES" \
-    --crops 2 --channels 32 --seed 0 --out "$HEAD" | tee "$RUN/box_head.log"
-for S in 320 256 416; do
-  $PY analysis/merge_box_head.py --model "$MODEL_OUT/crack-detector-$S.onnx" --size $S --head "$HEAD/box_head.pt" \
-      --channels 32 --out "$MODEL_OUT/crack-detector-$S.onnx" --skip-eval
-done
+bash add_box_head.sh "$MODEL_OUT" "$HEAD" "$BOX_HEAD_MINUTES"
 $PY make_reference.py --models "$MODEL_OUT" --out "$MODEL_OUT/reference"
 M="$MODEL_OUT/crack-detector-320.onnx"
 for ds in crackforest uav75 quaywall; do
