@@ -536,17 +536,13 @@ fn detect(image: &image::RgbImage, p: &ClassicalParams) -> Vec<Detection> {
             let extent = bw.hypot(bh);
             let score = contrast / (contrast + f64::from(p.contrast_half)) * extent
                 / (extent + f64::from(p.extent_half) * diag);
-            Some(Detection {
-                bbox: BoundingBox {
-                    x0: s.x0 as f32,
-                    y0: s.y0 as f32,
-                    x1: (s.x1 + 1) as f32,
-                    y1: (s.y1 + 1) as f32,
-                },
-                score: score as f32,
-                shape: None,
-                source: crate::DetectionSource::Primary,
-            })
+            let bbox = BoundingBox {
+                x0: s.x0 as f32,
+                y0: s.y0 as f32,
+                x1: (s.x1 + 1) as f32,
+                y1: (s.y1 + 1) as f32,
+            };
+            Some(Detection::boxed(bbox, score as f32))
         })
         .collect();
     detections.sort_by(|a, b| b.score.total_cmp(&a.score));

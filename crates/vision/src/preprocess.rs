@@ -143,17 +143,14 @@ pub fn postprocess(
     let candidates = rows
         .chunks_exact(5)
         .filter(|r| r[4] >= params.score_threshold && r.iter().all(|v| v.is_finite()))
-        .map(|r| Detection {
-            bbox: BoundingBox {
+        .map(|r| {
+            let bbox = BoundingBox {
                 x0: r[0] / lb.scale,
                 y0: r[1] / lb.scale,
                 x1: r[2] / lb.scale,
                 y1: r[3] / lb.scale,
-            }
-            .clipped(w, h),
-            score: r[4],
-            shape: None,
-            source: crate::DetectionSource::Primary,
+            };
+            Detection::boxed(bbox.clipped(w, h), r[4])
         })
         .collect();
     Ok(nms(candidates, params.iou_threshold, params.max_detections))
