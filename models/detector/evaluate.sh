@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Every figure of MODEL_CARD.md by crackbot's own (Rust) evaluator, release build, one ONNX Runtime thread:
 #   bash models/detector/evaluate.sh            # writes models/detector/out/rust/*.json and the trade-off tables
+#   MODELS=models/detector/crackseg-tiles OUT=/tmp/eval-tiles bash models/detector/evaluate.sh
+#                                               # the same figures for another folder of crack-detector-{256,320,416}.onnx
+#   DETECTORS=onnx TRADEOFF_THREADS= …          # the model's accuracy alone (no edge baseline, no timing runs)
 # The val splits of the photos and of the DeepCrack/CRACK500 tiles; unseen rendered scenes of two families (seeds 900000.. with the training family's
 # parameters, 950000.. with eval/unseen-layout-b.toml), never rendered for training; 8 frames of the built-in
 # default scene; the edge baseline on the same sets; mAP@0.5 vs input size vs ms at 1 and 2 threads.
@@ -9,7 +12,10 @@ HERE="$(cd "$(dirname "$0")" && pwd)"
 ROOT="$(cd "$HERE/../.." && pwd)"
 C="${CRACKS_DATA:-$(cd "$ROOT/../shared/data/cracks" && pwd)}"
 TILES="${CRACK_TILES_DATA:-$(cd "$ROOT/../shared/data/cracks-tiles" && pwd)}"
-OUT="$HERE/out/rust"
+OUT="${OUT:-$HERE/out/rust}"
+MODELS="$(cd "${MODELS:-$HERE}" && pwd)"
+M320="$MODELS/crack-detector-320.onnx"
+[ -f "$M320" ] || { echo "evaluate.sh: no crack-detector-320.onnx in $MODELS" >&2; exit 2; }
 mkdir -p "$OUT"
 (cd "$ROOT" && cargo build --release --quiet -p crackbot-cli -p crackbot-lab)
 T="${CARGO_TARGET_DIR:-$ROOT/target}/release"
@@ -20,24 +26,26 @@ SIM="$HERE/out/sim"
 [ -d "$SIM/unseen-b" ] || "$L" sim detector-set --params "$HERE/eval/unseen-layout-b.toml" --scenes 20 --frames-per-scene 2 \
     --seed 950000 --out "$SIM/unseen-b" --json > /dev/null
 [ -d "$SIM/default" ] || "$B" sim render --out "$SIM/default" --frames 8 > /dev/null
-for det in onnx classical; do
+for det in ${DETECTORS:-onnx classical}; do
+  MODEL_ARG=(); [ "$det" = onnx ] && MODEL_ARG=(--model "$M320")
   for ds in crackforest uav75 quaywall; do
-    "$L" eval-detector --coco "$C/$ds/val.json" --detector $det --json > "$OUT/${det}_$ds.json"
+    "$L" eval-detector --coco "$C/$ds/val.json" --detector $det "${MODEL_ARG[@]}" --json > "$OUT/${det}_$ds.json"
   done
-  "$L" eval-detector --coco "$C/val_all.json" --detector $det --json > "$OUT/${det}_val_all.json"
+  "$L" eval-detector --coco "$C/val_all.json" --detector $det "${MODEL_ARG[@]}" --json > "$OUT/${det}_val_all.json"
   for ds in deepcrack crack500; do
-    "$L" eval-detector --coco "$TILES/$ds/val.json" --detector $det --json > "$OUT/${det}_tiles_$ds.json"
+    "$L" eval-detector --coco "$TILES/$ds/val.json" --detector $det "${MODEL_ARG[@]}" --json > "$OUT/${det}_tiles_$ds.json"
   done
   for s in unseen-a unseen-b; do
-    "$L" eval-detector --coco "$SIM/$s/annotations.json" --detector $det --json > "$OUT/${det}_$s.json"
+    "$L" eval-detector --coco "$SIM/$s/annotations.json" --detector $det "${MODEL_ARG[@]}" --json > "$OUT/${det}_$s.json"
   done
-  "$L" eval-detector --coco "$SIM/default/coco.json" --images "$SIM/default/images" --detector $det --json \
+  "$L" eval-detector --coco "$SIM/default/coco.json" --images "$SIM/default/images" --detector $det "${MODEL_ARG[@]}" --json \
       > "$OUT/${det}_default_scene.json"
 done
-for th in 1 2; do
-  "$L" detector-tradeoff --coco "$C/val_all.json" --threads $th --out "$OUT/tradeoff-val_all-${th}thread"
+for th in ${TRADEOFF_THREADS-1 2}; do
+  "$L" detector-tradeoff --coco "$C/val_all.json" --threads $th --out "$OUT/tradeoff-val_all-${th}thread" \
+      --models "$MODELS"/crack-detector-{256,320,416}.onnx
   "$L" detector-tradeoff --coco "$SIM/unseen-a/annotations.json" --threads $th --no-classical \
-      --out "$OUT/tradeoff-unseen-a-${th}thread"
+      --out "$OUT/tradeoff-unseen-a-${th}thread" --models "$MODELS"/crack-detector-{256,320,416}.onnx
 done
 python3 - "$OUT" <<'PY'
 import json, sys, glob, os

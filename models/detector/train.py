@@ -174,6 +174,30 @@ def geometric(img, tgt, val, weak, ops, n):
             None if weak is None else weak.astype(np.float32))
 
 
+MIX_SOURCES = ("crackforest", "uav75", "quaywall") + TILE_SETS + ("sim",)
+
+
+def parse_mix(text, have_sim):
+    """`name=share,…` → {name: share}, shares normalised to 1; exits naming the bad part."""
+    mix = {}
+    for part in text.split(","):
+        name, _, share = part.partition("=")
+        name = name.strip()
+        if name not in MIX_SOURCES:
+            sys.exit(f"--mix: unknown source {name!r} in {part!r} (known: {', '.join(MIX_SOURCES)})")
+        try:
+            v = float(share)
+        except ValueError:
+            sys.exit(f"--mix: {part!r} needs a number after '='")
+        if not (np.isfinite(v) and v > 0):
+            sys.exit(f"--mix: the share of {name} must be a positive finite number, got {share!r}")
+        mix[name] = v
+    if "sim" in mix and not have_sim:
+        sys.exit("--mix: 'sim' needs --sim (a folder of `crackbot-lab sim detector-set`)")
+    total = sum(mix.values())
+    return {n: v / total for n, v in mix.items()}
+
+
 class Stream(torch.utils.data.IterableDataset):
     def __init__(self, sim_root, batch, crop, seed, mix):
         self.sim_root, self.batch, self.crop, self.seed, self.mix = sim_root, batch, crop, seed, mix
@@ -315,11 +339,15 @@ def main():
     ap.add_argument("--pretrained", default="", help="EfficientNet-Lite0 ImageNet weights (.pth) for effseg")
     ap.add_argument("--encoder-lr", type=float, default=0.5, help="encoder learning rate as a fraction of --lr")
     ap.add_argument("--tiles", action="store_true", help="add the DeepCrack/CRACK500 train tiles to the mix")
+    ap.add_argument("--mix", default="", help="the sources' shares, e.g. sim=0.4,deepcrack=0.15,… (overrides the "
+                    "default mix; names: crackforest, uav75, quaywall, deepcrack, crack500, sim)")
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
     os.makedirs(a.out, exist_ok=True)
-    if not a.tiles:
+    if a.mix:
+        mix = parse_mix(a.mix, bool(a.sim))
+    elif not a.tiles:
         mix = {"crackforest": 0.25, "uav75": 0.25, "quaywall": 0.2, "sim": 0.3}
     else:
         mix = {"crackforest": 0.13, "uav75": 0.13, "quaywall": 0.12, "deepcrack": 0.18, "crack500": 0.16,
