@@ -4,8 +4,8 @@
 #   MODELS=models/detector/crackseg-tiles OUT=/tmp/eval-tiles bash models/detector/evaluate.sh
 #                                               # the same figures for another folder of crack-detector-{256,320,416}.onnx
 #   DETECTORS=onnx TRADEOFF_THREADS= …          # the model's accuracy alone (no edge baseline, no timing runs)
-# The val splits of the photos and of the DeepCrack/CRACK500 tiles; unseen rendered scenes of two families (seeds 900000.. with the training family's
-# parameters, 950000.. with eval/unseen-layout-b.toml), never rendered for training; 8 frames of the built-in
+# The val splits of the photos and of the DeepCrack/CRACK500 tiles; unseen rendered scenes of three families (seeds 900000.. with the training
+# family's parameters, 950000.. with eval/unseen-layout-b.toml, 970000.. with eval/unseen-layout-c.toml), never rendered for training; 8 frames of the built-in
 # default scene; the edge baseline on the same sets; mAP@0.5 vs input size vs ms at 1 and 2 threads.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
@@ -25,6 +25,8 @@ SIM="$HERE/out/sim"
 [ -d "$SIM/unseen-a" ] || "$L" sim detector-set --scenes 20 --frames-per-scene 2 --seed 900000 --out "$SIM/unseen-a" --json > /dev/null
 [ -d "$SIM/unseen-b" ] || "$L" sim detector-set --params "$HERE/eval/unseen-layout-b.toml" --scenes 20 --frames-per-scene 2 \
     --seed 950000 --out "$SIM/unseen-b" --json > /dev/null
+[ -d "$SIM/unseen-c" ] || "$L" sim detector-set --params "$HERE/eval/unseen-layout-c.toml" --scenes 20 --frames-per-scene 2 \
+    --seed 970000 --out "$SIM/unseen-c" --json > /dev/null
 [ -d "$SIM/default" ] || "$B" sim render --out "$SIM/default" --frames 8 > /dev/null
 for det in ${DETECTORS:-onnx classical}; do
   MODEL_ARG=(); [ "$det" = onnx ] && MODEL_ARG=(--model "$M320")
@@ -35,7 +37,7 @@ for det in ${DETECTORS:-onnx classical}; do
   for ds in deepcrack crack500; do
     "$L" eval-detector --coco "$TILES/$ds/val.json" --detector $det "${MODEL_ARG[@]}" --json > "$OUT/${det}_tiles_$ds.json"
   done
-  for s in unseen-a unseen-b; do
+  for s in unseen-a unseen-b unseen-c; do
     "$L" eval-detector --coco "$SIM/$s/annotations.json" --detector $det "${MODEL_ARG[@]}" --json > "$OUT/${det}_$s.json"
   done
   "$L" eval-detector --coco "$SIM/default/coco.json" --images "$SIM/default/images" --detector $det "${MODEL_ARG[@]}" --json \
