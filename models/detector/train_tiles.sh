@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
 # The crackseg-tiles/ model: the default CrackSeg fine-tuned with the DeepCrack and CRACK500 train tiles added to its
 # mix, then a box head of its own: setup, the default's weights rebuilt from its ONNX (analysis/onnx_to_checkpoint.py),
-# rendered training plates, one fine-tuning run, export (256/320/416), the box head trained and merged, reference
+# rendered training plates, three fine-tuning stages, export (256/320/416), the box head trained and merged, reference
 # outputs, pycocotools evaluation.
-#   bash models/detector/train_tiles.sh                             # the committed crackseg-tiles/: 45 + 10 minutes, 2 CPU cores
-#   TRAIN_MINUTES=1 BOX_HEAD_MINUTES=0.5 SIM_SCENES=10 MODEL_OUT=/tmp/smoke RUNS=/tmp/smoke/runs bash models/detector/train_tiles.sh
-#                                                                   # a short smoke schedule (~6 min), models elsewhere
-# MODEL_OUT (default: crackseg-tiles/ beside this script) receives the ONNX files, reference/ and metrics.json; RUNS
-# (default: runs) the checkpoints, logs and rendered plates. START (default: the shipped crack-detector-320.onnx) is
-# the model whose weights are fine-tuned. Model selection: val_all mAP@0.5 of the real photos (the map's boxes).
+#   bash models/detector/train_tiles.sh                             # crackseg-tiles/: 45 + 70 + 25 + 10 minutes, 2 CPU cores
+#   TRAIN_MINUTES=1 SIM_MINUTES=1 ROLL_MINUTES=1 BOX_HEAD_MINUTES=0.5 SIM_SCENES=10 MODEL_OUT=/tmp/smoke \
+#       RUNS=/tmp/smoke/runs bash models/detector/train_tiles.sh    # a short smoke schedule (~9 min), models elsewhere
+# Three fine-tuning stages, each from the one before's best weights (val_all mAP@0.5 of the photos, the map's boxes):
+#   1. seg3: the tiles added to the mix (EffSeg's), plates of the default generator (SIM_SCENES), lr 1e-3;
+#   2. seg4: a larger rendered share and twice the plates, lr 5e-4, one thread;
+#   3. seg7: plates rendered with the camera rolled up to ±45° (train-roll45.toml: plate edges at every angle, which
+#      stage 2 took for cracks on unseen family B's rolled webcam), lr 2.5e-4, one thread.
+# SIM_MINUTES=0 or ROLL_MINUTES=0 leaves a stage out.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 ROOT="$(cd "$HERE/../.." && pwd)"
@@ -16,6 +19,8 @@ cd "$HERE"
 DATA="${CRACKS_DATA:-$(cd "$HERE/../../../shared/data/cracks" && pwd)}"
 export CRACKS_DATA="$DATA"
 MINUTES=${TRAIN_MINUTES:-45}
+SIM_MINUTES=${SIM_MINUTES:-70}
+ROLL_MINUTES=${ROLL_MINUTES:-25}
 BOX_HEAD_MINUTES=${BOX_HEAD_MINUTES:-10}
 SIM_SCENES=${SIM_SCENES:-300}
 START="${START:-$HERE/crack-detector-320.onnx}"
@@ -28,15 +33,37 @@ RUN=$RUNS/seg3
 SIM=$RUNS/simdata/train
 HEAD=$RUN/box_head
 EVAL="$RUNS/eval-tiles"
-rm -rf "$RUN" "$EVAL"; mkdir -p "$RUN" "$EVAL" "$MODEL_OUT"
+# Stages 2 and 3's mix: the photos 36 %, the tiles 26 %, rendered plates 38 %.
+MIX2=crackforest=0.12,uav75=0.12,quaywall=0.12,deepcrack=0.14,crack500=0.12,sim=0.38
+rm -rf "$RUN" "$RUNS/seg4" "$RUNS/seg7" "$EVAL"; mkdir -p "$RUN" "$EVAL" "$MODEL_OUT"
 (cd "$ROOT" && cargo build --release --quiet -p crackbot-lab)
 LAB="${CARGO_TARGET_DIR:-$ROOT/target}/release/crackbot-lab"
-rm -rf "$SIM"
-"$LAB" sim detector-set --scenes "$SIM_SCENES" --frames-per-scene 2 --seed 1000 --out "$SIM" --json > "$RUNS/simdata.json"
+plates() {  # plates OUT SCENES SEED [PARAMS]: rendered training plates, 2 frames a scene
+  rm -rf "$1"; mkdir -p "$(dirname "$1")"
+  "$LAB" sim detector-set --scenes "$2" --frames-per-scene 2 --seed "$3" ${4:+--params "$4"} --out "$1" --json \
+      > "$1.json"
+}
+stage() {  # stage RUN INIT SIM MINUTES LR SEED: one single-thread fine-tuning stage with MIX2
+  mkdir -p "$1"
+  OMP_NUM_THREADS=1 nice -n 5 $PY train.py --init "$2" --tiles --sim "$3" --mix "$MIX2" --minutes "$4" --lr "$5" \
+      --seed "$6" --threads 1 --eval-every 300 --out "$1" | tee "$1/stdout.log"
+}
+plates "$SIM" "$SIM_SCENES" 1000
 $PY analysis/onnx_to_checkpoint.py --model "$START" --out "$RUN/start.pt"
 nice -n 5 $PY train.py --init "$RUN/start.pt" --tiles --sim "$SIM" --minutes "$MINUTES" --lr 1e-3 --seed 2 \
     --eval-every 300 --out "$RUN" | tee "$RUN/stdout.log"
-$PY export.py --ckpt "$RUN/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
+BEST="$RUN/best.pt"
+if [ "$SIM_MINUTES" != 0 ]; then
+  plates "$RUNS/simdata/train600" $((2 * SIM_SCENES)) 1000
+  stage "$RUNS/seg4" "$BEST" "$RUNS/simdata/train600" "$SIM_MINUTES" 5e-4 3
+  BEST="$RUNS/seg4/best.pt"
+fi
+if [ "$ROLL_MINUTES" != 0 ]; then
+  plates "$RUNS/simdata/train-roll45" $((2 * SIM_SCENES)) 2000 train-roll45.toml
+  stage "$RUNS/seg7" "$BEST" "$RUNS/simdata/train-roll45" "$ROLL_MINUTES" 2.5e-4 7
+  BEST="$RUNS/seg7/best.pt"
+fi
+$PY export.py --ckpt "$BEST" --sizes 320 256 416 --out "$MODEL_OUT"
 bash add_box_head.sh "$MODEL_OUT" "$HEAD" "$BOX_HEAD_MINUTES"
 $PY make_reference.py --models "$MODEL_OUT" --out "$MODEL_OUT/reference"
 M="$MODEL_OUT/crack-detector-320.onnx"
@@ -44,11 +71,17 @@ for ds in crackforest uav75 quaywall; do
   $PY eval.py --model "$M" --ann "$DATA/$ds/val.json" --json-metrics "$EVAL/metrics_320_$ds.json"
 done
 $PY eval.py --model "$M" --ann "$DATA/val_all.json" --root "$DATA" --json-metrics "$EVAL/metrics_320_val_all.json"
-$PY - "$RUN" "$HEAD" "$EVAL" "$MODEL_OUT/metrics.json" <<'PY'
+$PY - "$RUNS" "$HEAD" "$EVAL" "$MODEL_OUT/metrics.json" <<'PY'
 import json, os, sys
-run, head, ev, out = sys.argv[1:]
-summary = [l for l in open(os.path.join(run, "stdout.log")) if l.startswith("summary: ")][-1]
-m = {"training": {"seg3_tiles_finetune": json.loads(summary[len("summary: "):])},
+runs, head, ev, out = sys.argv[1:]
+def summary(d):
+    log = os.path.join(d, "stdout.log")
+    lines = [l for l in open(log) if l.startswith("summary: ")] if os.path.exists(log) else []
+    return json.loads(lines[-1][len("summary: "):]) if lines else None
+stages = {"seg3_tiles_finetune": summary(os.path.join(runs, "seg3")),
+          "seg4_more_plates": summary(os.path.join(runs, "seg4")),
+          "seg7_rolled_plates": summary(os.path.join(runs, "seg7"))}
+m = {"training": {k: v for k, v in stages.items() if v is not None},
      "box_head": json.load(open(os.path.join(head, "history.json")))["history"][-1],
      "pycocotools_val": {f"320/{ds}": json.load(open(os.path.join(ev, f"metrics_320_{ds}.json")))
                          for ds in ("crackforest", "uav75", "quaywall", "val_all")}}
