@@ -115,6 +115,18 @@ def claimed_cracks(report, feats):
     return claimed
 
 
+def second_or_off(report, feats, ri, ci, claimed):
+    """Why confirmed report `ri`, whose stroke crossed crack `ci`, matched no crack: the crack
+    was already claimed by another report (a second report: where that one lies, mm apart), or
+    the report lies off it (how far)."""
+    here = report["cracks"][ri]["position_mm"]
+    if ci in claimed:
+        first = report["cracks"][claimed[ci]]
+        gap = math.dist(here, first["position_mm"])
+        return f" (a second report of crack {ci}, the first candidate {first['candidate']}'s {gap:.1f} mm away)"
+    return f" (the report {dist_poly(here, feats[ci]['path']):.1f} mm off crack {ci})"
+
+
 def trial(scenes, folder, stats, errors, untouched, totals):
     seed = int(folder.rstrip("/").split("-")[-2])
     with open(os.path.join(folder, "report.json")) as f:
@@ -167,6 +179,7 @@ def trial(scenes, folder, stats, errors, untouched, totals):
         crossed.update(c[1] for c in xs)
         near = nearest_middle(xs, length)
         truth = near[2] if near else "nothing"
+        detail = ""
         standing = standing_near(ps[0]["start_mm"], ps[0]["end_mm"], feats)
         hit = [ri for ri, c in confirmed if c == cand]
         if hit:
@@ -179,6 +192,8 @@ def trial(scenes, folder, stats, errors, untouched, totals):
                     if matched == near[1]
                     else "duplicate or off the crack" if matched is None else "matched to another crack"
                 )
+                if matched is None:
+                    detail = second_or_off(report, feats, hit[0], near[1], claimed)
             else:
                 result = f"{truth} confirmed" + (" (matched to a crack)" if matched is not None else "")
                 if matched is None:
@@ -201,7 +216,7 @@ def trial(scenes, folder, stats, errors, untouched, totals):
         if result != "ok":
             dips = [p["dip"] and round(p["dip"]["centre_mm"], 1) for p in ps]
             errors.append(
-                f"{seed} candidate {cand}: {truth}, {result}; {decided[:60]}; ratio "
+                f"{seed} candidate {cand}: {truth}, {result}{detail}; {decided[:60]}; ratio "
                 f"{ratio if ratio is None else round(ratio, 2)}; stroke {length:.1f} mm crosses "
                 f"{[(round(c[0], 1), c[2], round(c[3], 2)) for c in xs]}; standing {standing}; "
                 f"dip centres {dips}"
