@@ -11,6 +11,8 @@ set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
 ROOT="$(cd "$HERE/../.." && pwd)"
 C="${CRACKS_DATA:-$(cd "$ROOT/../shared/data/cracks" && pwd)}"
+# The unseen scenes' renderer takes its crack textures from the same photos.
+export CRACKBOT_CRACKS_DIR="${CRACKBOT_CRACKS_DIR:-$C}"
 TILES="${CRACK_TILES_DATA:-$(cd "$ROOT/../shared/data/cracks-tiles" && pwd)}"
 OUT="${OUT:-$HERE/out/rust}"
 MODELS="$(cd "${MODELS:-$HERE}" && pwd)"

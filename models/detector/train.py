@@ -338,7 +338,8 @@ def main():
                     "(the pretrained EfficientNet-Lite0 encoder; train_effseg.sh)")
     ap.add_argument("--pretrained", default="", help="EfficientNet-Lite0 ImageNet weights (.pth) for effseg")
     ap.add_argument("--encoder-lr", type=float, default=0.5, help="encoder learning rate as a fraction of --lr")
-    ap.add_argument("--tiles", action="store_true", help="add the DeepCrack/CRACK500 train tiles to the mix")
+    ap.add_argument("--tiles", action="store_true", help="add the DeepCrack/CRACK500 train tiles to the default mix "
+                    "(with --mix, the tiles load where the mix names them)")
     ap.add_argument("--mix", default="", help="the sources' shares, e.g. sim=0.4,deepcrack=0.15,… (overrides the "
                     "default mix; names: crackforest, uav75, quaywall, deepcrack, crack500, sim)")
     a = ap.parse_args()

@@ -12,17 +12,12 @@
 # seeds 1000.., exact crack masks). Model selection: val_all mAP@0.5 of the real photos. The unseen rendered scenes
 # of the evaluation (seeds 900000..) are never rendered here.
 set -euo pipefail
-HERE="$(cd "$(dirname "$0")" && pwd)"
-ROOT="$(cd "$HERE/../.." && pwd)"
-cd "$HERE"
-DATA="${CRACKS_DATA:-$(cd "$HERE/../../../shared/data/cracks" && pwd)}"
-export CRACKS_DATA="$DATA"
+source "$(dirname "$0")/common.sh"
 MINUTES=${TRAIN_MINUTES:-20}
 STAGE2_MINUTES=${STAGE2_MINUTES:-55}
 BOX_HEAD_MINUTES=${BOX_HEAD_MINUTES:-25}
 SIM_SCENES=${SIM_SCENES:-300}
 bash setup.sh
-PY=.venv/bin/python
 export OMP_NUM_THREADS=2
 MODEL_OUT="${MODEL_OUT:-$HERE}"
 RUNS="${RUNS:-runs}"
@@ -31,9 +26,8 @@ RUN2=$RUNS/seg2
 SIM=$RUNS/simdata/train
 EVAL="$MODEL_OUT/out"
 rm -rf "$RUN" "$RUN2" "$SIM"; mkdir -p "$RUN" "$RUN2" "$EVAL"
-(cd "$ROOT" && cargo build --quiet -p crackbot-lab)
-LAB="${CARGO_TARGET_DIR:-$ROOT/target}/debug/crackbot-lab"
-"$LAB" sim detector-set --scenes "$SIM_SCENES" --frames-per-scene 2 --seed 1000 --out "$SIM" --json > "$RUN/simdata.json"
+build_lab debug
+plates "$SIM" "$SIM_SCENES" 1000 "$RUN/simdata.json"
 nice -n 5 $PY train.py --minutes "$MINUTES" --eval-every 300 --out "$RUN" | tee "$RUN/stdout.log"
 nice -n 5 $PY train.py --init "$RUN/best.pt" --sim "$SIM" --minutes "$STAGE2_MINUTES" --lr 2e-3 --seed 1 \
     --eval-every 300 --out "$RUN2" | tee "$RUN2/stdout.log"
@@ -43,17 +37,7 @@ $PY export.py --ckpt "$RUN2/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
 HEAD=$RUNS/box_head
 bash add_box_head.sh "$MODEL_OUT" "$HEAD" "$BOX_HEAD_MINUTES"
 $PY make_reference.py --models "$MODEL_OUT" --out "$MODEL_OUT/reference"
-for S in 320 256 416; do
-  M="$MODEL_OUT/crack-detector-$S.onnx"
-  for ds in crackforest uav75 quaywall; do
-    $PY eval.py --model "$M" --ann $DATA/$ds/val.json --json-metrics "$EVAL/metrics_${S}_$ds.json"
-  done
-  $PY eval.py --model "$M" --ann $DATA/val_all.json --root $DATA \
-      --results "$EVAL/dets_${S}_val_all.json" --json-metrics "$EVAL/metrics_${S}_val_all.json"
-done
-$PY augmented_set.py --split val --out "$EVAL/augval" --seed 0
-$PY eval.py --model "$MODEL_OUT/crack-detector-320.onnx" --ann "$EVAL/augval/annotations.json" \
-    --json-metrics "$EVAL/metrics_320_augval.json"
+evaluate_sizes "$MODEL_OUT" "$EVAL"
 $PY collect_metrics.py --runs "$RUNS" --eval "$EVAL" --out "$MODEL_OUT/metrics.json"
 echo "models:     $MODEL_OUT/crack-detector-{256,320,416}.onnx"
 echo "reference:  $MODEL_OUT/reference/"

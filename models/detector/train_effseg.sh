@@ -16,18 +16,13 @@
 # masks). Model selection: val_all mAP@0.5 of the real photos. The unseen rendered scenes of the evaluation (seeds
 # 900000..) are never rendered here.
 set -euo pipefail
-HERE="$(cd "$(dirname "$0")" && pwd)"
-ROOT="$(cd "$HERE/../.." && pwd)"
-cd "$HERE"
-DATA="${CRACKS_DATA:-$(cd "$HERE/../../../shared/data/cracks" && pwd)}"
-export CRACKS_DATA="$DATA"
+source "$(dirname "$0")/common.sh"
 MINUTES=${TRAIN_MINUTES:-75}
 # One PyTorch thread (and one data worker): two OpenMP threads on two shared cores stall at every
 # barrier whenever anything else runs (a build), and ran 6x slower here.
 THREADS=${TRAIN_THREADS:-1}
 SIM_SCENES=${SIM_SCENES:-300}
 LITE0=$(bash setup.sh | sed -n 's/^LITE0=//p')
-PY=.venv/bin/python
 export OMP_NUM_THREADS=$THREADS
 MODEL_OUT="${MODEL_OUT:-$HERE/effseg}"
 mkdir -p "$MODEL_OUT"
@@ -46,26 +41,14 @@ else
 fi
 mkdir -p "$EVAL"
 if [ "${RESUME:-0}" != 1 ] || [ ! -f "$RUNS/simdata.json" ]; then
-  (cd "$ROOT" && cargo build --release --quiet -p crackbot-lab)
-  LAB="${CARGO_TARGET_DIR:-$ROOT/target}/release/crackbot-lab"
-  rm -rf "$SIM"
-  "$LAB" sim detector-set --scenes "$SIM_SCENES" --frames-per-scene 2 --seed 1000 --out "$SIM" --json > "$RUNS/simdata.json"
+  build_lab release
+  plates "$SIM" "$SIM_SCENES" 1000 "$RUNS/simdata.json"
 fi
 nice -n 5 $PY train.py --arch effseg "${START[@]}" --tiles --sim "$SIM" --minutes "$MINUTES" --lr "$LR" \
     --threads "$THREADS" --eval-every 600 --out "$RUN" | tee -a "$RUN/stdout.log"
 $PY export.py --ckpt "$RUN/best.pt" --sizes 320 256 416 --out "$MODEL_OUT"
 $PY make_reference.py --models "$MODEL_OUT" --out "$MODEL_OUT/reference"
-for S in 320 256 416; do
-  M="$MODEL_OUT/crack-detector-$S.onnx"
-  for ds in crackforest uav75 quaywall; do
-    $PY eval.py --model "$M" --ann $DATA/$ds/val.json --json-metrics "$EVAL/metrics_${S}_$ds.json"
-  done
-  $PY eval.py --model "$M" --ann $DATA/val_all.json --root $DATA \
-      --results "$EVAL/dets_${S}_val_all.json" --json-metrics "$EVAL/metrics_${S}_val_all.json"
-done
-$PY augmented_set.py --split val --out "$EVAL/augval" --seed 0
-$PY eval.py --model "$MODEL_OUT/crack-detector-320.onnx" --ann "$EVAL/augval/annotations.json" \
-    --json-metrics "$EVAL/metrics_320_augval.json"
+evaluate_sizes "$MODEL_OUT" "$EVAL"
 $PY collect_metrics.py --runs "$RUNS" --eval "$EVAL" --out "$MODEL_OUT/metrics.json"
 echo "models:     $MODEL_OUT/crack-detector-{256,320,416}.onnx"
 echo "reference:  $MODEL_OUT/reference/"

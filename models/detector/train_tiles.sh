@@ -13,11 +13,7 @@
 #      stage 2 took for cracks on unseen family B's rolled webcam), lr 2.5e-4, one thread.
 # SIM_MINUTES=0 or ROLL_MINUTES=0 leaves a stage out.
 set -euo pipefail
-HERE="$(cd "$(dirname "$0")" && pwd)"
-ROOT="$(cd "$HERE/../.." && pwd)"
-cd "$HERE"
-DATA="${CRACKS_DATA:-$(cd "$HERE/../../../shared/data/cracks" && pwd)}"
-export CRACKS_DATA="$DATA"
+source "$(dirname "$0")/common.sh"
 MINUTES=${TRAIN_MINUTES:-45}
 SIM_MINUTES=${SIM_MINUTES:-70}
 ROLL_MINUTES=${ROLL_MINUTES:-25}
@@ -25,41 +21,34 @@ BOX_HEAD_MINUTES=${BOX_HEAD_MINUTES:-10}
 SIM_SCENES=${SIM_SCENES:-300}
 START="${START:-$HERE/crack-detector-320.onnx}"
 bash setup.sh
-PY=.venv/bin/python
 export OMP_NUM_THREADS=2
 MODEL_OUT="${MODEL_OUT:-$HERE/crackseg-tiles}"
 RUNS="${RUNS:-runs}"
 RUN=$RUNS/seg3
 SIM=$RUNS/simdata/train
-HEAD=$RUN/box_head
+HEAD=$RUNS/box_head-tiles
 EVAL="$RUNS/eval-tiles"
 # Stages 2 and 3's mix: the photos 36 %, the tiles 26 %, rendered plates 38 %.
 MIX2=crackforest=0.12,uav75=0.12,quaywall=0.12,deepcrack=0.14,crack500=0.12,sim=0.38
-rm -rf "$RUN" "$RUNS/seg4" "$RUNS/seg7" "$EVAL"; mkdir -p "$RUN" "$EVAL" "$MODEL_OUT"
-(cd "$ROOT" && cargo build --release --quiet -p crackbot-lab)
-LAB="${CARGO_TARGET_DIR:-$ROOT/target}/release/crackbot-lab"
-plates() {  # plates OUT SCENES SEED [PARAMS]: rendered training plates, 2 frames a scene
-  rm -rf "$1"; mkdir -p "$(dirname "$1")"
-  "$LAB" sim detector-set --scenes "$2" --frames-per-scene 2 --seed "$3" ${4:+--params "$4"} --out "$1" --json \
-      > "$1.json"
-}
+rm -rf "$RUN" "$RUNS/seg4" "$RUNS/seg7" "$HEAD" "$EVAL"; mkdir -p "$RUN" "$EVAL" "$MODEL_OUT"
+build_lab release
 stage() {  # stage RUN INIT SIM MINUTES LR SEED: one single-thread fine-tuning stage with MIX2
   mkdir -p "$1"
-  OMP_NUM_THREADS=1 nice -n 5 $PY train.py --init "$2" --tiles --sim "$3" --mix "$MIX2" --minutes "$4" --lr "$5" \
+  OMP_NUM_THREADS=1 nice -n 5 $PY train.py --init "$2" --sim "$3" --mix "$MIX2" --minutes "$4" --lr "$5" \
       --seed "$6" --threads 1 --eval-every 300 --out "$1" | tee "$1/stdout.log"
 }
-plates "$SIM" "$SIM_SCENES" 1000
+plates "$SIM" "$SIM_SCENES" 1000 "$SIM.json"
 $PY analysis/onnx_to_checkpoint.py --model "$START" --out "$RUN/start.pt"
 nice -n 5 $PY train.py --init "$RUN/start.pt" --tiles --sim "$SIM" --minutes "$MINUTES" --lr 1e-3 --seed 2 \
     --eval-every 300 --out "$RUN" | tee "$RUN/stdout.log"
 BEST="$RUN/best.pt"
 if [ "$SIM_MINUTES" != 0 ]; then
-  plates "$RUNS/simdata/train600" $((2 * SIM_SCENES)) 1000
+  plates "$RUNS/simdata/train600" $((2 * SIM_SCENES)) 1000 "$RUNS/simdata/train600.json"
   stage "$RUNS/seg4" "$BEST" "$RUNS/simdata/train600" "$SIM_MINUTES" 5e-4 3
   BEST="$RUNS/seg4/best.pt"
 fi
 if [ "$ROLL_MINUTES" != 0 ]; then
-  plates "$RUNS/simdata/train-roll45" $((2 * SIM_SCENES)) 2000 train-roll45.toml
+  plates "$RUNS/simdata/train-roll45" $((2 * SIM_SCENES)) 2000 "$RUNS/simdata/train-roll45.json" train-roll45.toml
   stage "$RUNS/seg7" "$BEST" "$RUNS/simdata/train-roll45" "$ROLL_MINUTES" 2.5e-4 7
   BEST="$RUNS/seg7/best.pt"
 fi
