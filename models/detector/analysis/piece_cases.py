@@ -23,7 +23,13 @@ def load(path):
         return json.load(f)
 
 
-def draw_case(img, boxes, case, pieces, size=220):
+TILE = 220  # a case's crop, pixels square
+GAP = 2  # between crops on the sheet
+COLS = 6
+
+
+def draw_case(img, boxes, case, pieces, size=TILE):
+    """The crop of `img` around `case`'s crack with the true centre lines of `boxes` and the `pieces` drawn."""
     x, y, w, h = case["bbox"]
     cx, cy = x + w / 2, y + h / 2
     half = max(w, h) / 2 + 30
@@ -57,7 +63,7 @@ def main(set_dir, eval_json, detect_json, out_png):
     features = {os.path.basename(i["file_name"]): i for i in load(os.path.join(set_dir, "features.json"))["images"]}
     pieces = {}
     for im in load(detect_json)["images"]:
-        name = os.path.basename(im.get("image") or im.get("file") or im.get("path"))
+        name = os.path.basename(im["file"])
         pieces[name] = [p for det in im["detections"] for p in det.get("pieces_px", [])]
     cases = load(eval_json)["scene"]["pieces"]["cases"]
     tiles = []
@@ -65,11 +71,11 @@ def main(set_dir, eval_json, detect_json, out_png):
         name = os.path.basename(case["file"])
         img = Image.open(os.path.join(set_dir, "images", name))
         tiles.append(draw_case(img, features[name]["boxes"], case, pieces.get(name, [])))
-    cols = 6
-    rows = max(1, (len(tiles) + cols - 1) // cols)
-    sheet = Image.new("RGB", (cols * 222, rows * 222))
+    step = TILE + GAP
+    rows = max(1, (len(tiles) + COLS - 1) // COLS)
+    sheet = Image.new("RGB", (COLS * step, rows * step))
     for k, t in enumerate(tiles):
-        sheet.paste(t, ((k % cols) * 222, (k // cols) * 222))
+        sheet.paste(t, ((k % COLS) * step, (k // COLS) * step))
     sheet.save(out_png)
     print(f"{len(tiles)} cases -> {out_png}")
 
