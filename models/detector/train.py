@@ -340,6 +340,8 @@ def main():
     ap.add_argument("--encoder-lr", type=float, default=0.5, help="encoder learning rate as a fraction of --lr")
     ap.add_argument("--tiles", action="store_true", help="add the DeepCrack/CRACK500 train tiles to the default mix "
                     "(with --mix, the tiles load where the mix names them)")
+    ap.add_argument("--bf16", action="store_true", help="forward pass in bfloat16 (CPU autocast, channels-last): "
+                    "2x faster for the VGG-sized HED on a CPU with AVX512-BF16; weights, loss and EMA stay float32")
     ap.add_argument("--mix", default="", help="the sources' shares, e.g. sim=0.4,deepcrack=0.15,… (overrides the "
                     "default mix; names: crackforest, uav75, quaywall, deepcrack, crack500, sim)")
     a = ap.parse_args()
@@ -365,10 +367,12 @@ def main():
     elif a.init:
         model.load_state_dict(torch.load(a.init, map_location="cpu")["model"])
     elif a.pretrained:
-        loaded, skipped = model.load_lite0(a.pretrained)
+        loaded, skipped = model.load_pretrained(a.pretrained)
         print(f"pretrained: {loaded} tensors from {a.pretrained} ({skipped} not used)", flush=True)
     nparams = sum(p.numel() for p in model.parameters())
     print(f"params: {nparams}", flush=True)
+    if a.bf16:
+        model = model.to(memory_format=torch.channels_last)
     ema = EMA(model)
     enc = set(id(p) for p in getattr(model, "encoder_parameters", lambda: [])())
     groups = [{"params": [p for p in model.parameters() if id(p) in enc], "scale": a.encoder_lr},
@@ -397,7 +401,12 @@ def main():
         for g in opt.param_groups:
             g["lr"] = lr * g["scale"]
         model.train()
-        loss = seg_loss(model.logits(x), t, v, weaks)
+        if a.bf16:
+            with torch.autocast("cpu", dtype=torch.bfloat16):
+                lg = model.logits(x.contiguous(memory_format=torch.channels_last))
+            loss = seg_loss(lg.float(), t, v, weaks)
+        else:
+            loss = seg_loss(model.logits(x), t, v, weaks)
         opt.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
@@ -431,7 +440,8 @@ def main():
     summary = {"iterations": it, "wall_s": round(time.time() - t0, 1), "batch": a.batch, "crop": a.crop,
                "images_seen": it * a.batch, "best": best, "params": nparams, "minutes_budget": a.minutes,
                "lr": a.lr, "seed": a.seed, "mix": mix, "sim": a.sim, "threads": a.threads, "arch": a.arch,
-               "pretrained": os.path.basename(a.pretrained) if a.pretrained else None, "encoder_lr": a.encoder_lr}
+               "pretrained": os.path.basename(a.pretrained) if a.pretrained else None, "encoder_lr": a.encoder_lr,
+               "bf16": a.bf16}
     json.dump(summary, open(os.path.join(a.out, "summary.json"), "w"), indent=1)
     print("summary:", json.dumps(summary), flush=True)
 
