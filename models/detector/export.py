@@ -52,4 +52,5 @@ if __name__ == "__main__":
     ap.add_argument("--sizes", type=int, nargs="+", default=[320, 256, 416])
     ap.add_argument("--out", default=HERE)
     a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
     export(a.ckpt, a.sizes, a.out)
