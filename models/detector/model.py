@@ -156,8 +156,9 @@ class EffSeg(nn.Module):
         nn.init.normal_(self.out.weight, std=0.01)
         nn.init.constant_(self.out.bias, -4.0)
 
-    def load_lite0(self, path):
-        """Loads the ImageNet weights of the kept stem and blocks; returns (loaded, skipped) key counts."""
+    def load_pretrained(self, path):
+        """Loads the ImageNet EfficientNet-Lite0 weights of the kept stem and blocks; returns (loaded, skipped) key
+        counts."""
         sd = torch.load(path, map_location="cpu", weights_only=False)
         if isinstance(sd, dict) and "state_dict" in sd:
             sd = sd["state_dict"]
@@ -169,8 +170,6 @@ class EffSeg(nn.Module):
             raise ValueError(f"pretrained file {path} lacks {len(missing)} encoder tensors, e.g. {missing[:3]}")
         self.load_state_dict(take, strict=False)
         return len(take), len(sd) - len(take)
-
-    load_pretrained = load_lite0
 
     def encoder_parameters(self):
         return [p for n, p in self.named_parameters() if n.startswith(("_conv_stem", "_bn0", "_blocks"))]

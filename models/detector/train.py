@@ -341,7 +341,8 @@ def main():
     ap.add_argument("--tiles", action="store_true", help="add the DeepCrack/CRACK500 train tiles to the default mix "
                     "(with --mix, the tiles load where the mix names them)")
     ap.add_argument("--bf16", action="store_true", help="forward pass in bfloat16 (CPU autocast, channels-last): "
-                    "2x faster for the VGG-sized HED on a CPU with AVX512-BF16; weights, loss and EMA stay float32")
+                    "a training step 2.1-2.5x faster for CrackSeg and HED on a CPU with AVX512-BF16; weights, loss and EMA "
+                    "stay float32")
     ap.add_argument("--mix", default="", help="the sources' shares, e.g. sim=0.4,deepcrack=0.15,… (overrides the "
                     "default mix; names: crackforest, uav75, quaywall, deepcrack, crack500, sim)")
     a = ap.parse_args()
@@ -371,8 +372,8 @@ def main():
         print(f"pretrained: {loaded} tensors from {a.pretrained} ({skipped} not used)", flush=True)
     nparams = sum(p.numel() for p in model.parameters())
     print(f"params: {nparams}", flush=True)
-    if a.bf16:
-        model = model.to(memory_format=torch.channels_last)
+    fmt = torch.channels_last if a.bf16 else torch.contiguous_format
+    model = model.to(memory_format=fmt)
     ema = EMA(model)
     enc = set(id(p) for p in getattr(model, "encoder_parameters", lambda: [])())
     groups = [{"params": [p for p in model.parameters() if id(p) in enc], "scale": a.encoder_lr},
@@ -401,12 +402,9 @@ def main():
         for g in opt.param_groups:
             g["lr"] = lr * g["scale"]
         model.train()
-        if a.bf16:
-            with torch.autocast("cpu", dtype=torch.bfloat16):
-                lg = model.logits(x.contiguous(memory_format=torch.channels_last))
-            loss = seg_loss(lg.float(), t, v, weaks)
-        else:
-            loss = seg_loss(model.logits(x), t, v, weaks)
+        with torch.autocast("cpu", dtype=torch.bfloat16, enabled=a.bf16):
+            lg = model.logits(x.contiguous(memory_format=fmt))
+        loss = seg_loss(lg.float(), t, v, weaks)
         opt.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
