@@ -34,7 +34,8 @@ fn bench_mission(c: &mut Criterion) {
     let out = tempfile::tempdir().expect("a temporary folder");
     let scene = Scene::load_or_default(None).expect("the built-in default scene");
     let mut config = InspectConfig::new(scene, out.path().join("mission"));
-    config.speedup = SPEEDUP;
+    config.rig.speedup = SPEEDUP;
+    let config = config.check().expect("the default scene's settings");
     let stop = AtomicBool::new(false);
     let runs: Mutex<Vec<Run>> = Mutex::new(Vec::new());
 

@@ -12,9 +12,19 @@ use crackbot_mission::inspect::{
     run_inspection, Hardware, InspectConfig, InspectMode, InspectReport, Progress, Site,
 };
 
-/// Flags of the mission.
+/// Flags of the mission. Each setting left out keeps the configuration file's value
+/// (`--config`), or else its default (`--print-config` writes them all).
 #[derive(Debug, Args)]
 pub struct RunArgs {
+    /// A mission configuration file (TOML; `--print-config` writes one with every default and
+    /// where it comes from): every setting it names replaces the default, and the flags given
+    /// here replace the file's.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Print the mission's configuration (the defaults, the file's and the flags' settings) as
+    /// a TOML file with each key explained, and exit.
+    #[arg(long)]
+    pub print_config: bool,
     /// Simulated rig: the scene file, TOML (or JSON when named `.json`, as `trial_scenes` writes
     /// them; default: the built-in default scene).
     #[cfg(feature = "sim")]
@@ -26,27 +36,27 @@ pub struct RunArgs {
     #[arg(long, requires = "serial")]
     pub site: Option<PathBuf>,
     /// tactile (scan rows, no camera), vision (camera only) or fused (camera proposes, finger
-    /// confirms).
-    #[arg(long, default_value = "fused")]
-    pub mode: InspectMode,
+    /// confirms) [default: fused].
+    #[arg(long)]
+    pub mode: Option<InspectMode>,
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
-    /// Folder for the report and every recording of the mission.
-    #[arg(long, default_value = "out/mission")]
-    pub out: PathBuf,
-    /// Run the simulation this many times faster than real time.
-    #[arg(long, default_value_t = 1.0)]
-    pub speedup: f64,
-    /// Seed of the simulated sensor and camera.
-    #[arg(long, default_value_t = 7)]
-    pub seed: u64,
+    /// Folder for the report and every recording of the mission [default: out/mission].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Run the simulation this many times faster than real time [default: 1].
+    #[arg(long)]
+    pub speedup: Option<f64>,
+    /// Seed of the simulated sensor and camera [default: 7].
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Strokes across each candidate (forth and back count as two; the authors slid 4 and
     /// more). One stroke was as accurate as four on the simulated trials, at a third of the
     /// time (crates/research/EXPERIMENTS.md, "Error against run time before the print check:
-    /// strokes, stroke length, margin").
-    #[arg(long, default_value_t = 1)]
-    pub passes: u32,
+    /// strokes, stroke length, margin") [default: 1].
+    #[arg(long)]
+    pub passes: Option<u32>,
     /// Shortest stroke across a candidate, mm (default: 6, or the scene's manipulator stroke
     /// if shorter; the paper's is 16); a wide candidate still gets a stroke that starts and
     /// ends on sound surface.
@@ -61,50 +71,52 @@ pub struct RunArgs {
     /// 2.4 mm for the simulated finger; 4.4 keeps the whole tip on sound surface].
     #[arg(long)]
     pub reach_mm: Option<f64>,
-    /// γ of the tactile-only scan (the paper's eq. 2), in (0, 1).
-    #[arg(long, default_value_t = 0.5)]
-    pub gamma: f64,
-    /// Vision mode: detections scoring below this are not reported.
-    #[arg(long, default_value_t = 0.3, value_parser = score_in_unit_range)]
-    pub min_score: f32,
+    /// γ of the tactile-only scan (the paper's eq. 2), in (0, 1) [default: 0.5].
+    #[arg(long)]
+    pub gamma: Option<f64>,
+    /// Vision mode: detections scoring below this are not reported [default: 0.3].
+    #[arg(long, value_parser = score_in_unit_range)]
+    pub min_score: Option<f32>,
     /// Fused mode: detections scoring below this are not touched (the finger confirms or
-    /// rejects the rest).
-    #[arg(long, default_value_t = 0.3, value_parser = score_in_unit_range)]
-    pub proposal_min_score: f32,
+    /// rejects the rest) [default: 0.3].
+    #[arg(long, value_parser = score_in_unit_range)]
+    pub proposal_min_score: Option<f32>,
     /// What the finger touches: every crack a detection holds, on its centre line (cracks), or
     /// every detection once across its main axis (detections: fewer strokes, but of cracks that
-    /// run close together or cross only one is touched).
-    #[arg(long, default_value = "cracks", value_parser = ["cracks", "detections"])]
-    pub candidates: String,
+    /// run close together or cross only one is touched) [default: cracks].
+    #[arg(long, value_parser = ["cracks", "detections"])]
+    pub candidates: Option<String>,
     /// Confirm a crack on the recognition model's vote alone, also where the proximity channel
     /// saw no dip (by default a crack must show one).
     #[arg(long)]
     pub confirm_without_dip: bool,
     /// Fused missions: height of the print check's raised pass over each candidate the finger
     /// confirmed, mm above the plate (a print's dip keeps its share of the signal there, a
-    /// crack's does not); 0 turns the check off.
-    #[arg(long, default_value_t = crackbot_mission::PRINT_CHECK_HEIGHT_MM)]
-    pub print_check_mm: f64,
+    /// crack's does not); 0 turns the check off [default: 2].
+    #[arg(long)]
+    pub print_check_mm: Option<f64>,
     /// Shallowest proximity dip a confirmed crack needs, counts (100 suits missions without the
-    /// print check).
-    #[arg(long, default_value_t = crackbot_mission::inspect::MIN_DIP_COUNTS)]
-    pub min_dip_counts: f64,
+    /// print check) [default: 40].
+    #[arg(long)]
+    pub min_dip_counts: Option<f64>,
     /// Fused missions with the print check: a pass the recognition model read as "no crack"
     /// while doubting it (a surface unlike training, or a weak vote) still stands for a crack
     /// when its proximity dip is at least this confident (0–1), and the print check decides;
-    /// 0: the model's verdict always stands.
-    #[arg(long, default_value_t = crackbot_mission::inspect::DOUBTED_DIP_CONFIDENCE)]
-    pub doubted_dip_confidence: f64,
+    /// 0: the model's verdict always stands [default: 0.6].
+    #[arg(long)]
+    pub doubted_dip_confidence: Option<f64>,
     /// Fused missions: report confirmed candidates whose detections continue each other
-    /// across at most this gap (mm, within 40° of one direction) as one crack; 0 reports each.
-    #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_GAP_MM)]
-    pub piece_gap_mm: f64,
+    /// across at most this gap (mm, within 40° of one direction) as one crack; 0 reports each
+    /// [default: 12].
+    #[arg(long)]
+    pub piece_gap_mm: Option<f64>,
     /// Fused missions: also report two confirmed candidates as one crack when the straight line
     /// between the points where their strokes met it runs along both and over the detector's
     /// crack map, off it for at most this much (mm); pieces joined by --piece-gap-mm must then
-    /// also have that line on the map but for their gap plus this much. Negative: off.
-    #[arg(long, default_value_t = crackbot_mission::inspect::PIECE_TRACE_GAP_MM, allow_negative_numbers = true)]
-    pub piece_trace_gap_mm: f64,
+    /// also have that line on the map but for their gap plus this much. Negative: off
+    /// [default: 2].
+    #[arg(long, allow_negative_numbers = true)]
+    pub piece_trace_gap_mm: Option<f64>,
     /// Do not write the mission's log, `mission.mcap` (for Foxglove and other MCAP readers;
     /// written by default beside the report).
     #[arg(long)]
@@ -155,7 +167,7 @@ pub struct RunArgs {
     #[arg(long, requires_all = ["serial", "key"])]
     pub controller: Option<std::net::SocketAddr>,
     /// Hardware: this host's UDP address for the link.
-    #[arg(long, default_value = "0.0.0.0:7701")]
+    #[arg(long, default_value = crackbot_mission::inspect::DEFAULT_BIND)]
     pub bind: std::net::SocketAddr,
     /// Hardware: the link's pre-shared key file (64–128 hex digits, mode 0600).
     #[arg(long)]
@@ -202,6 +214,10 @@ pub struct FleetArgs {
 /// Runs the mission and prints the report.
 pub fn run(args: RunArgs) -> Result<()> {
     let config = config_from(&args)?;
+    if args.print_config {
+        print!("{}", config.to_commented_toml()?);
+        return Ok(());
+    }
     if args.fleet.telemetry.is_some() {
         return fleet(&args, config);
     }
@@ -212,59 +228,119 @@ pub fn run(args: RunArgs) -> Result<()> {
         ctrlc::set_handler(move || stop.store(true, Ordering::Relaxed))
             .context("installing the Ctrl-C handler")?;
     }
+    let checked = config.check().context("the mission's settings")?;
     let bar = progress_bar(args.json);
-    let report = run_inspection(&config, &stop, |p| show(&bar, p)).with_context(|| {
+    let report = run_inspection(&checked, &stop, |p| show(&bar, p)).with_context(|| {
         format!(
             "mission failed (recordings so far are in {})",
-            args.out.display()
+            config.output.out_dir.display()
         )
     })?;
     bar.finish_and_clear();
     print_report(&report, args.json)
 }
 
-/// The mission's configuration from the flags.
+/// The mission's configuration: the rig's defaults (the hardware the flags name, or the
+/// simulated scene), the file's settings over them (`--config`), the flags' over those.
 fn config_from(args: &RunArgs) -> Result<InspectConfig> {
     let mut config = rig_config(args)?;
-    config.mode = args.mode;
-    config.speedup = args.speedup;
-    config.seed = args.seed;
-    config.gamma = args.gamma;
-    config.min_score = args.min_score;
-    config.proposal_min_score = args.proposal_min_score;
-    config.candidates = args.candidates.parse().map_err(anyhow::Error::msg)?;
-    config.require_dip = !args.confirm_without_dip;
-    config.print_check_mm =
-        crackbot_mission::print_check_height(args.print_check_mm).context("--print-check-mm")?;
-    config.min_dip_counts = args.min_dip_counts;
-    config.doubted_dip_confidence =
-        crackbot_mission::inspect::doubted_dip_confidence(args.doubted_dip_confidence)
+    if let Some(path) = &args.config {
+        config = config.overlaid_file(path)?;
+        // Hardware flags name the rig whatever the file says.
+        if let Some(hw) = hardware(args) {
+            config.rig.hardware = Some(hw);
+        }
+    }
+    if let Some(out) = &args.out {
+        config.output.out_dir = out.clone();
+    }
+    settings_from_flags(args, &mut config)?;
+    if args.no_mcap {
+        config.output.mcap = false;
+    }
+    #[cfg(feature = "foxglove")]
+    if args.foxglove.is_some() {
+        config.output.foxglove = args.foxglove;
+    }
+    link_faults_from_flags(args, &mut config);
+    Ok(config)
+}
+
+/// The settings flags given, over `config`.
+fn settings_from_flags(args: &RunArgs, config: &mut InspectConfig) -> Result<()> {
+    let set = |slot: &mut f64, v: Option<f64>| {
+        if let Some(v) = v {
+            *slot = v;
+        }
+    };
+    if let Some(m) = args.mode {
+        config.mode = m;
+    }
+    set(&mut config.rig.speedup, args.speedup);
+    if let Some(s) = args.seed {
+        config.rig.seed = s;
+    }
+    set(&mut config.plan.gamma, args.gamma);
+    if let Some(v) = args.min_score {
+        config.perceive.min_score = v;
+    }
+    if let Some(v) = args.proposal_min_score {
+        config.perceive.proposal_min_score = v;
+    }
+    if let Some(c) = &args.candidates {
+        config.perceive.candidates = c.parse().map_err(anyhow::Error::msg)?;
+    }
+    if args.confirm_without_dip {
+        config.judge.require_dip = false;
+    }
+    if let Some(h) = args.print_check_mm {
+        config.print_check.height_mm =
+            crackbot_mission::print_check_height(h).context("--print-check-mm")?;
+    }
+    set(&mut config.touch.min_dip_counts, args.min_dip_counts);
+    if let Some(c) = args.doubted_dip_confidence {
+        config.judge.doubted_dip_confidence = crackbot_mission::inspect::doubted_dip_confidence(c)
             .context("--doubted-dip-confidence")?;
-    config.piece_gap_mm = (args.piece_gap_mm != 0.0).then_some(args.piece_gap_mm);
-    config.piece_trace_gap_mm = (args.piece_trace_gap_mm >= 0.0).then_some(args.piece_trace_gap_mm);
-    config.planner.passes = args.passes;
-    if let Some(v) = args.stroke_mm {
-        config.planner.min_stroke_mm = v;
     }
-    if let Some(v) = args.reach_mm {
-        config.planner.reach_mm = v;
+    if let Some(g) = args.piece_gap_mm {
+        config.pieces.gap_mm = (g != 0.0).then_some(g);
     }
-    if let Some(v) = args.margin_mm {
-        config.planner.margin_mm = v;
-        config.planner.min_margin_mm = config.planner.min_margin_mm.min(v);
+    if let Some(g) = args.piece_trace_gap_mm {
+        config.pieces.trace_gap_mm = (g >= 0.0).then_some(g);
     }
+    planner_from_flags(args, config);
     if let Some(p) = &args.recognition_model {
-        config.recognition_model = p.clone();
+        config.touch.recognition_model = p.clone();
     }
     if let Some(p) = &args.width_model {
-        config.width_model = p.clone();
+        config.touch.width_model = p.clone();
     }
-    config.detector_model = args.detector.clone();
-    config.mcap = !args.no_mcap;
-    #[cfg(feature = "foxglove")]
-    {
-        config.foxglove = args.foxglove;
+    if args.detector.is_some() {
+        config.perceive.detector_model = args.detector.clone();
     }
+    Ok(())
+}
+
+/// The planner's flags given, over `config`.
+fn planner_from_flags(args: &RunArgs, config: &mut InspectConfig) {
+    let planner = &mut config.plan.planner;
+    if let Some(p) = args.passes {
+        planner.passes = p;
+    }
+    if let Some(v) = args.stroke_mm {
+        planner.min_stroke_mm = v;
+    }
+    if let Some(v) = args.reach_mm {
+        planner.reach_mm = v;
+    }
+    if let Some(v) = args.margin_mm {
+        planner.margin_mm = v;
+        planner.min_margin_mm = planner.min_margin_mm.min(v);
+    }
+}
+
+/// The link faults the flags inject (`--loss`, `--reorder`, `--duplicate`).
+fn link_faults_from_flags(args: &RunArgs, config: &mut InspectConfig) {
     if args.loss > 0.0 || args.reorder > 0.0 || args.duplicate > 0.0 {
         let faults = crackbot_link::FaultConfig {
             drop: args.loss,
@@ -274,11 +350,10 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
         };
         #[cfg(feature = "sim")]
         {
-            config.faults.link = Some(faults.clone());
+            config.rig.faults.link = Some(faults.clone());
         }
-        config.host_link_faults = Some(crackbot_link::FaultConfig { seed: 2, ..faults });
+        config.rig.host_link_faults = Some(crackbot_link::FaultConfig { seed: 2, ..faults });
     }
-    Ok(config)
 }
 
 /// `--foxglove`'s address when none is given.
@@ -306,7 +381,7 @@ fn hardware_config(args: &RunArgs, hw: Hardware) -> Result<InspectConfig> {
         Some(path) => Site::load(path).context("--site")?,
         None => Site::default(),
     };
-    Ok(InspectConfig::on_hardware(hw, site, &args.out))
+    Ok(InspectConfig::on_hardware(hw, site, out_dir(args)))
 }
 
 /// The mission's rig: the hardware the flags name, or the simulated scene (`--scene`) with the
@@ -317,27 +392,36 @@ fn rig_config(args: &RunArgs) -> Result<InspectConfig> {
         return hardware_config(args, hw);
     }
     let scene = crackbot_sim::Scene::load_or_default(args.scene.as_deref())?;
-    let mut config = InspectConfig::new(scene, &args.out);
-    config.clock.offset_us = args.clock_offset_us;
-    config.clock.drift_ppm = args.clock_drift_ppm;
-    config.faults.stall = args
+    let mut config = InspectConfig::new(scene, out_dir(args));
+    config.rig.clock.offset_us = args.clock_offset_us;
+    config.rig.clock.drift_ppm = args.clock_drift_ppm;
+    config.rig.faults.stall = args
         .stall_slide
         .map(|slide| crackbot_controller::SensorStall {
             slide,
             duration: Duration::from_secs(1),
         });
-    config.faults.restart_after = args.restart_after_s.map(Duration::from_secs_f64);
+    config.rig.faults.restart_after = args.restart_after_s.map(Duration::from_secs_f64);
     Ok(config)
 }
 
-/// The mission's rig: the hardware the flags name (this build has no simulator).
+/// The mission's folder by default, or `--out`.
+fn out_dir(args: &RunArgs) -> PathBuf {
+    args.out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out/mission"))
+}
+
+/// The mission's rig: the hardware the flags name, or the one the configuration file names
+/// (this build has no simulator).
 #[cfg(not(feature = "sim"))]
 fn rig_config(args: &RunArgs) -> Result<InspectConfig> {
     match hardware(args) {
         Some(hw) => hardware_config(args, hw),
+        None if args.config.is_some() => Ok(InspectConfig::at(Site::default(), out_dir(args))),
         None => anyhow::bail!(
             "this build has no simulator (built without the `sim` feature): a mission needs \
-             hardware, --serial DEVICE --controller ADDR --key FILE"
+             hardware, --serial DEVICE --controller ADDR --key FILE (or [rig.hardware] in --config)"
         ),
     }
 }
@@ -442,7 +526,7 @@ fn fleet(args: &RunArgs, config: InspectConfig) -> Result<()> {
             .with_context(|| {
                 format!(
                     "mission failed (recordings so far are in {})",
-                    args.out.display()
+                    config.output.out_dir.display()
                 )
             })?;
         bar.finish_and_clear();

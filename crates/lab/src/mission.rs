@@ -135,46 +135,46 @@ fn base(common: &Common) -> Result<ExperimentConfig> {
     std::fs::create_dir_all(&common.out)
         .with_context(|| format!("creating {}", common.out.display()))?;
     let mut template = InspectConfig::new(Scene::builtin_default(), &common.out);
-    template.planner.passes = common.passes;
+    template.plan.planner.passes = common.passes;
     if !(0.0..=1.0).contains(&common.proposal_min_score) {
         anyhow::bail!(
             "--proposal-min-score must lie in [0, 1], got {}",
             common.proposal_min_score
         );
     }
-    template.proposal_min_score = common.proposal_min_score;
-    template.candidates = common.candidates.parse().map_err(anyhow::Error::msg)?;
-    template.require_dip = !common.confirm_without_dip;
-    template.print_check_mm =
+    template.perceive.proposal_min_score = common.proposal_min_score;
+    template.perceive.candidates = common.candidates.parse().map_err(anyhow::Error::msg)?;
+    template.judge.require_dip = !common.confirm_without_dip;
+    template.print_check.height_mm =
         crackbot_mission::print_check_height(common.print_check_mm).context("--print-check-mm")?;
-    template.min_dip_counts = common.min_dip_counts;
-    template.doubted_dip_confidence =
+    template.touch.min_dip_counts = common.min_dip_counts;
+    template.judge.doubted_dip_confidence =
         crackbot_mission::inspect::doubted_dip_confidence(common.doubted_dip_confidence)
             .context("--doubted-dip-confidence")?;
-    template.piece_gap_mm = (common.piece_gap_mm != 0.0).then_some(common.piece_gap_mm);
-    template.piece_trace_gap_mm =
+    template.pieces.gap_mm = (common.piece_gap_mm != 0.0).then_some(common.piece_gap_mm);
+    template.pieces.trace_gap_mm =
         (common.piece_trace_gap_mm >= 0.0).then_some(common.piece_trace_gap_mm);
     if let Some(p) = &common.recognition_model {
-        template.recognition_model = p.clone();
+        template.touch.recognition_model = p.clone();
     }
     if let Some(p) = &common.width_model {
-        template.width_model = p.clone();
+        template.touch.width_model = p.clone();
     }
     if common.detector.is_some() {
-        template.detector_model = common.detector.clone();
+        template.perceive.detector_model = common.detector.clone();
     }
     if let Some(v) = common.stroke_mm {
-        template.planner.min_stroke_mm = v;
+        template.plan.planner.min_stroke_mm = v;
     }
     if let Some(v) = common.margin_mm {
-        template.planner.margin_mm = v;
-        template.planner.min_margin_mm = template.planner.min_margin_mm.min(v);
+        template.plan.planner.margin_mm = v;
+        template.plan.planner.min_margin_mm = template.plan.planner.min_margin_mm.min(v);
     }
     if let Some(v) = common.reach_mm {
-        template.planner.reach_mm = v;
+        template.plan.planner.reach_mm = v;
     }
     if let Some(v) = common.slide_speed {
-        template.planner.slide_speed_mm_s = v;
+        template.plan.planner.slide_speed_mm_s = v;
     }
     Ok(ExperimentConfig {
         out_dir: common.out.clone(),

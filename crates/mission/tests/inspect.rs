@@ -45,7 +45,7 @@ static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 fn mission(config: &InspectConfig) -> Result<InspectReport, MissionError> {
     let _one = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let stop = AtomicBool::new(false);
-    run_inspection(config, &stop, |_| {})
+    run_inspection(&config.check()?, &stop, |_| {})
 }
 
 /// A fused mission over `scene` at speed-up 8 with the default settings; its recordings go to
@@ -58,7 +58,7 @@ fn fast_mission(scene: &Scene) -> InspectReport {
 /// [`fast_mission`] with its recordings kept in `dir`.
 fn fast_mission_in(scene: &Scene, dir: &std::path::Path) -> InspectReport {
     let mut c = InspectConfig::new(scene.clone(), dir);
-    c.speedup = 8.0;
+    c.rig.speedup = 8.0;
     mission(&c).expect("mission")
 }
 
@@ -119,8 +119,8 @@ fn trial_scene_and_crack(seed: u64, index: usize) -> (Scene, Vec<[f64; 2]>) {
 
 fn config(dir: &std::path::Path) -> InspectConfig {
     let mut c = InspectConfig::new(one_crack(), dir);
-    c.speedup = 8.0;
-    c.planner.passes = 2;
+    c.rig.speedup = 8.0;
+    c.plan.planner.passes = 2;
     c
 }
 
@@ -153,8 +153,8 @@ fn a_fused_mission_finds_the_crack_with_synchronised_positions_and_saves_everyth
     let dir = tempfile::tempdir().unwrap();
     let mut c = config(dir.path());
     // The controller's clock 3.2 s ahead and 150 ppm fast: the robot synchronises to it.
-    c.clock.offset_us = 3.2e6;
-    c.clock.drift_ppm = 150.0;
+    c.rig.clock.offset_us = 3.2e6;
+    c.rig.clock.drift_ppm = 150.0;
     let r = mission(&c).unwrap();
     println!("{}", serde_json::to_string_pretty(&r.cracks).unwrap());
     println!("{}", serde_json::to_string_pretty(&r.candidates).unwrap());
@@ -232,9 +232,9 @@ fn lost_reordered_and_duplicated_packets_are_survived() {
         duplicate: 0.05,
         ..FaultConfig::default()
     };
-    c.faults.link = Some(faults.clone());
-    c.host_link_faults = Some(FaultConfig { seed: 9, ..faults });
-    c.planner.passes = 4;
+    c.rig.faults.link = Some(faults.clone());
+    c.rig.host_link_faults = Some(FaultConfig { seed: 9, ..faults });
+    c.plan.planner.passes = 4;
     let r = mission(&c).unwrap();
     assert_eq!(judged(&r.passes), 4 * r.candidates.len());
     // The faults were met (retries, refused duplicates and stale copies) and survived.
@@ -252,7 +252,7 @@ fn lost_reordered_and_duplicated_packets_are_survived() {
 fn a_stalled_sensor_stream_is_waited_for_and_the_slide_done_again() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = config(dir.path());
-    c.faults.stall = Some(SensorStall {
+    c.rig.faults.stall = Some(SensorStall {
         slide: 1,
         duration: Duration::from_secs(1),
     });
@@ -265,7 +265,7 @@ fn a_stalled_sensor_stream_is_waited_for_and_the_slide_done_again() {
 fn a_controller_restart_mid_mission_is_noticed_and_the_slide_done_again() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = config(dir.path());
-    c.faults.restart_during_slide = Some(1);
+    c.rig.faults.restart_during_slide = Some(1);
     let r = mission(&c).unwrap();
     assert!(
         r.passes.iter().any(|p| p.attempts == 2),
@@ -279,7 +279,7 @@ fn an_unreachable_controller_stops_the_mission_with_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = config(dir.path());
     // Every packet the controller sends is lost: the robot never hears it.
-    c.faults.link = Some(FaultConfig {
+    c.rig.faults.link = Some(FaultConfig {
         drop: 1.0,
         ..FaultConfig::default()
     });
@@ -295,7 +295,7 @@ fn an_unreachable_controller_stops_the_mission_with_a_clear_error() {
 fn stopping_mid_mission_stops_the_arm_and_says_so() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = config(dir.path());
-    c.speedup = 2.0;
+    c.rig.speedup = 2.0;
     let stop = std::sync::Arc::new(AtomicBool::new(false));
     let _one = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let setter = {
@@ -306,7 +306,7 @@ fn stopping_mid_mission_stops_the_arm_and_says_so() {
         })
     };
     let t = std::time::Instant::now();
-    let err = run_inspection(&c, &stop, |_| {}).unwrap_err();
+    let err = run_inspection(&c.check().unwrap(), &stop, |_| {}).unwrap_err();
     setter.join().unwrap();
     assert!(matches!(err, MissionError::Interrupted), "{err}");
     assert!(err.to_string().contains("arm was stopped"), "{err}");
@@ -319,12 +319,12 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
     use crackbot_mission::inspect::Progress;
     let dir = tempfile::tempdir().unwrap();
     let mut c = config(dir.path());
-    c.planner.passes = 1;
+    c.plan.planner.passes = 1;
     let mut events = Vec::new();
     let r = {
         let _one = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
         let stop = AtomicBool::new(false);
-        run_inspection(&c, &stop, |p| events.push(p.clone())).unwrap()
+        run_inspection(&c.check().unwrap(), &stop, |p| events.push(p.clone())).unwrap()
     };
     let frame = events
         .iter()
@@ -447,7 +447,7 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
     assert!(health.len() >= 2, "{} health events", health.len());
     let rate = health[health.len() - 1].sample_rate_hz;
     assert!(
-        (0.5 * 400.0 * c.speedup..1.5 * 400.0 * c.speedup).contains(&rate),
+        (0.5 * 400.0 * c.rig.speedup..1.5 * 400.0 * c.rig.speedup).contains(&rate),
         "{rate} Hz"
     );
     assert!(health.windows(2).all(|w| w[1].frames >= w[0].frames));
@@ -990,19 +990,25 @@ fn bad_confirmation_settings_are_refused_before_anything_starts() {
             other => panic!("{other}"),
         }
     };
-    assert_eq!(refused(&|c| c.min_dip_counts = f64::NAN), "min_dip_counts");
-    assert_eq!(refused(&|c| c.print_check_mm = Some(0.1)), "print_check_mm");
+    assert_eq!(
+        refused(&|c| c.touch.min_dip_counts = f64::NAN),
+        "touch.min_dip_counts"
+    );
+    assert_eq!(
+        refused(&|c| c.print_check.height_mm = Some(0.1)),
+        "print_check.height_mm"
+    );
     for bad in [0.0, 1.5, f64::NAN] {
         assert_eq!(
-            refused(&|c| c.doubted_dip_confidence = Some(bad)),
-            "doubted_dip_confidence"
+            refused(&|c| c.judge.doubted_dip_confidence = Some(bad)),
+            "judge.doubted_dip_confidence"
         );
     }
-    assert_eq!(refused(&|c| c.piece_gap_mm = Some(-1.0)), "piece_gap_mm");
+    assert_eq!(refused(&|c| c.pieces.gap_mm = Some(-1.0)), "pieces.gap_mm");
     for bad in [-0.5, f64::INFINITY] {
         assert_eq!(
-            refused(&|c| c.piece_trace_gap_mm = Some(bad)),
-            "piece_trace_gap_mm"
+            refused(&|c| c.pieces.trace_gap_mm = Some(bad)),
+            "pieces.trace_gap_mm"
         );
     }
 }

@@ -201,35 +201,38 @@ fn run_sim(
     ));
     let mut config = InspectConfig::new(scene, &out);
     config.mode = mode;
-    config.speedup = speedup;
+    config.rig.speedup = speedup;
     let mut wire_errors = 0u32;
-    let result = run_inspection(&config, stop, |p| {
-        if let Progress::Health(h) = p {
-            put(Telemetry::Health(Health {
-                uptime_s: started.elapsed().as_secs_f64(),
-                stream: Some(wire::StreamHealth::from(h)),
-            }));
-            return;
-        }
-        match feed.on_progress(p) {
-            Ok(bodies) => {
-                let mut f = lock(fleet);
-                let r = f.robot_mut(LOCAL_ROBOT);
-                r.alive = Some(true);
-                r.last_heard = Some(Instant::now());
-                for b in bodies {
-                    r.received += 1;
-                    r.apply_body(b);
+    let result = match config.check() {
+        Err(e) => Err(e),
+        Ok(checked) => run_inspection(&checked, stop, |p| {
+            if let Progress::Health(h) = p {
+                put(Telemetry::Health(Health {
+                    uptime_s: started.elapsed().as_secs_f64(),
+                    stream: Some(wire::StreamHealth::from(h)),
+                }));
+                return;
+            }
+            match feed.on_progress(p) {
+                Ok(bodies) => {
+                    let mut f = lock(fleet);
+                    let r = f.robot_mut(LOCAL_ROBOT);
+                    r.alive = Some(true);
+                    r.last_heard = Some(Instant::now());
+                    for b in bodies {
+                        r.received += 1;
+                        r.apply_body(b);
+                    }
+                }
+                Err(e) => {
+                    wire_errors += 1;
+                    if wire_errors <= 3 {
+                        let _ = log.send(format!("mission {n}: {e}"));
+                    }
                 }
             }
-            Err(e) => {
-                wire_errors += 1;
-                if wire_errors <= 3 {
-                    let _ = log.send(format!("mission {n}: {e}"));
-                }
-            }
-        }
-    });
+        }),
+    };
     put(feed.finish(result.as_ref()));
     let _ = log.send(match &result {
         Ok(r) => format!(

@@ -57,7 +57,7 @@ fn the_app_starts_watches_and_stops_a_live_robot_over_zenoh() {
         crackbot_sim::Scene::load_or_default(None).unwrap(),
         dir.path().join("robot"),
     );
-    base.speedup = 8.0;
+    base.rig.speedup = 8.0;
     let serving = {
         let robot = robot.clone();
         std::thread::spawn(move || {

@@ -84,8 +84,8 @@ pub use error::PlanError;
 pub use geometry::{Limits, Point, Workspace};
 pub use order::Order;
 pub use plan::{
-    raised_pass, slide_time_s, travel_time_s, Move, Plan, PlanKind, Slide, TimeEstimate,
-    Unreachable,
+    raised_pass, slide_along, slide_time_s, travel_time_s, Move, Plan, PlanKind, Slide,
+    TimeEstimate, Unreachable,
 };
 pub use planner::{OnUnreachable, Overlap, Planner, RaisedPass, Settings};
 pub use scan::{

@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use crate::candidate::CandidateId;
+use crate::candidate::{Candidate, CandidateId};
 use crate::geometry::{dist, Point, Workspace};
 use crate::{Order, Overlap, Settings};
 
@@ -219,6 +219,43 @@ pub fn raised_pass(
     ])
 }
 
+/// `slide` moved `by` mm along `candidate`'s axis (the mission makes a stroke again beside its
+/// candidate so), to the side where more of the candidate
+/// lies beyond the slide (`by` is a distance; its sign is chosen here); `None` when less than
+/// `by` plus `keep` mm of the candidate lies on that side, or either end would leave
+/// `workspace`.
+pub fn slide_along(
+    slide: &Slide,
+    candidate: &Candidate,
+    workspace: &Workspace,
+    by: f64,
+    keep: f64,
+) -> Option<Slide> {
+    let u = candidate.axis();
+    let mid = [
+        (slide.start_mm[0] + slide.end_mm[0]) / 2.0,
+        (slide.start_mm[1] + slide.end_mm[1]) / 2.0,
+    ];
+    let t = (mid[0] - candidate.centre_mm[0]) * u[0] + (mid[1] - candidate.centre_mm[1]) * u[1];
+    let half = candidate.length_mm / 2.0;
+    let (room, sign) = if half - t >= half + t {
+        (half - t, 1.0)
+    } else {
+        (half + t, -1.0)
+    };
+    if room.is_nan() || room < by + keep {
+        return None;
+    }
+    let shift = |p: [f64; 2]| [p[0] + sign * by * u[0], p[1] + sign * by * u[1]];
+    let (start, end) = (shift(slide.start_mm), shift(slide.end_mm));
+    (workspace.contains(start) && workspace.contains(end)).then(|| Slide {
+        start_mm: start,
+        end_mm: end,
+        moved_along_mm: slide.moved_along_mm + sign * by,
+        ..slide.clone()
+    })
+}
+
 /// Where the finger is once `slide` is done: the end of its raised pass, if it has one, else
 /// [`Slide::exit_mm`].
 pub(crate) fn leaves_at(slide: &Slide, settings: &Settings, workspace: &Workspace) -> Point {
@@ -315,5 +352,50 @@ mod tests {
         assert!((slide_time_s(16.0, 4.6, 2, 0.05) - (2.0 * 16.0 / 4.6 + 0.05)).abs() < 1e-12);
         // A ramp longer than the stroke takes is cut to it.
         assert!((slide_time_s(0.1, 4.6, 1, 1.0) - 1.5 * 0.1 / 4.6).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_slide_moves_along_its_candidate_to_the_longer_side_and_stays_inside() {
+        let ws = Workspace::new(0.0, 200.0, 0.0, 100.0).expect("workspace");
+        // A crack along x from 40 to 80 mm at y = 50, slid across at x = 50 (10 mm from its
+        // start, 30 from its end).
+        let cand = Candidate::from_axis(7, [[40.0, 50.0], [80.0, 50.0]], Some(1.0), 0.9);
+        let slide = Slide {
+            candidates: vec![7],
+            row: None,
+            start_mm: [50.0, 40.0],
+            end_mm: [50.0, 60.0],
+            stroke_mm: 20.0,
+            passes: 1,
+            speed_mm_s: 4.6,
+            duration_s: 4.3,
+            sound_run_mm: Some([5.0, 5.0]),
+            shifted_mm: 0.0,
+            clipped: false,
+            moved_along_mm: 0.0,
+        };
+        let moved = slide_along(&slide, &cand, &ws, 4.0, 1.0).expect("room on the far side");
+        assert_eq!(moved.start_mm, [54.0, 40.0]);
+        assert_eq!(moved.end_mm, [54.0, 60.0]);
+        assert_eq!(moved.moved_along_mm, 4.0);
+        assert_eq!(moved.stroke_mm, 20.0);
+        // Slid across near its far end: it moves back towards the start.
+        let near_end = Slide {
+            start_mm: [78.0, 40.0],
+            end_mm: [78.0, 60.0],
+            ..slide.clone()
+        };
+        let back = slide_along(&near_end, &cand, &ws, 4.0, 1.0).expect("room behind");
+        assert_eq!(back.start_mm, [74.0, 40.0]);
+        // A short candidate has no room; nor has a slide at the workspace's edge.
+        let short = Candidate::from_axis(8, [[48.0, 50.0], [52.0, 50.0]], None, 0.9);
+        assert!(slide_along(&slide, &short, &ws, 4.0, 1.0).is_none());
+        let edge = Slide {
+            start_mm: [50.0, 0.0],
+            end_mm: [50.0, 20.0],
+            ..slide.clone()
+        };
+        let along_y = Candidate::from_axis(9, [[50.0, 10.0], [50.0, 12.0]], None, 0.9);
+        assert!(slide_along(&edge, &along_y, &ws, 4.0, 1.0).is_none());
     }
 }

@@ -11,7 +11,7 @@
 //! mission does for a pass that runs the planner's default overrun (1.5 mm) past each end; the
 //! profile fit searches ±6 mm of shift, so a pass clipped at the workspace's edge still lines up.
 //! A single judged stroke that also crossed a second line is cut to the samples around the
-//! candidate's own dip, as the mission cuts it (`crackbot_mission::inspect::own_dip`).
+//! candidate's own dip, as the mission cuts it (`crackbot_tactile::stroke::own_dip`).
 //! On the fresh trials 9900–10019 (real time) the replayed ratios gave the report's own within
 //! 0.005 for 391 of 409 candidates, and within 0.053 for all: an approximation for comparing
 //! rules, not a copy of the report.
@@ -19,11 +19,12 @@
 use std::path::Path;
 
 use crackbot_mission::inspect::{
-    own_dip, surface_rise_mm, MIN_DIP_COUNTS, PRINT_CHECK_HEIGHT_MM, PRINT_CHECK_OVERRUN_MM,
+    surface_rise_mm, MIN_DIP_COUNTS, PRINT_CHECK_HEIGHT_MM, PRINT_CHECK_OVERRUN_MM,
 };
 use crackbot_research::trial_params;
 use crackbot_tactile::localise::{localise, LocaliseConfig};
 use crackbot_tactile::print_check::print_ratios;
+use crackbot_tactile::stroke::{own_dip, SeparateDips};
 use serde_json::Value;
 
 #[path = "support/trials.rs"]
@@ -164,7 +165,9 @@ fn main() -> Result<(), Error> {
                     let extent = localise(s, along, &config).ok().flatten();
                     if let (Some(c), Some(e)) = (centre, extent) {
                         let near = (c[0] - origin[0]) * u[0] + (c[1] - origin[1]) * u[1];
-                        if let Some((r, _)) = own_dip(s, along, &e, width, near, &config) {
+                        if let Some((r, _)) =
+                            own_dip(s, along, &e, width, near, &config, &SeparateDips::default())
+                        {
                             whole.push((p.clone(), along.clone()));
                             *p = p[r.clone()].to_vec();
                             *along = along[r].to_vec();

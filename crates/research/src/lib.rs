@@ -650,10 +650,10 @@ fn run(
     let mut c = base.template.clone();
     c.set_scene(scene.clone());
     c.mode = mode;
-    c.speedup = base.speedup;
-    c.out_dir = base.out_dir.join(name);
+    c.rig.speedup = base.speedup;
+    c.output.out_dir = base.out_dir.join(name);
     let stop = AtomicBool::new(false);
-    run_inspection(&c, &stop, |_| {})
+    run_inspection(&c.check()?, &stop, |_| {})
 }
 
 /// Runs `n` detection trials on the random scenes of seeds `first_seed..first_seed + n`,
@@ -838,7 +838,7 @@ fn worth_retrying(e: &MissionError) -> bool {
             | MissionError::ControllerUnreachable { .. }
             | MissionError::ControllerRestarted
             | MissionError::Timeout { .. }
-            | MissionError::Link(_)
+            | MissionError::Link { .. }
             | MissionError::Acquisition(_)
             | MissionError::Emulator(_)
     )
@@ -911,7 +911,7 @@ pub fn exploration_times(
     let mut rows = Vec::new();
     for &g in gammas {
         let mut b = base.clone();
-        b.template.gamma = g;
+        b.template.plan.gamma = g;
         let r = run(
             &b,
             scene,

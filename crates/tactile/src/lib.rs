@@ -8,6 +8,8 @@
 //! * [`evaluation`]: the whole `crackbot tactile eval` flow as one call returning a `Serialize` report;
 //! * [`context`]: causal context features of a window; [`stream`]: the same, sample by sample;
 //! * [`localise`]: where a crack starts and ends along a slide, from the proximity dip and the position stream;
+//! * [`stroke`]: what one stroke's proximity channel says (a candidate's own dip among several, the ends' levels,
+//!   a row cut into stroke-long pieces); [`print_check`] and [`raised`]: prints told from cracks by raised passes;
 //! * [`metrics`].
 //!
 //! Cargo features (default off), for research only:
@@ -30,9 +32,11 @@ pub mod online;
 #[cfg(feature = "research")]
 pub mod paper;
 pub mod print_check;
+pub mod raised;
 #[cfg(feature = "research")]
 pub mod stats;
 pub mod stream;
+pub mod stroke;
 #[cfg(feature = "research")]
 pub mod tradeoff;
 

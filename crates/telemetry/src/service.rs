@@ -182,21 +182,24 @@ impl RobotService {
             self.flags.mission_stop.store(false, Ordering::SeqCst);
         }
         let n = self.missions.fetch_add(1, Ordering::SeqCst) + 1;
-        let mut feed = MissionFeed::new(n, config.mode, &config.site.name);
+        let mut feed = MissionFeed::new(n, config.mode, &config.rig.site.name);
         self.publish_logged(feed.status());
-        let result = run_inspection(config, &self.flags.mission_stop, |p| {
-            match feed.on_progress(p) {
-                Ok(bodies) => {
-                    if let Progress::Health(h) = p {
-                        self.node.set_stream_health(Some(h.into()));
+        let checked = config.check();
+        let result = checked.and_then(|c| {
+            run_inspection(&c, &self.flags.mission_stop, |p| {
+                match feed.on_progress(p) {
+                    Ok(bodies) => {
+                        if let Progress::Health(h) = p {
+                            self.node.set_stream_health(Some(h.into()));
+                        }
+                        for b in bodies {
+                            self.publish_logged(b);
+                        }
                     }
-                    for b in bodies {
-                        self.publish_logged(b);
-                    }
+                    Err(e) => tracing::warn!("telemetry: {e}"),
                 }
-                Err(e) => tracing::warn!("telemetry: {e}"),
-            }
-            progress(p);
+                progress(p);
+            })
         });
         self.node.set_stream_health(None);
         self.publish_logged(feed.finish(result.as_ref()));
@@ -206,7 +209,7 @@ impl RobotService {
 
     /// Serves until [`Self::shutdown`]: each mission a station starts runs with `base`'s
     /// settings, the station's mode and scene, and its report and recordings in
-    /// `base.out_dir/mission-NNN`. `progress` sees every event of every mission (each starts with
+    /// `base.output.out_dir/mission-NNN`. `progress` sees every event of every mission (each starts with
     /// [`Progress::Starting`]); `done` gets each mission's number and result. A start whose mode
     /// or scene is unusable is published as a failed mission and answered by nothing more.
     pub fn serve(
@@ -222,7 +225,7 @@ impl RobotService {
             };
             served += 1;
             let mut config = base.clone();
-            config.out_dir = base.out_dir.join(format!("mission-{served:03}"));
+            config.output.out_dir = base.output.out_dir.join(format!("mission-{served:03}"));
             match start_config(&mut config, &start) {
                 Ok(()) => {
                     let result = self.run_mission(&config, &mut progress);

@@ -1,73 +1,45 @@
-//! What a mission tells its front ends while it runs ([`Progress`]) and what it leaves
-//! ([`InspectReport`], saved as `report.json`).
+//! What a mission leaves ([`InspectReport`], saved as `report.json`): the cracks it confirmed
+//! with their evidence, the candidates it rejected, every pass, the frame, the plan and times.
 
 use crackbot_planner::{Candidate, Plan};
-use crackbot_tactile::model::Doubt;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use super::config::InspectMode;
-use super::feel::Feeling;
+use super::doubts::{CrackDoubt, PassDoubt};
 use crate::sync::ClockFit;
 
-/// Progress of a mission, for a front end to show.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "stage", rename_all = "snake_case")]
-pub enum Progress {
-    /// Setting up (controller, sensor, models).
-    Starting,
-    /// The camera frame the mission looks at (saved beside the report).
-    Frame(FrameInfo),
-    /// Candidates found in the frame.
-    Perceived {
-        /// How many.
-        candidates: usize,
-        /// Each, in surface mm (with the detector's score).
-        detections: Vec<Candidate>,
-    },
-    /// The plan is made.
-    Planned {
-        /// Slides to do.
-        slides: usize,
-        /// The planner's time estimate, s.
-        estimated_s: f64,
-        /// The plan.
-        plan: Plan,
-    },
-    /// Sensor samples as they arrive (every 25 ms or so, whether the finger is down or not).
-    Samples {
-        /// The new samples, oldest first.
-        samples: Vec<LiveSample>,
-    },
-    /// The arm's states as they arrive (100 Hz, shown every 25 ms or so with the samples).
-    Poses {
-        /// The new states, oldest first.
-        poses: Vec<ArmPose>,
-    },
-    /// A stroke recorded: the samples its pass is judged from, each with its position along
-    /// the stroke interpolated from the arm's states (what `slide-NNN.csv` holds, with times).
-    Stroked {
-        /// The slide's id on the link (the pass's `id`).
-        slide: u32,
-        /// Its samples, oldest first.
-        samples: Vec<StrokeSample>,
-    },
-    /// The sensor stream's and the link's counters (every 0.5 s).
-    Health(StreamHealth),
-    /// What the finger feels so far in the stroke under way (every 0.1 s while it is down):
-    /// shown only, the pass's verdict comes with [`Progress::Slid`].
-    Feeling(Feeling),
-    /// A slide pass is done: judged, or left unjudged (no class; its doubt says why, and its
-    /// candidate is stroked again beside it).
-    Slid {
-        /// Slides done.
-        done: usize,
-        /// Of how many.
-        of: usize,
-        /// Its verdict's class name.
-        class: String,
-        /// The pass and its verdict.
-        pass: Box<PassRecord>,
-    },
+/// What the mission uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InspectMode {
+    /// Touch only: scan rows over the whole workspace.
+    Tactile,
+    /// Look only: the detector's candidates are the result.
+    Vision,
+    /// Look, then touch every candidate (the papers' method).
+    Fused,
+}
+
+impl InspectMode {
+    /// The mode's name as the command line spells it (what [`std::str::FromStr`] reads).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            InspectMode::Tactile => "tactile",
+            InspectMode::Vision => "vision",
+            InspectMode::Fused => "fused",
+        }
+    }
+}
+
+impl std::str::FromStr for InspectMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "tactile" => Ok(InspectMode::Tactile),
+            "vision" => Ok(InspectMode::Vision),
+            "fused" => Ok(InspectMode::Fused),
+            _ => Err(format!("unknown mode {s:?}: tactile, vision or fused")),
+        }
+    }
 }
 
 /// The camera frame a mission looked at.
@@ -82,72 +54,6 @@ pub struct FrameInfo {
     /// Surface mm → image pixels, a homography (row-major), to draw candidates and slides on
     /// the frame.
     pub surface_to_image: [[f64; 3]; 3],
-}
-
-/// How the sensor stream and the link to the controller are doing.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct StreamHealth {
-    /// Sensor samples per second over the last interval (400 nominal).
-    pub sample_rate_hz: f64,
-    /// Sensor frames decoded so far.
-    pub frames: u64,
-    /// Sensor frames rejected by their CRC.
-    pub crc_errors: u64,
-    /// Gaps in the sensor's sequence numbers (runs of lost frames) and the frames lost in them.
-    pub gaps: u64,
-    /// Frames lost in those gaps.
-    pub missing_frames: u64,
-    /// Link datagrams sent to the controller.
-    pub link_sent: u64,
-    /// Link retries (commands not acknowledged in time).
-    pub link_retries: u64,
-    /// Link packets refused (bad tag, replay, unsigned, other link).
-    pub link_rejected: u64,
-    /// Age of the controller's last state, ms (its stream runs at 100 Hz: this is the link's
-    /// latency plus at most 10 ms; it grows without bound when the link is lost).
-    pub state_age_ms: Option<f64>,
-}
-
-/// One sensor sample as it arrived.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct LiveSample {
-    /// Time since the mission's link started, s (the host's clock, from the board's through
-    /// the clock fit).
-    pub t_s: f64,
-    /// D1, D2, D3, P, counts.
-    pub raw: [u16; 4],
-    /// The slide the finger was down in, if any.
-    pub slide: Option<u32>,
-    /// Where the finger was along the stroke under way (a slide, or a raised pass of the print
-    /// check), mm from its start, by the arm's states around the sample; `None` between strokes.
-    pub along_mm: Option<f64>,
-}
-
-/// One sample of a recorded stroke.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct StrokeSample {
-    /// Time since the mission's link started, s (the host's clock).
-    pub t_s: f64,
-    /// D1, D2, D3, P, counts.
-    pub raw: [u16; 4],
-    /// Where the finger was along the stroke, mm from its start.
-    pub along_mm: f64,
-}
-
-/// One state of the arm as it arrived.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct ArmPose {
-    /// Time since the mission's link started, s (the host's clock, from the controller's
-    /// through the clock fit).
-    pub t_s: f64,
-    /// The controller's own clock, µs.
-    pub controller_us: u64,
-    /// Where the finger is, mm on the surface (z above it).
-    pub pose_mm: [f64; 3],
-    /// The slide it is in, if any.
-    pub slide: Option<u32>,
-    /// Where it is along the stroke under way, mm from its start.
-    pub along_mm: Option<f64>,
 }
 
 /// What the finger found for one slide pass.
@@ -341,239 +247,3 @@ pub struct LinkCounters {
 
 /// How an unjudged pass's doubt begins (a stroke whose ends read unlike each other).
 pub const NOT_JUDGED: &str = "not judged";
-
-/// Announces a finished pass to front ends (`done` of `of` slides) and keeps it in the report.
-/// Its class is shown as "not judged" where its stroke was left unjudged, "–" where it has none.
-pub(super) fn keep_pass(
-    progress: &mut dyn FnMut(&Progress),
-    report: &mut InspectReport,
-    done: usize,
-    of: usize,
-    rec: PassRecord,
-) {
-    let class = match (&rec.class, &rec.doubt) {
-        (Some(c), _) => c.clone(),
-        (None, Some(PassDoubt::NotJudged { .. })) => NOT_JUDGED.into(),
-        (None, _) => "–".into(),
-    };
-    progress(&Progress::Slid {
-        done,
-        of,
-        class,
-        pass: Box::new(rec.clone()),
-    });
-    report.passes.push(rec);
-}
-
-/// Why a pass's verdict is not to be trusted (the recognition model's own doubt), or why the
-/// pass was not judged. In the JSON report, an object tagged by `kind`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum PassDoubt {
-    /// A channel the model uses did not move over the pass.
-    DeadChannel {
-        /// `D1`, `D2`, `D3` or `P`.
-        channel: &'static str,
-    },
-    /// Too many samples outside the training range (saturation, another mounting).
-    OutOfRange {
-        /// The channel with most samples out.
-        channel: &'static str,
-        /// Share of the pass's samples out of range.
-        fraction: f64,
-    },
-    /// Too many windows unlike any the model learned (a surface unlike training).
-    Novel {
-        /// Share of novel windows.
-        fraction: f64,
-    },
-    /// The vote is weak.
-    LowConfidence {
-        /// The winning class's vote, 0–1.
-        confidence: f64,
-    },
-    /// Not judged: the stroke's ends read unlike each other (not both the sound surface), so
-    /// the candidate was stroked again beside it.
-    NotJudged {
-        /// The proximity channel at the stroke's two ends, counts.
-        end_counts: [f64; 2],
-        /// How far along the candidate the stroke was made again, mm.
-        moved_mm: f64,
-    },
-}
-
-impl From<&Doubt> for PassDoubt {
-    fn from(d: &Doubt) -> PassDoubt {
-        match *d {
-            Doubt::DeadChannel { channel } => PassDoubt::DeadChannel { channel },
-            Doubt::OutOfRange { channel, fraction } => PassDoubt::OutOfRange { channel, fraction },
-            Doubt::Novel { fraction } => PassDoubt::Novel { fraction },
-            Doubt::LowConfidence { confidence } => PassDoubt::LowConfidence { confidence },
-        }
-    }
-}
-
-impl std::fmt::Display for PassDoubt {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            PassDoubt::DeadChannel { channel } => write!(f, "channel {channel} did not move"),
-            PassDoubt::OutOfRange { channel, fraction } => write!(
-                f,
-                "{:.0} % of the samples outside the training range (channel {channel})",
-                100.0 * fraction
-            ),
-            PassDoubt::Novel { fraction } => write!(
-                f,
-                "a surface unlike training: {:.0} % of the windows unlike any learned",
-                100.0 * fraction
-            ),
-            PassDoubt::LowConfidence { confidence } => {
-                write!(f, "a weak vote ({confidence:.2})")
-            }
-            PassDoubt::NotJudged {
-                end_counts: [e0, e1],
-                moved_mm,
-            } => write!(
-                f,
-                "{NOT_JUDGED}: the stroke's ends read {e0:.0} and {e1:.0} counts, not both the \
-                 sound surface; stroked again {moved_mm:.1} mm along the candidate"
-            ),
-        }
-    }
-}
-
-/// A doubt raised over a candidate, pass by pass or by the print check. In the JSON report, an
-/// object tagged by `kind`; its text ([`std::fmt::Display`]) says it in words.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum CrackDoubt {
-    /// A pass's verdict was doubted.
-    Pass {
-        /// The pass (slide id).
-        slide: u32,
-        /// Why.
-        doubt: PassDoubt,
-    },
-    /// A pass read "no crack" but doubted it, over a proximity dip deep enough to stand for a
-    /// crack; the print check decides.
-    DoubtedNoCrack {
-        /// The pass.
-        slide: u32,
-        /// Its "no crack" vote, 0–1.
-        confidence: f64,
-        /// Its dip's confidence, 0–1.
-        dip_confidence: f64,
-    },
-    /// The print check's raised pass was stopped: something stands under the line.
-    RaisedPassStopped {
-        /// Where, mm along the pass.
-        at_mm: f64,
-        /// The pass's length, mm.
-        length_mm: f64,
-        /// How far the proximity channel rose above the sound surface, counts.
-        rise_counts: f64,
-    },
-    /// The surface at the line stood above the plate: the raised pass was made again higher.
-    SurfaceRise {
-        /// How far above the plate, mm.
-        rise_mm: f64,
-        /// The height the pass was made again at, mm.
-        height_mm: f64,
-    },
-    /// The raised pass made again higher was stopped; the first pass's ratio stands.
-    RaisedAgainStopped {
-        /// Where, mm along it.
-        at_mm: f64,
-        /// The rise, counts.
-        rise_counts: f64,
-    },
-    /// One of the raised passes made because the first ratio was in doubt was stopped.
-    RaisedInDoubtStopped {
-        /// Which pass (2 and up).
-        pass: usize,
-        /// Where, mm along it.
-        at_mm: f64,
-        /// The rise, counts.
-        rise_counts: f64,
-        /// Passes the ratio rests on.
-        passes: usize,
-    },
-    /// The first print ratio lay near the threshold: several passes' mean decides.
-    RatioInDoubt {
-        /// The first pass's print ratio.
-        first: f64,
-        /// Passes whose mean decides.
-        passes: usize,
-    },
-    /// A contact stroke the print check could not compare with.
-    UnusableStroke {
-        /// Why.
-        reason: String,
-    },
-}
-
-impl std::fmt::Display for CrackDoubt {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        use crackbot_tactile::print_check::PRINT_RATIO;
-        match self {
-            CrackDoubt::Pass { slide, doubt } => write!(f, "slide {slide}: {doubt}"),
-            CrackDoubt::DoubtedNoCrack {
-                slide,
-                confidence,
-                dip_confidence,
-            } => write!(
-                f,
-                "slide {slide}: read as no crack ({confidence:.2}), doubted; its proximity dip \
-                 ({dip_confidence:.2}) stands for a crack"
-            ),
-            CrackDoubt::RaisedPassStopped {
-                at_mm,
-                length_mm,
-                rise_counts,
-            } => write!(
-                f,
-                "the raised pass was stopped {at_mm:.1} mm along its {length_mm:.1} mm: the \
-                 proximity fibre read {rise_counts:.0} counts above the sound surface, \
-                 something stands under the line"
-            ),
-            CrackDoubt::SurfaceRise { rise_mm, height_mm } => write!(
-                f,
-                "the surface at the line stood {rise_mm:.2} mm above the plate: the raised pass \
-                 was made again {height_mm:.2} mm up"
-            ),
-            CrackDoubt::RaisedAgainStopped { at_mm, rise_counts } => write!(
-                f,
-                "the raised pass made again was stopped {at_mm:.1} mm along: the proximity \
-                 fibre read {rise_counts:.0} counts above the sound surface; the first pass's \
-                 ratio stands"
-            ),
-            CrackDoubt::RaisedInDoubtStopped {
-                pass,
-                at_mm,
-                rise_counts,
-                passes,
-            } => write!(
-                f,
-                "raised pass {pass} was stopped {at_mm:.1} mm along: the proximity fibre read \
-                 {rise_counts:.0} counts above the sound surface; the print ratio rests on \
-                 {passes} passes"
-            ),
-            CrackDoubt::RatioInDoubt { first, passes } => write!(
-                f,
-                "the first raised pass's print ratio {first:.3} was within {} of {PRINT_RATIO}: \
-                 the mean of {passes} passes' print and floor ratios decides",
-                super::PRINT_RATIO_DOUBT
-            ),
-            CrackDoubt::UnusableStroke { reason } => write!(f, "{reason}"),
-        }
-    }
-}
-
-/// A crack's width as the finger felt it.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Width {
-    /// The mean of the passes' width classes, mm.
-    pub mm: f64,
-    /// The mean of their votes' 10–90 % ranges, mm ([`ReportedCrack::width_range_mm`]).
-    pub range_mm: [f64; 2],
-}

@@ -1,43 +1,27 @@
 //! What the finger feels while a stroke is still under way: the deployed models' running
-//! verdict, for the front ends ([`Progress::Feeling`]). The pass's verdict is still taken when
+//! verdict, for the front ends ([`Progress::Feeling`](crate::inspect::Progress::Feeling)). The pass's verdict is still taken when
 //! the stroke ends, from positions interpolated at every sample
-//! ([`super::passes::classify`]); this one uses the arm's latest state, is only shown, and
+//! (the touch step's `classify`); this one uses the arm's latest state, is only shown, and
 //! never decides anything.
 
 use std::time::{Duration, Instant};
 
 use crackbot_tactile::model::TactileModel;
 use crackbot_tactile::online::OnlineClassifier;
-use serde::Serialize;
+
+use crackbot_tactile::online::RunningVerdict;
 
 use super::arm::pose;
-use super::passes::{along, unit};
 use super::sensor::TimedSample;
+use crate::inspect::geometry::{along, unit};
+use crate::inspect::progress::Feeling;
 use crate::MissionError;
-use crackbot_tactile::online::RunningVerdict;
 
 /// How often a running verdict is shown.
 const SHOW_FEELING_EVERY: Duration = Duration::from_millis(100);
 
-/// The verdict so far of the stroke under way.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Feeling {
-    /// The slide (its id on the link).
-    pub slide: u32,
-    /// The recognition model's class so far.
-    pub class: String,
-    /// Its vote so far (mean of both forests' window probabilities), 0–1.
-    pub confidence: f64,
-    /// The width model's class so far, mm (read it only when `class` is a crack).
-    pub width_mm: Option<f64>,
-    /// Windows classified so far in this stroke.
-    pub windows: usize,
-    /// Where the finger is along the stroke, mm from its start.
-    pub along_mm: f64,
-}
-
 /// Both deployed models fed sample by sample during a stroke.
-pub(super) struct Feel<'m> {
+pub(crate) struct Feel<'m> {
     recognition: OnlineClassifier<'m>,
     width: OnlineClassifier<'m>,
     /// The stroke under way: its id, start, unit direction and direction column.
@@ -49,7 +33,7 @@ pub(super) struct Feel<'m> {
 }
 
 impl<'m> Feel<'m> {
-    pub(super) fn new(
+    pub(crate) fn new(
         recognition: &'m TactileModel,
         width: &'m TactileModel,
     ) -> Result<Self, MissionError> {
@@ -65,7 +49,7 @@ impl<'m> Feel<'m> {
 
     /// A stroke `id` from `a` to `b` (direction column `dir`) starts; sensor samples from index
     /// `first_sample` on are its candidates.
-    pub(super) fn begin(&mut self, id: u32, (a, b): ([f64; 2], [f64; 2]), dir: u8, first: usize) {
+    pub(crate) fn begin(&mut self, id: u32, (a, b): ([f64; 2], [f64; 2]), dir: u8, first: usize) {
         self.recognition.reset();
         self.width.reset();
         self.stroke = Some((id, a, unit(a, b), dir));
@@ -75,7 +59,7 @@ impl<'m> Feel<'m> {
 
     /// Feeds the samples that arrived since the last call while the arm, by its latest state,
     /// was down in the stroke; returns the feeling to show every [`SHOW_FEELING_EVERY`].
-    pub(super) fn update(
+    pub(crate) fn update(
         &mut self,
         samples: &[TimedSample],
         latest: Option<&crackbot_link::State>,

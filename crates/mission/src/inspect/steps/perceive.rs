@@ -1,38 +1,122 @@
 //! Perception: a frame from the rig's camera (a camera on hardware, the scene rendered on the
 //! simulator), the detector, candidates in surface mm.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crackbot_imaging::Homography;
 use crackbot_planner::Candidate;
 use crackbot_vision::preprocess::PostprocessParams;
 use crackbot_vision::{Detection, DetectionSource};
+use serde::{Deserialize, Serialize};
 
-use super::config::{CandidateSource, InspectConfig, InspectMode};
-use super::pieces::CrackTrace;
-use super::report::FrameInfo;
-use super::rig::RigBackend;
+use super::trace::CrackTrace;
+use crate::error::io_err;
+use crate::inspect::report::{FrameInfo, InspectMode};
+use crate::inspect::rig::backend::RigBackend;
+use crate::inspect::rig::settings::RigConfig;
 use crate::MissionError;
+
+/// What the finger touches of what the camera saw.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CandidateSource {
+    /// Every crack a detection holds, on its centre line (`crackbot_vision::crack_map`, "Where
+    /// to touch"): cracks that the detection's dilation joined are touched one by one.
+    Cracks,
+    /// Every detection once, across the middle of its main axis: fewer strokes, but of cracks
+    /// that run close together or cross only one is touched.
+    Detections,
+}
+
+impl std::str::FromStr for CandidateSource {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "cracks" => Ok(CandidateSource::Cracks),
+            "detections" => Ok(CandidateSource::Detections),
+            _ => Err(format!(
+                "unknown candidate source {s:?}: cracks or detections"
+            )),
+        }
+    }
+}
+
+/// What the camera proposes and the finger touches: `[perceive]` of the configuration file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PerceiveConfig {
+    /// The ONNX detector (fused and vision modes; `None`: the committed one).
+    #[serde(default)]
+    pub detector_model: Option<PathBuf>,
+    /// Vision missions: detections below this score are not reported.
+    pub min_score: f32,
+    /// Fused missions: detections below this score are not touched. Lower than
+    /// [`min_score`](Self::min_score) where wanted: the finger confirms or rejects what the
+    /// camera proposes, so a weak detection costs a slide, not a false report.
+    pub proposal_min_score: f32,
+    /// What the finger touches (fused) and what is reported (vision).
+    pub candidates: CandidateSource,
+}
+
+impl Default for PerceiveConfig {
+    fn default() -> Self {
+        PerceiveConfig {
+            detector_model: None,
+            min_score: 0.3,
+            proposal_min_score: 0.3,
+            candidates: CandidateSource::Cracks,
+        }
+    }
+}
+
+impl PerceiveConfig {
+    /// Refuses a setting out of range, naming it.
+    pub fn check(&self) -> Result<(), MissionError> {
+        for (field, value) in [
+            ("perceive.min_score", self.min_score),
+            ("perceive.proposal_min_score", self.proposal_min_score),
+        ] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(MissionError::Setting {
+                    field,
+                    value: f64::from(value),
+                    allowed: "[0, 1]",
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The score under which a detection is left out in `mode`.
+    fn min_score(&self, mode: InspectMode) -> f32 {
+        match mode {
+            InspectMode::Fused => self.proposal_min_score,
+            _ => self.min_score,
+        }
+    }
+}
 
 /// What the camera gave: candidates in the scene's frame (rendered or grabbed, detected, mapped
 /// to mm) with their detector scores; the detector's crack map seen from the plate, when it
 /// predicts one; and the frame itself (saved beside the report).
-pub(super) struct Perceived {
+pub(crate) struct Perceived {
     pub candidates: Vec<(Candidate, f64)>,
     pub trace: Option<CrackTrace>,
     pub frame: FrameInfo,
 }
 
-/// Looks at the scene through the camera of `rig` ([`Perceived`]).
-pub(super) fn perceive(
-    config: &InspectConfig,
+/// Looks at the scene through the camera of `rig` ([`Perceived`]) in a `mode` mission, the
+/// frame saved in `out_dir`.
+pub(crate) fn perceive(
+    (config, mode): (&PerceiveConfig, InspectMode),
+    (rig_config, out_dir): (&RigConfig, &Path),
     rig: &mut dyn RigBackend,
 ) -> Result<Perceived, MissionError> {
     use crackbot_vision::model::{build_detector, DetectorChoice};
 
-    std::fs::create_dir_all(&config.out_dir).map_err(|e| io_err(&config.out_dir, e))?;
-    let (image, h) = rig.frame(config)?;
-    let frame_path = config.out_dir.join("frame.png");
+    std::fs::create_dir_all(out_dir).map_err(|e| io_err(out_dir, e))?;
+    let (image, h) = rig.frame(rig_config, mode)?;
+    let frame_path = out_dir.join("frame.png");
     image
         .save(&frame_path)
         .map_err(|source| MissionError::Image {
@@ -49,10 +133,7 @@ pub(super) fn perceive(
         model: config.detector_model.clone(),
         ..DetectorChoice::default()
     };
-    let min_score = match config.mode {
-        InspectMode::Fused => config.proposal_min_score,
-        _ => config.min_score,
-    };
+    let min_score = config.min_score(mode);
     // The detector's own cut must not be above ours. Cracks whose box is small (short, or
     // thin along a pixel axis) are kept where they have a centre line to touch (below).
     let defaults = PostprocessParams::default();
@@ -65,14 +146,10 @@ pub(super) fn perceive(
     let (detections, map) = detector.detect_with_map(&image)?;
     // Only a fused mission joins what the finger confirmed; a vision report needs no map.
     let trace = map
-        .filter(|_| config.mode == InspectMode::Fused)
+        .filter(|_| mode == InspectMode::Fused)
         .map(|m| CrackTrace::new(&m, h));
-    let out = candidates(
-        &detections,
-        &h,
-        config,
-        image.width() as f32 * image.height() as f32,
-    );
+    let area = image.width() as f32 * image.height() as f32;
+    let out = candidates(&detections, &h, (config, mode), area);
     Ok(Perceived {
         candidates: out,
         trace,
@@ -87,13 +164,10 @@ pub(super) fn perceive(
 fn candidates(
     detections: &[Detection],
     h: &Homography,
-    config: &InspectConfig,
+    (config, mode): (&PerceiveConfig, InspectMode),
     image_area: f32,
 ) -> Vec<(Candidate, f64)> {
-    let min_score = match config.mode {
-        InspectMode::Fused => config.proposal_min_score,
-        _ => config.min_score,
-    };
+    let min_score = config.min_score(mode);
     let min_area = PostprocessParams::default().min_area_fraction * image_area;
     let mut out = Vec::new();
     let mut id = 0u64;
@@ -156,18 +230,11 @@ fn candidates(
     out
 }
 
-/// An I/O error on `path`, naming it.
-pub(crate) fn io_err(path: &Path, e: std::io::Error) -> MissionError {
-    MissionError::Io {
-        path: path.to_path_buf(),
-        source: e,
-    }
-}
-
 #[cfg(all(test, feature = "sim"))]
 mod tests {
     use super::*;
-    use crate::inspect::SimulatedRig;
+    use crate::inspect::rig::simulated::SimulatedRig;
+    use crate::inspect::rig::site::Site;
     use crackbot_sim::random_scene::{as_printed, trial_params};
     use crackbot_sim::surface::distance_to_polyline;
 
@@ -190,9 +257,15 @@ mod tests {
                 .nth(nth)
                 .unwrap();
             let dir = tempfile::tempdir().unwrap();
-            let mut c = InspectConfig::new(scene, dir.path());
-            c.mode = InspectMode::Fused;
-            let seen = perceive(&c, &mut SimulatedRig::default()).unwrap();
+            let mut rig = RigConfig::at(Site::default());
+            rig.set_scene(scene);
+            let c = PerceiveConfig::default();
+            let seen = perceive(
+                (&c, InspectMode::Fused),
+                (&rig, dir.path()),
+                &mut SimulatedRig::default(),
+            )
+            .unwrap();
             let near: Vec<f64> = seen
                 .candidates
                 .iter()
@@ -208,9 +281,7 @@ mod tests {
     #[test]
     fn the_box_heads_boxes_never_become_candidates() {
         use crackbot_vision::{BoundingBox, Detection, DetectionSource};
-        let scene = crackbot_sim::random_scene(&trial_params(), 6098).unwrap();
-        let dir = tempfile::tempdir().unwrap();
-        let mut config = InspectConfig::new(scene, dir.path());
+        let config = PerceiveConfig::default();
         // 0.1 mm per pixel.
         let h =
             Homography::from_matrix([[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 1.0]]).unwrap();
@@ -220,19 +291,16 @@ mod tests {
             ..boxed.clone()
         };
         for mode in [InspectMode::Fused, InspectMode::Vision] {
-            config.mode = mode;
-            config.min_score = 0.3;
-            config.proposal_min_score = 0.3;
             let area = 640.0 * 480.0;
             // A box detector's box is a candidate over its box, the head's is not.
-            let got = candidates(&[boxed.clone(), head.clone()], &h, &config, area);
+            let got = candidates(&[boxed.clone(), head.clone()], &h, (&config, mode), area);
             assert_eq!(got.len(), 1, "{mode:?}");
             assert!(
                 (got[0].0.centre_mm[0] - 14.0).abs() < 1e-6,
                 "{:?}",
                 got[0].0
             );
-            assert!(candidates(std::slice::from_ref(&head), &h, &config, area).is_empty());
+            assert!(candidates(std::slice::from_ref(&head), &h, (&config, mode), area).is_empty());
         }
     }
 }

@@ -5,47 +5,49 @@ use std::time::{Duration, Instant};
 
 use crackbot_link::{LinkEndpoint, Message, State};
 
+use crate::error::link_err;
+use crate::inspect::report::LinkCounters;
 use crate::sync::ClockSync;
 use crate::MissionError;
 
 /// Longest a move or slide command may take to reach the controller and start (its
 /// `valid_until_us`; the link's retries take at most 250 ms).
-pub(super) const COMMAND_MAX_AGE: Duration = Duration::from_millis(1000);
+pub(crate) const COMMAND_MAX_AGE: Duration = Duration::from_millis(1000);
 
 /// One arm state (its controller time maps to the host's clock through the fit).
 #[derive(Debug, Clone, Copy)]
-pub(super) struct ArmSample {
-    pub(super) state: State,
+pub(crate) struct ArmSample {
+    pub(crate) state: State,
 }
 
-pub(super) struct Arm {
-    pub(super) ep: LinkEndpoint,
-    pub(super) sync: ClockSync,
-    pub(super) t0: Instant,
-    pub(super) states: VecDeque<ArmSample>,
-    pub(super) done: Vec<u32>,
-    pub(super) errors: Vec<crackbot_link::ErrorReport>,
-    pub(super) last_heartbeat: Instant,
-    pub(super) last_state_at: Option<Instant>,
-    pub(super) epoch: Option<u32>,
-    pub(super) restarted: bool,
+pub(crate) struct Arm {
+    pub(crate) ep: LinkEndpoint,
+    pub(crate) sync: ClockSync,
+    pub(crate) t0: Instant,
+    pub(crate) states: VecDeque<ArmSample>,
+    pub(crate) done: Vec<u32>,
+    pub(crate) errors: Vec<crackbot_link::ErrorReport>,
+    pub(crate) last_heartbeat: Instant,
+    pub(crate) last_state_at: Option<Instant>,
+    pub(crate) epoch: Option<u32>,
+    pub(crate) restarted: bool,
 }
 
 impl Arm {
-    pub(super) fn host_us(&self, at: Instant) -> f64 {
+    pub(crate) fn host_us(&self, at: Instant) -> f64 {
         at.saturating_duration_since(self.t0).as_secs_f64() * 1e6
     }
 
     /// Takes what has arrived (waiting up to `wait`), sends a heartbeat every 200 ms.
-    pub(super) fn pump(&mut self, wait: Duration) -> Result<(), MissionError> {
+    pub(crate) fn pump(&mut self, wait: Duration) -> Result<(), MissionError> {
         if self.last_heartbeat.elapsed() > Duration::from_millis(200) {
             self.ep
                 .send_unreliable(&Message::Heartbeat)
-                .map_err(link_err)?;
+                .map_err(talking)?;
             self.last_heartbeat = Instant::now();
         }
         let mut wait = wait;
-        while let Some(r) = self.ep.recv(wait).map_err(link_err)? {
+        while let Some(r) = self.ep.recv(wait).map_err(talking)? {
             wait = Duration::ZERO;
             if let Some(e) = self.epoch {
                 if e != r.peer_epoch {
@@ -71,15 +73,15 @@ impl Arm {
         Ok(())
     }
 
-    pub(super) fn command(&mut self, m: &Message) -> Result<u32, MissionError> {
-        self.ep.send_reliable(m).map_err(link_err)
+    pub(crate) fn command(&mut self, m: &Message) -> Result<u32, MissionError> {
+        self.ep.send_reliable(m).map_err(talking)
     }
 
     /// The `valid_until_us` of a command sent now: the controller's clock as the newest state
     /// gave it, advanced by the time since that state arrived, plus [`COMMAND_MAX_AGE`]. A
     /// command the network holds back longer is refused by the controller (`Expired`), not run
     /// late. Before any state, the controller's clock is unknown: no command can be sent.
-    pub(super) fn deadline_us(&self) -> Result<u64, MissionError> {
+    pub(crate) fn deadline_us(&self) -> Result<u64, MissionError> {
         let (Some(s), Some(at)) = (self.states.back(), self.last_state_at) else {
             return Err(MissionError::ControllerUnreachable {
                 addr: self.ep.peer_addr().to_string(),
@@ -94,26 +96,37 @@ impl Arm {
     }
 
     /// Where the arm last said it was (the origin before any state came).
-    pub(super) fn here(&self) -> [f64; 3] {
+    pub(crate) fn here(&self) -> [f64; 3] {
         self.states
             .back()
             .map(|s| pose(&s.state))
             .unwrap_or([0.0; 3])
     }
 
-    pub(super) fn stop(&mut self) {
+    /// The host's link counters so far.
+    pub(crate) fn counters(&self) -> LinkCounters {
+        let s = self.ep.stats();
+        LinkCounters {
+            sent: s.sent,
+            retries: s.retries,
+            rejected: s.rejected(),
+            duplicates: s.duplicates,
+        }
+    }
+
+    pub(crate) fn stop(&mut self) {
         // Best effort: the link retries; a dead controller's watchdog stops it anyway.
         let _ = self.ep.send_reliable(&Message::Stop);
     }
 }
 
 /// The arm's states on the host's clock, oldest first (mapped with the current clock fit).
-pub(super) fn mapped_states(arm: &mut Arm) -> Vec<(f64, State)> {
+pub(crate) fn mapped_states(arm: &mut Arm) -> Vec<(f64, State)> {
     newest_mapped(arm, usize::MAX)
 }
 
 /// The arm's newest `n` states on the host's clock, oldest first.
-pub(super) fn newest_mapped(arm: &mut Arm, n: usize) -> Vec<(f64, State)> {
+pub(crate) fn newest_mapped(arm: &mut Arm, n: usize) -> Vec<(f64, State)> {
     let skip = arm.states.len().saturating_sub(n);
     let (states, sync) = (&arm.states, &mut arm.sync);
     states
@@ -127,7 +140,7 @@ pub(super) fn newest_mapped(arm: &mut Arm, n: usize) -> Vec<(f64, State)> {
 }
 
 /// The arm's pose and mode at host time `host_us`, interpolated between the two states around it.
-pub(super) fn position_at(
+pub(crate) fn position_at(
     mapped: &[(f64, State)],
     host_us: f64,
 ) -> Option<([f64; 3], crackbot_link::Mode)> {
@@ -161,7 +174,7 @@ pub(super) fn position_at(
 /// down (z below 0.5 mm) in slide `id`: a sample between the last state before touchdown and
 /// the first one after it may have been taken in the air, and a lifted finger's signals are
 /// not the surface's.
-pub(super) fn down_at(mapped: &[(f64, State)], host_us: f64, id: u32) -> Option<[f64; 3]> {
+pub(crate) fn down_at(mapped: &[(f64, State)], host_us: f64, id: u32) -> Option<[f64; 3]> {
     let idx = mapped.partition_point(|(h, _)| *h <= host_us);
     if idx == 0 || idx >= mapped.len() {
         return None;
@@ -175,7 +188,7 @@ pub(super) fn down_at(mapped: &[(f64, State)], host_us: f64, id: u32) -> Option<
     }
 }
 
-pub(super) fn pose(s: &State) -> [f64; 3] {
+pub(crate) fn pose(s: &State) -> [f64; 3] {
     [
         f64::from(s.pose.x_mm),
         f64::from(s.pose.y_mm),
@@ -183,8 +196,9 @@ pub(super) fn pose(s: &State) -> [f64; 3] {
     ]
 }
 
-pub(super) fn link_err(e: crackbot_link::LinkError) -> MissionError {
-    MissionError::Link(e.to_string())
+/// The link's error while talking to the controller.
+fn talking(e: crackbot_link::LinkError) -> MissionError {
+    link_err("talking to the controller", e)
 }
 
 #[cfg(test)]

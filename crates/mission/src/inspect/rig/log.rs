@@ -7,8 +7,9 @@ use crackbot_mcap::{JsonTopic, Label, LogLevel, LogWriter, Polyline, SampleMessa
 use crackbot_planner::{Candidate, Plan};
 use serde::Serialize;
 
-use super::config::InspectConfig;
-use super::report::{FrameInfo, InspectReport, Progress};
+use super::settings::OutputConfig;
+use crate::inspect::progress::Progress;
+use crate::inspect::report::{FrameInfo, InspectReport};
 use crate::MissionError;
 
 /// The file's name in the mission's folder.
@@ -27,7 +28,7 @@ struct Status<'a> {
 }
 
 /// The log being written, with what it needs to draw later events (the frame's homography).
-pub(super) struct MissionLog {
+pub(crate) struct MissionLog {
     writer: LogWriter,
     /// The mission clock's zero (`t_s = 0`: the link's start).
     t0: Instant,
@@ -39,7 +40,7 @@ pub(super) struct MissionLog {
 impl MissionLog {
     /// Opens `mission.mcap` in the mission's folder (`None` when the config turns it off), its
     /// clock zero at `t0`; with `config.foxglove`, serves it live.
-    pub(super) fn open(config: &InspectConfig, t0: Instant) -> Result<Option<Self>, MissionError> {
+    pub(crate) fn open(config: &OutputConfig, t0: Instant) -> Result<Option<Self>, MissionError> {
         if !config.mcap {
             return Ok(None);
         }
@@ -47,7 +48,10 @@ impl MissionLog {
         let origin = SystemTime::now()
             .checked_sub(since)
             .unwrap_or(SystemTime::UNIX_EPOCH);
-        #[allow(unused_mut)]
+        #[cfg_attr(
+            not(feature = "foxglove"),
+            expect(unused_mut, reason = "only the live view changes the writer")
+        )]
         let mut writer = LogWriter::create(
             &config.out_dir.join(LOG_FILE),
             crackbot_mcap::unix_ns(origin),
@@ -91,7 +95,7 @@ impl MissionLog {
     }
 
     /// Logs one progress event.
-    pub(super) fn record(&mut self, p: &Progress) {
+    pub(crate) fn record(&mut self, p: &Progress) {
         match p {
             Progress::Starting => self.stage("starting", String::new()),
             Progress::Frame(f) => self.frame(f),
@@ -224,7 +228,7 @@ impl MissionLog {
     }
 
     /// Logs how the mission ended (the report, or the error) and closes the file.
-    pub(super) fn finish(
+    pub(crate) fn finish(
         mut self,
         result: Result<&InspectReport, &MissionError>,
     ) -> Result<(), MissionError> {

@@ -9,11 +9,13 @@ use crackbot_imaging::Homography;
 use crackbot_link::{Key, Security};
 use image::RgbImage;
 
-use super::config::InspectConfig;
-use super::rig::{bind, Connection, RigBackend};
+use super::backend::{bind, Connection, RigBackend};
+use super::settings::RigConfig;
+use crate::error::link_err;
+use crate::inspect::report::InspectMode;
 use crate::MissionError;
 
-/// The simulated controller of [`InspectConfig::scene`], started by
+/// The simulated controller of [`RigConfig::scene`], started by
 /// [`connect`](RigBackend::connect) with a fresh random key per mission that is never written
 /// anywhere (both ends live in this process).
 #[derive(Default)]
@@ -24,19 +26,20 @@ pub struct SimulatedRig {
 impl RigBackend for SimulatedRig {
     fn connect(
         &mut self,
-        config: &InspectConfig,
+        config: &RigConfig,
+        mode: InspectMode,
         state_dir: &Path,
     ) -> Result<Connection, MissionError> {
-        let link = |e: std::io::Error| MissionError::Link(e.to_string());
+        let link = |e: std::io::Error| link_err("the simulated rig's sockets", e);
         let loopback: SocketAddr = ([127, 0, 0, 1], 0).into();
         let socket = bind(loopback)?;
         let ctrl_socket = bind(loopback)?;
         let host_addr = socket.local_addr().map_err(link)?;
         let controller: SocketAddr = ctrl_socket.local_addr().map_err(link)?;
         let key_bytes: [u8; 32] = rand::random();
-        let key = Key::from_bytes(&key_bytes).map_err(|e| MissionError::Link(e.to_string()))?;
+        let key = Key::from_bytes(&key_bytes).map_err(|source| MissionError::LinkKey { source })?;
         let mut server = ServerConfig::new(
-            scene_of(config)?.clone(),
+            scene_of(config, mode)?.clone(),
             Security::Signed(key.clone()),
             state_dir.join("controller.epoch"),
         );
@@ -57,11 +60,15 @@ impl RigBackend for SimulatedRig {
         })
     }
 
-    fn frame(&mut self, config: &InspectConfig) -> Result<(RgbImage, Homography), MissionError> {
+    fn frame(
+        &mut self,
+        config: &RigConfig,
+        mode: InspectMode,
+    ) -> Result<(RgbImage, Homography), MissionError> {
         use crackbot_sim::render::{render, CrackAssets, RenderOptions};
         let assets = CrackAssets::load_default()?;
         let frame = render(
-            scene_of(config)?,
+            scene_of(config, mode)?,
             &assets,
             &RenderOptions::default(),
             config.seed,
@@ -83,10 +90,10 @@ impl RigBackend for SimulatedRig {
     }
 }
 
-/// The scene `config` simulates, or an error saying it has none.
-fn scene_of(config: &InspectConfig) -> Result<&crackbot_sim::Scene, MissionError> {
+/// The scene `config` simulates, or an error saying it has none (naming `mode`).
+fn scene_of(config: &RigConfig, mode: InspectMode) -> Result<&crackbot_sim::Scene, MissionError> {
     config.scene().ok_or(MissionError::Missing {
-        mode: config.mode.as_str(),
+        mode: mode.as_str(),
         what: "a scene to simulate (InspectConfig::new or set_scene), or hardware",
     })
 }

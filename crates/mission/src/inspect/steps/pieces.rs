@@ -17,13 +17,13 @@
 //! tolerance).
 
 use crackbot_imaging::geometry::distance_to_polyline;
-use crackbot_imaging::Homography;
 use crackbot_planner::geometry::connected_groups;
-use crackbot_vision::crack_map::{CrackMap, MAP_THRESHOLD};
-
 use crackbot_planner::Candidate;
+use serde::{Deserialize, Serialize};
 
-use super::report::ReportedCrack;
+use super::trace::{CrackTrace, TRACE_REACH_MM};
+use crate::inspect::report::ReportedCrack;
+use crate::MissionError;
 
 /// Longest stretch of the line between two crossings that may run off the crack map for the
 /// two pieces to be one crack, mm (see `traced_between`): two map cells. On the trial scenes
@@ -32,23 +32,6 @@ use super::report::ReportedCrack;
 /// cracks that touch or cross (`crates/research/EXPERIMENTS.md`, "Pieces joined where the crack
 /// map runs between their crossings").
 pub const PIECE_TRACE_GAP_MM: f64 = 2.0;
-/// A point of the plate is on the crack map when a crack cell lies within this distance, mm.
-pub const TRACE_REACH_MM: f64 = 1.0;
-/// Step along the line between two crossings, mm.
-const TRACE_STEP_MM: f64 = 0.25;
-/// Most samples along one line (25 m at [`TRACE_STEP_MM`]): a line longer than any plate is
-/// sampled more coarsely rather than for ever.
-const MAX_TRACE_STEPS: f64 = 100_000.0;
-
-/// Which rules join confirmed pieces (each `None` is off).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct PieceRule {
-    /// [`continuation_gap`]'s largest gap between the detections, mm.
-    pub gap_mm: Option<f64>,
-    /// [`traced_between`]'s longest gap off the crack map, mm.
-    pub trace_gap_mm: Option<f64>,
-}
-
 /// Largest gap between two confirmed pieces of one crack by default, mm: a narrow crack's
 /// pieces on either side of a wide one it crosses lie 8.9–11.5 mm apart end to end on the
 /// simulated trial scenes (seeds 1000–1029, 2000–2029, 3000–3029; 10 mm before).
@@ -71,7 +54,7 @@ pub fn turn_deg(a: f64, b: f64) -> f64 {
 /// [`PIECE_ANGLE_DEG`], end to end rather than side by side: overlapping by at most
 /// [`PIECE_OVERLAP_MM`] along the first one's direction), mm: how far an end of one lies from
 /// the other. `None` when they do not continue each other.
-pub(super) fn continuation_gap(a: &Candidate, b: &Candidate) -> Option<f64> {
+pub(crate) fn continuation_gap(a: &Candidate, b: &Candidate) -> Option<f64> {
     let (ea, eb) = (a.ends(), b.ends());
     let gap = ea
         .iter()
@@ -90,164 +73,56 @@ pub(super) fn continuation_gap(a: &Candidate, b: &Candidate) -> Option<f64> {
         .then_some(gap)
 }
 
-/// The detector's crack map seen from the plate: which points of the plate lie on its crack
-/// cells (probability at least [`MAP_THRESHOLD`]).
-#[derive(Debug, Clone)]
-pub struct CrackTrace {
-    crack: Vec<bool>,
-    width: usize,
-    height: usize,
-    homography: Homography,
+/// Which rules join confirmed pieces: `[pieces]` of the configuration file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PiecesConfig {
+    /// Fused missions: confirmed candidates whose detections continue each other across a gap
+    /// of at most this much (mm, within [`PIECE_ANGLE_DEG`] of one direction) are reported as
+    /// one crack ([`continuation_gap`], [`PIECE_GAP_MM`]); `None` (0 in the file) reports every
+    /// confirmed candidate.
+    #[serde(with = "crate::inspect::off::at_zero")]
+    pub gap_mm: Option<f64>,
+    /// Fused missions: two confirmed candidates are also one crack when the straight line
+    /// between the points where their strokes met it runs along both and over the detector's
+    /// crack map, off it for at most this much (mm, [`traced_between`],
+    /// [`PIECE_TRACE_GAP_MM`]); candidates joined by `gap_mm` must then also have that line on
+    /// the map but for their gap plus this much. `None` (negative in the file) joins by the
+    /// detections' geometry alone.
+    #[serde(with = "crate::inspect::off::when_negative")]
+    pub trace_gap_mm: Option<f64>,
 }
 
-impl CrackTrace {
-    /// The map of one frame, with the frame's pixel ↔ plate homography.
-    pub fn new(map: &CrackMap, homography: Homography) -> Self {
-        let lb = map.letterbox();
-        CrackTrace {
-            crack: map.to_image().iter().map(|&p| p >= MAP_THRESHOLD).collect(),
-            width: lb.image_width as usize,
-            height: lb.image_height as usize,
-            homography,
+impl Default for PiecesConfig {
+    fn default() -> Self {
+        PiecesConfig {
+            gap_mm: Some(PIECE_GAP_MM),
+            trace_gap_mm: Some(PIECE_TRACE_GAP_MM),
         }
     }
+}
 
-    /// The pixels (indices into the mask) whose centres lie within `reach_mm` of the plate
-    /// point `p` (mm), crack or not; none where `p` falls outside the frame.
-    fn pixels_near(&self, p: [f64; 2], reach_mm: f64) -> impl Iterator<Item = usize> + '_ {
-        let px = |q: [f64; 2]| self.homography.surface_to_pixel(q).ok();
-        let disc = match (
-            px(p),
-            px([p[0] + reach_mm, p[1]]),
-            px([p[0], p[1] + reach_mm]),
-        ) {
-            (Some(c), Some(ex), Some(ey)) => Some((
-                c,
-                (ex[0] - c[0])
-                    .hypot(ex[1] - c[1])
-                    .max((ey[0] - c[0]).hypot(ey[1] - c[1])),
-            )),
-            _ => None,
-        };
-        let span = |v: f64, r: f64, n: usize| {
-            let lo = ((v - r - 0.5).floor().max(0.0) as usize).min(n);
-            let hi = ((v + r + 0.5).ceil().max(0.0) as usize).min(n);
-            lo..hi
-        };
-        let (w, h) = (self.width, self.height);
-        disc.into_iter().flat_map(move |(c, r)| {
-            span(c[1], r, h).flat_map(move |y| {
-                span(c[0], r, w).filter_map(move |x| {
-                    let (dx, dy) = (x as f64 + 0.5 - c[0], y as f64 + 0.5 - c[1]);
-                    (dx * dx + dy * dy <= r * r).then_some(y * w + x)
-                })
-            })
-        })
+impl PiecesConfig {
+    /// Refuses a setting out of range, naming it.
+    pub fn check(&self) -> Result<(), MissionError> {
+        for (field, value) in [
+            ("pieces.gap_mm", self.gap_mm),
+            ("pieces.trace_gap_mm", self.trace_gap_mm),
+        ] {
+            if let Some(v) = value.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+                return Err(MissionError::Setting {
+                    field,
+                    value: v,
+                    allowed: "a number ≥ 0",
+                });
+            }
+        }
+        Ok(())
     }
 
-    /// Whether a crack cell lies within `reach_mm` of the plate point `p` (mm); `false` where
-    /// `p` falls outside the frame.
-    pub fn near_crack(&self, p: [f64; 2], reach_mm: f64) -> bool {
-        self.pixels_near(p, reach_mm).any(|i| self.crack[i])
-    }
-
-    /// The longest stretch of the straight line from `a` to `b` (plate mm) with no crack cell
-    /// within `reach_mm`, mm (sampled every 0.25 mm; the whole line where it leaves the frame).
-    /// Not a number where an end is not finite, so nothing compares as joined.
-    pub fn longest_gap_mm(&self, a: [f64; 2], b: [f64; 2], reach_mm: f64) -> f64 {
-        let length = (b[0] - a[0]).hypot(b[1] - a[1]);
-        if !length.is_finite() {
-            return f64::NAN;
-        }
-        let steps = (length / TRACE_STEP_MM).ceil().clamp(1.0, MAX_TRACE_STEPS) as usize;
-        let (mut gap, mut longest) = (0usize, 0usize);
-        for k in 0..=steps {
-            let t = k as f64 / steps as f64;
-            let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
-            if self.near_crack(p, reach_mm) {
-                gap = 0;
-            } else {
-                gap += 1;
-                longest = longest.max(gap);
-            }
-        }
-        longest as f64 * length / steps as f64
-    }
-
-    /// The length of the shortest path from `a` to `b` (plate mm) that stays on the crack map
-    /// (8-connected crack pixels, starting and ending within `reach_mm` of the points), mm on the
-    /// plate; `None` where no such path exists or an end lies off the map.
-    pub fn path_on_map_mm(&self, a: [f64; 2], b: [f64; 2], reach_mm: f64) -> Option<f64> {
-        use std::cmp::Reverse;
-        use std::collections::BinaryHeap;
-        let on_map = |p| {
-            self.pixels_near(p, reach_mm)
-                .filter(|&i| self.crack[i])
-                .collect::<Vec<_>>()
-        };
-        let (starts, goals) = (on_map(a), on_map(b));
-        if starts.is_empty() || goals.is_empty() {
-            return None;
-        }
-        let mut goal = vec![false; self.crack.len()];
-        for &g in &goals {
-            goal[g] = true;
-        }
-        // Dijkstra over pixels, lengths in plate mm between pixel centres (each pixel mapped to
-        // the plate once, when first reached).
-        let mut centres: Vec<Option<Option<[f64; 2]>>> = vec![None; self.crack.len()];
-        let mut centre = |i: usize| {
-            *centres[i].get_or_insert_with(|| {
-                let (x, y) = (i % self.width, i / self.width);
-                self.homography
-                    .pixel_to_surface([x as f64 + 0.5, y as f64 + 0.5])
-                    .ok()
-            })
-        };
-        let mut dist = vec![f64::INFINITY; self.crack.len()];
-        let mut heap = BinaryHeap::new();
-        for &s in &starts {
-            dist[s] = 0.0;
-            heap.push((Reverse(0u64), s));
-        }
-        while let Some((Reverse(d_bits), i)) = heap.pop() {
-            let d = f64::from_bits(d_bits);
-            if d > dist[i] {
-                continue;
-            }
-            if goal[i] {
-                return Some(d);
-            }
-            let (x, y) = ((i % self.width) as isize, (i / self.width) as isize);
-            let Some(pi) = centre(i) else { continue };
-            for (dx, dy) in [
-                (-1, -1),
-                (0, -1),
-                (1, -1),
-                (-1, 0),
-                (1, 0),
-                (-1, 1),
-                (0, 1),
-                (1, 1),
-            ] {
-                let (nx, ny) = (x + dx, y + dy);
-                if nx < 0 || ny < 0 || nx >= self.width as isize || ny >= self.height as isize {
-                    continue;
-                }
-                let j = ny as usize * self.width + nx as usize;
-                if !self.crack[j] {
-                    continue;
-                }
-                let Some(pj) = centre(j) else { continue };
-                let nd = d + (pj[0] - pi[0]).hypot(pj[1] - pi[1]);
-                if nd < dist[j] {
-                    dist[j] = nd;
-                    // Non-negative finite f64s order as their bits do.
-                    heap.push((Reverse(nd.to_bits()), j));
-                }
-            }
-        }
-        None
+    /// Whether any rule joins pieces.
+    pub fn joins(&self) -> bool {
+        self.gap_mm.is_some() || self.trace_gap_mm.is_some()
     }
 }
 
@@ -256,7 +131,7 @@ impl CrackTrace {
 /// [`PIECE_ANGLE_DEG`] of both pieces' directions and over the crack map, leaving it (by more
 /// than [`TRACE_REACH_MM`]) for at most `gap_mm`. Two cracks side by side, or crossing, put the
 /// line across sound surface or across the pieces.
-pub(super) fn traced_between(
+pub(crate) fn traced_between(
     a: (&ReportedCrack, &Candidate),
     b: (&ReportedCrack, &Candidate),
     trace: &CrackTrace,
@@ -274,11 +149,11 @@ pub(super) fn traced_between(
 /// have the line between their crossings on the map but for their gap plus `trace_gap_mm`.
 /// Each group becomes its most confident report, with the other pieces' slides added to its
 /// evidence and their candidate ids in `evidence.pieces`. Reports without a candidate stay.
-pub(super) fn join_pieces(
+pub(crate) fn join_pieces(
     cracks: Vec<ReportedCrack>,
     candidates: &[Candidate],
     trace: Option<&CrackTrace>,
-    rule: PieceRule,
+    rule: &PiecesConfig,
 ) -> Vec<ReportedCrack> {
     let geometry = |r: &ReportedCrack| {
         r.candidate
@@ -330,8 +205,9 @@ pub(super) fn join_pieces(
 
 #[cfg(test)]
 mod tests {
-    use super::super::Evidence;
+    use super::super::trace::trace_of;
     use super::*;
+    use crate::inspect::report::Evidence;
 
     /// Whether two detected segments are pieces of one crack by their geometry alone: they
     /// continue each other across at most `gap_mm`.
@@ -350,8 +226,8 @@ mod tests {
         }
     }
 
-    fn gap_only(gap_mm: f64) -> PieceRule {
-        PieceRule {
+    fn gap_only(gap_mm: f64) -> PiecesConfig {
+        PiecesConfig {
             gap_mm: Some(gap_mm),
             trace_gap_mm: None,
         }
@@ -417,7 +293,7 @@ mod tests {
             ],
             &c,
             None,
-            gap_only(PIECE_GAP_MM),
+            &gap_only(PIECE_GAP_MM),
         );
         assert_eq!(joined.len(), 3);
         let one = joined.iter().find(|r| r.candidate == Some(2)).unwrap();
@@ -429,53 +305,11 @@ mod tests {
                 vec![report(1, 0.6), report(2, 0.8)],
                 &c,
                 None,
-                gap_only(0.0)
+                &gap_only(0.0)
             )
             .len(),
             2
         );
-    }
-
-    /// A 100 × 100 mm plate seen as a 200 × 200 px frame (0.5 mm a pixel, one map cell a mm),
-    /// with crack cells at `(row, column)`: row `r` is the plate's `y = r` mm.
-    fn trace_of(cells: &[(usize, usize)]) -> CrackTrace {
-        use crackbot_vision::preprocess::Letterbox;
-        let mut prob = vec![0.0f32; 100 * 100];
-        for &(r, c) in cells {
-            prob[r * 100 + c] = 0.9;
-        }
-        let map = CrackMap::new(prob, Letterbox::new(200, 200, 200).unwrap()).unwrap();
-        let h = Homography::from_matrix([[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]]);
-        CrackTrace::new(&map, h.unwrap())
-    }
-
-    #[test]
-    fn the_path_over_the_crack_map_follows_its_bends_and_stops_at_its_gaps() {
-        // An L: along y = 20 from x = 10 to 50, then up x = 50 to y = 60; apart, y = 80 with a
-        // 6 mm gap at x = 30.
-        let mut cells: Vec<(usize, usize)> = (10..=50).map(|c| (20, c)).collect();
-        cells.extend((20..=60).map(|r| (r, 50)));
-        cells.extend((10..30).chain(36..60).map(|c| (80, c)));
-        let trace = trace_of(&cells);
-        // Around the corner: 40 + 40 mm give or take a cell, where the straight line is 56.6.
-        let around = trace
-            .path_on_map_mm([10.5, 20.5], [50.5, 60.5], 1.0)
-            .expect("the L is connected");
-        assert!((77.0..=81.0).contains(&around), "{around}");
-        assert_eq!(trace.path_on_map_mm([10.5, 20.5], [10.5, 80.5], 1.0), None);
-        assert_eq!(trace.path_on_map_mm([15.5, 80.5], [45.5, 80.5], 1.0), None);
-        // Off the map, outside the frame or not a number: no path.
-        assert_eq!(trace.path_on_map_mm([10.5, 40.5], [50.5, 60.5], 1.0), None);
-        assert_eq!(
-            trace.path_on_map_mm([-500.0, 20.5], [50.5, 60.5], 1.0),
-            None
-        );
-        assert_eq!(
-            trace.path_on_map_mm([f64::NAN, 20.5], [50.5, 60.5], 1.0),
-            None
-        );
-        let here = trace.path_on_map_mm([30.5, 20.5], [30.5, 20.5], 1.0);
-        assert_eq!(here, Some(0.0));
     }
 
     #[test]
@@ -548,7 +382,7 @@ mod tests {
         ));
 
         // In the join: without a trace, or with the rule off, the pieces stay two.
-        let both = PieceRule {
+        let both = PiecesConfig {
             gap_mm: Some(PIECE_GAP_MM),
             trace_gap_mm: Some(PIECE_TRACE_GAP_MM),
         };
@@ -558,10 +392,10 @@ mod tests {
             !same_crack(&c[0], &c[1], PIECE_GAP_MM),
             "30 mm apart end to end"
         );
-        let one = join_pieces(reports(), &c, Some(&trace), both);
+        let one = join_pieces(reports(), &c, Some(&trace), &both);
         assert_eq!(one.len(), 1);
         assert_eq!(one[0].evidence.pieces.len(), 1);
-        assert_eq!(join_pieces(reports(), &c, None, both).len(), 2);
+        assert_eq!(join_pieces(reports(), &c, None, &both).len(), 2);
 
         // Pieces end to end (the gap rule's pairs), with the map on: joined where the map runs
         // between their crossings but for the faded stretch (y = 70: detections 9 mm apart,
@@ -579,7 +413,7 @@ mod tests {
             &trace,
             PIECE_TRACE_GAP_MM
         ));
-        assert_eq!(join_pieces(pair(), &faded, Some(&trace), both).len(), 1);
+        assert_eq!(join_pieces(pair(), &faded, Some(&trace), &both).len(), 1);
         let (lower, upper) = (
             cand(1, [25.0, 25.0], 0.0, 28.0),
             cand(2, [55.0, 30.0], 0.0, 20.0),
@@ -587,15 +421,15 @@ mod tests {
         assert!(same_crack(&lower, &upper, PIECE_GAP_MM));
         let two = || vec![felt(1, [20.0, 25.4]), felt(2, [55.0, 30.4])];
         let apart = [lower, upper];
-        assert_eq!(join_pieces(two(), &apart, Some(&trace), both).len(), 2);
+        assert_eq!(join_pieces(two(), &apart, Some(&trace), &both).len(), 2);
         // Without the map, or with the trace rule off, the geometry alone joins them.
-        assert_eq!(join_pieces(two(), &apart, None, both).len(), 1);
+        assert_eq!(join_pieces(two(), &apart, None, &both).len(), 1);
         assert_eq!(
-            join_pieces(two(), &apart, Some(&trace), gap_only(PIECE_GAP_MM)).len(),
+            join_pieces(two(), &apart, Some(&trace), &gap_only(PIECE_GAP_MM)).len(),
             1
         );
         assert_eq!(
-            join_pieces(reports(), &c, Some(&trace), gap_only(PIECE_GAP_MM)).len(),
+            join_pieces(reports(), &c, Some(&trace), &gap_only(PIECE_GAP_MM)).len(),
             2
         );
     }

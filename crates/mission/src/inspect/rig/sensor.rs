@@ -9,23 +9,23 @@ use crate::MissionError;
 
 /// One sensor sample on the host's clock.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct TimedSample {
-    pub(super) device_us: f64,
-    pub(super) host_us: f64,
-    pub(super) raw: [u16; 4],
+pub(crate) struct TimedSample {
+    pub(crate) device_us: f64,
+    pub(crate) host_us: f64,
+    pub(crate) raw: [u16; 4],
 }
 
-pub(super) struct Sensor {
-    pub(super) stream: SensorStream,
-    pub(super) sync: ClockSync,
-    pub(super) offset_us: f64,
-    pub(super) samples: Vec<TimedSample>,
-    pub(super) last_at: Instant,
-    pub(super) path: String,
+pub(crate) struct Sensor {
+    pub(crate) stream: SensorStream,
+    pub(crate) sync: ClockSync,
+    pub(crate) offset_us: f64,
+    pub(crate) samples: Vec<TimedSample>,
+    pub(crate) last_at: Instant,
+    pub(crate) path: String,
 }
 
 impl Sensor {
-    pub(super) fn open(path: &str, t0: Instant) -> Result<Sensor, MissionError> {
+    pub(crate) fn open(path: &str, t0: Instant) -> Result<Sensor, MissionError> {
         let stream = SensorStream::open(&PortConfig::new(path))?;
         let offset_us = stream
             .opened_at()
@@ -43,7 +43,7 @@ impl Sensor {
     }
 
     /// Takes what has arrived.
-    pub(super) fn drain(&mut self) -> Result<usize, MissionError> {
+    pub(crate) fn drain(&mut self) -> Result<usize, MissionError> {
         let mut n = 0;
         loop {
             match self.stream.try_next() {

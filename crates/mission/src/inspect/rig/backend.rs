@@ -1,11 +1,11 @@
 //! What a mission runs on: a [`RigBackend`] says where the arm's controller and the sensor are,
 //! starts what must be started, and gives the camera's frame. The mission's own arm and sensor
-//! code ([`super::arm`], [`super::sensor`]) is the same on every rig: it always talks to the
+//! code (`arm.rs`, `sensor.rs`) is the same on every rig: it always talks to the
 //! controller over the authenticated UDP link and reads the sensor over a serial port, so what
 //! differs is only what answers at the other end.
 //!
 //! * [`HardwareRig`]: a real controller, serial port and camera ([`Hardware`]).
-//! * `SimulatedRig` (cargo feature `sim`): the simulated controller and emulated sensor
+//! * `SimulatedRig` (cargo feature `sim`, `simulated.rs`): the simulated controller and emulated sensor
 //!   started in-process over loopback UDP and a pseudo-terminal, and the scene rendered as the
 //!   camera's frame.
 
@@ -16,7 +16,9 @@ use crackbot_imaging::Homography;
 use crackbot_link::Key;
 use image::RgbImage;
 
-use super::config::{Hardware, InspectConfig};
+use super::settings::{Hardware, RigConfig};
+use crate::error::link_err;
+use crate::inspect::report::InspectMode;
 use crate::MissionError;
 
 /// Where a mission's arm and sensor are, once started.
@@ -34,15 +36,21 @@ pub struct Connection {
 /// A mission's rig: the arm's controller, the sensor and the camera.
 pub trait RigBackend {
     /// Starts what the rig needs (its state files under `state_dir`) and says where the arm and
-    /// the sensor are.
+    /// the sensor are (`mode` named in errors).
     fn connect(
         &mut self,
-        config: &InspectConfig,
+        config: &RigConfig,
+        mode: InspectMode,
         state_dir: &Path,
     ) -> Result<Connection, MissionError>;
 
-    /// One camera frame and its pixel → surface homography (fused and vision missions).
-    fn frame(&mut self, config: &InspectConfig) -> Result<(RgbImage, Homography), MissionError>;
+    /// One camera frame and its pixel → surface homography (fused and vision missions, `mode`
+    /// named in errors).
+    fn frame(
+        &mut self,
+        config: &RigConfig,
+        mode: InspectMode,
+    ) -> Result<(RgbImage, Homography), MissionError>;
 
     /// Stops what [`connect`](Self::connect) started (nothing on hardware). Called once, after
     /// the arm was stopped.
@@ -63,10 +71,14 @@ impl HardwareRig {
 }
 
 impl RigBackend for HardwareRig {
-    fn connect(&mut self, _: &InspectConfig, _: &Path) -> Result<Connection, MissionError> {
+    fn connect(
+        &mut self,
+        _: &RigConfig,
+        _: InspectMode,
+        _: &Path,
+    ) -> Result<Connection, MissionError> {
         let hw = &self.hardware;
-        let key = Key::from_file(&hw.key_file)
-            .map_err(|e| MissionError::Link(format!("the link key: {e}")))?;
+        let key = Key::from_file(&hw.key_file).map_err(|e| link_err("the link key", e))?;
         Ok(Connection {
             socket: bind(hw.bind)?,
             controller: hw.controller,
@@ -75,11 +87,15 @@ impl RigBackend for HardwareRig {
         })
     }
 
-    fn frame(&mut self, config: &InspectConfig) -> Result<(RgbImage, Homography), MissionError> {
+    fn frame(
+        &mut self,
+        _: &RigConfig,
+        mode: InspectMode,
+    ) -> Result<(RgbImage, Homography), MissionError> {
         use crackbot_vision::camera::{grab_frame, CameraSource, DEFAULT_TIMEOUT};
         let hw = &self.hardware;
         let missing = |what| MissionError::Missing {
-            mode: config.mode.as_str(),
+            mode: mode.as_str(),
             what,
         };
         let camera = hw
@@ -96,22 +112,7 @@ impl RigBackend for HardwareRig {
     }
 }
 
-/// The rig `config` names: its hardware, or the simulated rig of its scene (feature `sim`).
-pub fn rig_of(config: &InspectConfig) -> Result<Box<dyn RigBackend>, MissionError> {
-    match &config.hardware {
-        Some(hw) => Ok(Box::new(HardwareRig::new(hw.clone()))),
-        #[cfg(feature = "sim")]
-        None => Ok(Box::new(super::simulated::SimulatedRig::default())),
-        #[cfg(not(feature = "sim"))]
-        None => Err(MissionError::Missing {
-            mode: config.mode.as_str(),
-            what: "hardware (--serial, --controller and --key): this build has no simulator \
-                   (the cargo feature `sim` is off)",
-        }),
-    }
-}
-
 /// A UDP socket bound to `a`.
-pub(super) fn bind(a: SocketAddr) -> Result<UdpSocket, MissionError> {
-    UdpSocket::bind(a).map_err(|e| MissionError::Link(format!("binding {a}: {e}")))
+pub(crate) fn bind(a: SocketAddr) -> Result<UdpSocket, MissionError> {
+    UdpSocket::bind(a).map_err(|e| link_err(format!("binding {a}"), e))
 }

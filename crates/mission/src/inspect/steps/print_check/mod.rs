@@ -4,57 +4,27 @@
 //! pass; made again higher where the surface at the line stands above the plate; more passes,
 //! back and forth, where the first ratio lies near the threshold.
 
-use std::ops::Range;
+use std::path::Path;
 
-use crackbot_planner::{Planner, RaisedPass, Slide, Workspace};
-use crackbot_tactile::print_check;
+use crackbot_planner::{Planner, RaisedPass, Workspace};
+use crackbot_tactile::raised::{judged_ratio, raised_ratio, RaisedRatio};
 
-use super::config::InspectConfig;
-use super::judge::Felt;
-use super::passes::{self, judged_ratio, save_pass, unit, Obstruction, RaisedRatio, Recorded, Rig};
-use super::report::CrackDoubt;
+mod settings;
+
+pub use settings::{
+    print_check_height, PrintCheckConfig, MAX_SURFACE_RISE_MM, PRINT_CHECK_HEIGHT_MM,
+    PRINT_CHECK_OVERRUN_MM, PRINT_CHECK_PASSES_IN_DOUBT, PRINT_CHECK_SPEED_MM_S, PRINT_RATIO_DOUBT,
+    PRINT_RATIO_SETTLED, RAISED_PASS_CLEAR_MM, RAISED_PASS_GUARD_COUNTS, SURFACE_RISE_TOLERANCE_MM,
+};
+
+use super::felt::Felt;
+use super::touch::{Strokes, Touched};
+use crate::inspect::doubts::CrackDoubt;
+use crate::inspect::geometry::unit;
+use crate::inspect::rig::context::Rig;
+use crate::inspect::rig::hover::Obstruction;
+use crate::inspect::rig::recording::{save_pass, Recorded};
 use crate::MissionError;
-
-/// The print check's raised pass is stopped (the arm lifts to its travel height) when the
-/// proximity channel rises this far above the level it read at the pass's start, counts:
-/// something under the line is closer to the fibre than the plate. On the simulated trial
-/// scenes 9000–9119 at real time, raised passes over sound surface, cracks, prints and bumps up
-/// to 1.2 mm rose at most 12 counts above their level, passes over screw heads 258–466 counts
-/// (heads 2.2–3.6 mm tall, which the finger 2 mm up would strike; the simulator does not model
-/// that collision). For the fitted fibre, 40 counts is something about 1.1 mm tall under it
-/// (`crates/research/EXPERIMENTS.md`, "Raised passes stop over what stands under them"). The
-/// level is the pass's own first 20 samples: a head already in view at the pass's start raises
-/// it, and the pass is then stopped later than it should be.
-pub const RAISED_PASS_GUARD_COUNTS: f64 = 40.0;
-/// A raised pass stopped by [`RAISED_PASS_GUARD_COUNTS`] judges its candidate only if it had
-/// gone this far past where the strokes crossed the crack (along the pass), mm: the fibre's
-/// look-ahead (1.8 mm) and spot have then seen the whole crossing, and what it read gives a
-/// ratio. Stopped sooner, or without a ratio, what stands under the line may be the candidate,
-/// which is rejected as "something standing above the plate" (a crack does not stand up; a
-/// screw's rim can look and feel like one).
-pub const RAISED_PASS_CLEAR_MM: f64 = 2.5;
-/// The print check's raised pass is made again, back along its line, where the surface at the
-/// line stands more than this far above the plate it was held over ([`surface_rise_mm`]), mm,
-/// and the first pass reads a print ([`print_check::PRINT_RATIO`]): held level over a bump's
-/// flank or a curved part, the fibre is nearer the surface than the check's height, and a crack
-/// keeps more of its dip, as a print does (one that reads a crack nearer would read one all the
-/// more at the check's height). Made again that much higher, by at most
-/// [`MAX_SURFACE_RISE_MM`]. A surface below the plate (a fibre farther than the height) is left
-/// alone: a crack then keeps less of its dip and ink all of it, so the two only lie farther
-/// apart; and the level beside a dip 2–5 mm wide reads 0.3–0.7 mm low on flat plates. Replayed
-/// on the saved passes of 3288 candidates of the trial runs 11460–12419 (real time), 5 on flat
-/// plates and 12 near bumps rose more than 0.3 mm (flat plates: 99 % under 0.03 mm), among them
-/// two cracks on a bump's flank rejected as prints at 0.94 and 0.89.
-/// Missions run again on those scenes and three fresh sets, made again whatever the first pass
-/// read: four cracks and a print set right, four prints beside bumps and a crack set wrong (the
-/// dip over the flank's sloping level misread 2.3–2.9 mm up); the crack and two of the prints
-/// had first passes that read a crack, as did the print set right, and are now left to them
-/// (`crates/research/EXPERIMENTS.md`, "The raised pass as high above the surface as the check
-/// needs").
-pub const SURFACE_RISE_TOLERANCE_MM: f64 = 0.3;
-/// The most a raised pass made again is raised above the print check's height, mm (a
-/// surface that much higher stops a first pass: [`RAISED_PASS_GUARD_COUNTS`]).
-pub const MAX_SURFACE_RISE_MM: f64 = 1.5;
 
 /// How far the surface at the line stands above the plane a raised pass was held over, mm
 /// (negative where it lies below), from the sound surface's level beside the line in contact
@@ -83,57 +53,11 @@ pub fn surface_rise_mm(
     Some(d0 + height_mm - g)
 }
 
-/// A print ratio within this of [`print_check::PRINT_RATIO`] is measured again: the raised pass
-/// is made back and forth, up to [`PRINT_CHECK_PASSES_IN_DOUBT`] times in all (two where they
-/// settle, [`PRINT_RATIO_SETTLED`]), and the mean over the passes of each one's print ratio
-/// and floor ratio ([`print_check::floor_ratio`]) decides (the print ratio alone where a pass
-/// gives no floor ratio). On the simulated trials 9420–9539 (speed-up 2), four raised passes
-/// over every candidate read a median 0.012 apart (a crack's and a print's ratios lie 0.22
-/// apart), and the mean of four put 3 candidates on the wrong side of the threshold where the
-/// first pass alone put 8; every one of the 8 first read within 0.02 of it, but for one crack
-/// at 1.07. What four passes leave is not the raised pass's
-/// noise but the estimate's own bias on narrow marks: replayed offline on the saved passes of
-/// 2010 candidates over a crack or a print (looked-at trial runs 9300–9899, real time), the
-/// print ratio put 35 on the wrong side of the threshold, the mean with the floor ratio where
-/// the first ratio was in doubt 24 (12 right that were wrong, 1 wrong that was right;
-/// `crates/research/EXPERIMENTS.md`, "Two estimates of a ratio in doubt").
-pub const PRINT_RATIO_DOUBT: f64 = 0.08;
-/// Most raised passes in all over a candidate whose first print ratio is in doubt
-/// ([`PRINT_RATIO_DOUBT`]): an even number, as many each way.
-pub const PRINT_CHECK_PASSES_IN_DOUBT: usize = 4;
-/// After each pair of raised passes in doubt (one each way), the passes stop where their mean
-/// (of print and floor ratios) lies at least this far from [`print_check::PRINT_RATIO`]. Replayed
-/// offline on the 347 candidates over a crack or a print measured in doubt (four passes each) in
-/// five trial runs at real time (seeds 9540–10019, 9900–10019 twice), stopping after two where
-/// they lay 0.03–0.06 from the threshold judged every candidate as four passes did (8 on the
-/// wrong side either way); at 0.05, 305 of them stopped after two
-/// (`crates/research/EXPERIMENTS.md`, "Two estimates of a ratio in doubt").
-pub const PRINT_RATIO_SETTLED: f64 = 0.05;
-
-/// How far the print check's raised pass runs past each end of the candidate's stroke, mm (the
-/// default of the planner's [`crackbot_planner::RaisedPass`]; `InspectConfig::planner`'s
-/// `raised_pass` replaces it and the speed below).
-pub const PRINT_CHECK_OVERRUN_MM: f64 = 1.5;
-/// Speed of the print check's raised pass, mm/s (or the manipulator's travel limit, if lower):
-/// 0.1 mm between the sensor's samples, a tenth of the fibre's spot.
-pub const PRINT_CHECK_SPEED_MM_S: f64 = 40.0;
-
-/// The contact strokes over one candidate, as the print check compares raised passes with
-/// them.
-#[derive(Debug, Clone, Default)]
-pub(super) struct Strokes {
-    /// Each stroke's proximity channel and positions on the slide's axis (mm from its start).
-    pub(super) profiles: Vec<(Vec<f64>, Vec<f64>)>,
-    /// Where the one stroke also crossed a second line: the samples around the candidate's
-    /// own dip ([`passes::own_dip`]).
-    pub(super) own_dip: Option<Range<usize>>,
-    /// Where the finger ended.
-    pub(super) finger_at: [f64; 2],
-}
-
 /// One candidate's print check: its slide's axis, its strokes, where its raised passes go.
 struct Check<'c> {
-    config: &'c InspectConfig,
+    settings: &'c PrintCheckConfig,
+    fibre: &'c crackbot_fibre::ProximityFibre,
+    out_dir: &'c Path,
     candidate: u64,
     /// The slide's start and unit direction: positions on its axis.
     origin: [f64; 2],
@@ -145,20 +69,23 @@ struct Check<'c> {
     dark: f64,
 }
 
-/// Runs the print check over `candidate` (its `slide`, the `strokes` made) when the contact
-/// strokes read it as a crack and the planner gives it a raised pass at `height_mm`; the
-/// ratios, and whether something stood in the way, go into `felt`.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn print_check(
+/// Runs the print check (`settings`) over the candidate a slide touched (`touched`), where the
+/// contact strokes read it as a crack (`felt`, `None` where they did not), the check is on and
+/// the planner gives it a raised pass; the ratios, and whether something stood in the way, go
+/// into `felt`.
+pub(crate) fn print_check(
     rig: &mut Rig<'_>,
-    planner: &Planner,
-    workspace: &Workspace,
-    slide: &Slide,
-    candidate: u64,
-    height_mm: f64,
-    strokes: &Strokes,
-    felt: &mut Felt,
+    settings: &PrintCheckConfig,
+    (planner, workspace): (&Planner, &Workspace),
+    touched: &Touched,
+    felt: Option<&mut Felt>,
 ) -> Result<(), MissionError> {
+    let (Some(candidate), Some(height_mm), Some(felt)) =
+        (touched.candidate, settings.height_mm, felt)
+    else {
+        return Ok(());
+    };
+    let (slide, strokes) = (&touched.slide, &touched.strokes);
     let pass = crackbot_planner::raised_pass(slide, planner.settings(), workspace)
         .zip(planner.settings().raised_pass);
     let Some(([from, to], raised)) = pass else {
@@ -171,7 +98,9 @@ pub(super) fn print_check(
         _ => None,
     };
     let check = Check {
-        config: rig.config,
+        settings,
+        fibre: &rig.config.site.fibre,
+        out_dir: rig.out_dir,
         candidate,
         origin: slide.start_mm,
         u: unit(slide.start_mm, slide.end_mm),
@@ -239,7 +168,7 @@ impl Check<'_> {
         let speed = self.raised.speed_mm_s;
         rig.hover_and_record(self.strokes.finger_at, from, h, speed, None)?;
         let ((hs, hx), obstruction) =
-            rig.hover_and_record(from, to, h, speed, Some(RAISED_PASS_GUARD_COUNTS))?;
+            rig.hover_and_record(from, to, h, speed, Some(self.settings.guard_counts))?;
         if let Some(o) = obstruction {
             f.doubts.push(CrackDoubt::RaisedPassStopped {
                 at_mm: o.at_mm,
@@ -249,7 +178,6 @@ impl Check<'_> {
         }
         let d = unit(from, to);
         let path = self
-            .config
             .out_dir
             .join(format!("raised-{:03}.csv", self.candidate));
         save_pass(&path, &hs, &hx, u8::from(self.backwards(d)))?;
@@ -270,15 +198,15 @@ impl Check<'_> {
         first: Option<RaisedRatio>,
         f: &mut Felt,
     ) -> Result<Option<(RaisedRatio, f64)>, MissionError> {
-        let fibre = &self.config.site.fibre;
+        let s = self.settings;
         let rise = first
-            .filter(|r| r.print > print_check::PRINT_RATIO)
-            .and_then(|r| surface_rise_mm(fibre, r.levels, self.dark, h))
-            .filter(|r| *r > SURFACE_RISE_TOLERANCE_MM);
+            .filter(|r| r.print > s.print_ratio)
+            .and_then(|r| surface_rise_mm(self.fibre, r.levels, self.dark, h))
+            .filter(|r| *r > s.surface_rise_tolerance_mm);
         let Some(rise) = rise else {
             return Ok(None);
         };
-        let height = h + rise.min(MAX_SURFACE_RISE_MM);
+        let height = h + rise.min(s.max_surface_rise_mm);
         f.doubts.push(CrackDoubt::SurfaceRise {
             rise_mm: rise,
             height_mm: height,
@@ -309,10 +237,11 @@ impl Check<'_> {
         ratios: &mut Vec<RaisedRatio>,
         f: &mut Felt,
     ) -> Result<bool, MissionError> {
-        if (first - print_check::PRINT_RATIO).abs() >= PRINT_RATIO_DOUBT {
+        let s = self.settings;
+        if (first - s.print_ratio).abs() >= s.ratio_doubt {
             return Ok(false);
         }
-        for k in 2..=PRINT_CHECK_PASSES_IN_DOUBT {
+        for k in 2..=s.passes_in_doubt {
             let ((rs, rx), stopped, dk) = self.pass(rig, [a, b], height, &k.to_string())?;
             if let Some(o) = stopped {
                 f.doubts.push(CrackDoubt::RaisedInDoubtStopped {
@@ -325,12 +254,14 @@ impl Check<'_> {
             }
             ratios.extend(self.ratio(&rs, &rx, a, dk, &mut f.doubts));
             std::mem::swap(&mut a, &mut b);
-            if k % 2 == 0 && ratios.len() == k && settled(ratios) {
+            if k % 2 == 0 && ratios.len() == k && settled(ratios, s) {
                 break;
             }
         }
         f.doubts.push(CrackDoubt::RatioInDoubt {
             first,
+            threshold: s.print_ratio,
+            within: s.ratio_doubt,
             passes: ratios.len(),
         });
         Ok(true)
@@ -350,11 +281,10 @@ impl Check<'_> {
             b,
             height,
             self.raised.speed_mm_s,
-            Some(RAISED_PASS_GUARD_COUNTS),
+            Some(self.settings.guard_counts),
         )?;
         let dk = unit(a, b);
         let path = self
-            .config
             .out_dir
             .join(format!("raised-{:03}-{name}.csv", self.candidate));
         save_pass(&path, &pass.0, &pass.1, u8::from(self.backwards(dk)))?;
@@ -374,10 +304,16 @@ impl Check<'_> {
     ) -> Option<RaisedRatio> {
         let p: Vec<f64> = samples.iter().map(|v| v[3]).collect();
         let x: Vec<f64> = xs.iter().map(|&v| self.on_axis(start, dir, v)).collect();
-        self.own
+        let mut unusable = Vec::new();
+        let r = self
+            .own
             .as_ref()
-            .and_then(|own| passes::raised_ratio(own, (&p, &x), self.dark, &mut Vec::new()))
-            .or_else(|| passes::raised_ratio(&self.strokes.profiles, (&p, &x), self.dark, doubts))
+            .and_then(|own| raised_ratio(own, (&p, &x), self.dark, &mut Vec::new()))
+            .or_else(|| raised_ratio(&self.strokes.profiles, (&p, &x), self.dark, &mut unusable));
+        doubts.extend(unusable.into_iter().map(|e| CrackDoubt::UnusableStroke {
+            reason: e.to_string(),
+        }));
+        r
     }
 
     /// A point `v` mm along a raised pass from `a` in direction `dir`, on the slide's axis as
@@ -393,7 +329,7 @@ impl Check<'_> {
     }
 
     /// Stopped by something standing: had the pass from `from` to `to` gone
-    /// [`RAISED_PASS_CLEAR_MM`] past every crossing?
+    /// [`PrintCheckConfig::clear_mm`] past every crossing?
     fn passed_every_crossing(
         &self,
         from: [f64; 2],
@@ -406,15 +342,14 @@ impl Check<'_> {
         f.crossings.iter().all(|c| {
             let crossing =
                 (c.0[0] - self.origin[0]) * self.u[0] + (c.0[1] - self.origin[1]) * self.u[1];
-            sign * (self.on_axis(from, d, o.at_mm) - crossing) > RAISED_PASS_CLEAR_MM
+            sign * (self.on_axis(from, d, o.at_mm) - crossing) > self.settings.clear_mm
         })
     }
 }
 
 /// One pass each way and settled: the rest would not move the mean across the threshold.
-fn settled(ratios: &[RaisedRatio]) -> bool {
-    judged_ratio(ratios, true)
-        .is_some_and(|m| (m - print_check::PRINT_RATIO).abs() >= PRINT_RATIO_SETTLED)
+fn settled(ratios: &[RaisedRatio], s: &PrintCheckConfig) -> bool {
+    judged_ratio(ratios, true).is_some_and(|m| (m - s.print_ratio).abs() >= s.ratio_settled)
 }
 
 #[cfg(test)]

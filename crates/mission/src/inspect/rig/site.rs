@@ -22,6 +22,7 @@ use std::path::Path;
 use crackbot_fibre::ProximityFibre;
 use serde::{Deserialize, Serialize};
 
+use crate::error::io_err;
 use crate::MissionError;
 
 /// The place a mission inspects, as the mission needs to know it.
@@ -82,7 +83,7 @@ impl Default for Site {
 impl Site {
     /// A site file (TOML, see the [module docs](self)), checked.
     pub fn load(path: &Path) -> Result<Site, MissionError> {
-        let text = std::fs::read_to_string(path).map_err(|e| super::io_err(path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| io_err(path, e))?;
         let site: Site = toml::from_str(&text).map_err(|e| MissionError::SiteFile {
             path: path.to_path_buf(),
             message: e.message().to_string(),

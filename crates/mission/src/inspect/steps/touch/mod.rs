@@ -1,94 +1,33 @@
 //! The touch step: each planned slide stroked (forth and back where the plan says), each
 //! stroke recorded and saved, a stroke whose ends read unlike each other made again beside its
-//! candidate, every classification unit classified and localised, what was felt kept per
-//! candidate ([`Felt`]), and the print check run over what reads as a crack.
+//! candidate, every classification unit classified and localised, and what was felt kept per
+//! candidate ([`Felt`]). What the strokes read goes on to the print check ([`Touched`]).
 
-use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 
 use crackbot_planner::{Candidate, Planner, Slide, Workspace};
 use crackbot_tactile::localise::{localise, CrackExtent, LocaliseConfig};
 use crackbot_tactile::model::TactileModel;
-use crackbot_tactile::online::{OnlineClassifier, SlideVerdict};
+use crackbot_tactile::online::OnlineClassifier;
+use crackbot_tactile::stroke::{end_levels, ends_agree, own_dip, split_by_travel};
 
-use super::config::InspectConfig;
-use super::feel::Feel;
-use super::judge::{Felt, PassReading, Rules};
-use super::passes::{self, classify, save_pass, split_by_travel, Crossing, Rig};
-use super::raised::{print_check, Strokes};
-use super::report::{keep_pass, Dip, InspectReport, PassDoubt, PassRecord};
+mod settings;
+mod strokes;
+
+pub use settings::{
+    TouchConfig, MIN_DIP_COUNTS, RESTROKE_ALONG_MM, RESTROKE_KEEP_MM, UNEVEN_ENDS_SHARE,
+};
+pub(crate) use strokes::{Strokes, Touched};
+
+use super::felt::{Crossing, Felt, PassReading};
+use super::rules::Rules;
+use crate::inspect::doubts::PassDoubt;
+use crate::inspect::report::{InspectReport, PassRecord};
+use crate::inspect::rig::context::Rig;
+use crate::inspect::rig::feel::Feel;
+use crate::inspect::rig::recording::save_pass;
 use crate::MissionError;
-
-/// A candidate's stroke is made once more beside it when its two ends read this unlike each
-/// other: the darker end's signal above the fibre's dark level is less than this share of the
-/// brighter end's (`passes::ends_agree`). A stroke is planned to start and end on sound surface;
-/// on the simulated trial scenes 9000–9119 and 9180–9299, 30 of 839 candidate strokes did not
-/// (another crack or a print beside the candidate, a bump's flank, a screw head, a crack wider
-/// than its stroke), and half of those candidates ended as errors.
-pub const UNEVEN_ENDS_SHARE: f64 = 0.6;
-/// How far along the candidate the stroke is made again, mm: past a screw head's radius.
-pub const RESTROKE_ALONG_MM: f64 = 5.0;
-/// Least of the candidate left beyond the moved stroke, mm: it still crosses the candidate.
-pub const RESTROKE_KEEP_MM: f64 = 1.0;
-
-/// One stroke of a classification unit, as recorded.
-#[derive(Debug, Clone)]
-struct Stroke {
-    /// Its link id.
-    id: u32,
-    /// Where it started and ended, mm.
-    from: [f64; 2],
-    to: [f64; 2],
-    /// Samples recorded.
-    samples: usize,
-    /// Its recording.
-    recording: PathBuf,
-    /// Attempts needed.
-    attempts: u32,
-}
-
-/// A classification unit: a stroke forth and back (or one), its samples, positions along the
-/// slide's axis and direction column.
-#[derive(Debug, Default)]
-struct Unit {
-    samples: Vec<[f64; 4]>,
-    along: Vec<f64>,
-    dirs: Vec<u8>,
-    strokes: Vec<Stroke>,
-}
-
-/// A slide's axis: its start, unit direction and length.
-#[derive(Debug, Clone, Copy)]
-struct Axis {
-    start: [f64; 2],
-    u: [f64; 2],
-    len: f64,
-}
-
-impl Axis {
-    fn of(slide: &Slide) -> Axis {
-        let d = [
-            slide.end_mm[0] - slide.start_mm[0],
-            slide.end_mm[1] - slide.start_mm[1],
-        ];
-        let len = d[0].hypot(d[1]).max(1e-9);
-        Axis {
-            start: slide.start_mm,
-            u: [d[0] / len, d[1] / len],
-            len,
-        }
-    }
-
-    /// The point `s` mm along the axis.
-    fn at(&self, s: f64) -> [f64; 2] {
-        [self.start[0] + s * self.u[0], self.start[1] + s * self.u[1]]
-    }
-
-    /// How far `p` lies along the axis, mm.
-    fn along(&self, p: [f64; 2]) -> f64 {
-        (p[0] - self.start[0]) * self.u[0] + (p[1] - self.start[1]) * self.u[1]
-    }
-}
+use strokes::{classify, keep_pass, pass_record, Axis, Stroke, Unit};
 
 /// What one slide's strokes came to.
 enum Stroked {
@@ -100,8 +39,8 @@ enum Stroked {
 
 /// The touch step's state over a mission: the models fed pass by pass, the next link id, and
 /// what was felt so far.
-pub(super) struct Touch<'m, 'c> {
-    config: &'c InspectConfig,
+pub(crate) struct Touch<'m, 'c> {
+    config: &'c TouchConfig,
     candidates: &'c [(Candidate, f64)],
     planner: &'c Planner,
     workspace: &'c Workspace,
@@ -112,13 +51,13 @@ pub(super) struct Touch<'m, 'c> {
     classes: usize,
     next_id: u32,
     /// Per candidate (or stroke-long piece of a tactile row), in the order first felt.
-    pub(super) felt: Vec<(u64, Felt)>,
+    pub(crate) felt: Vec<(u64, Felt)>,
 }
 
 impl<'m, 'c> Touch<'m, 'c> {
     /// Ready to touch `candidates` along the plan of `planner`.
-    pub(super) fn new(
-        config: &'c InspectConfig,
+    pub(crate) fn new(
+        config: &'c TouchConfig,
         (recognition, width): (&'m TactileModel, &'m TactileModel),
         candidates: &'c [(Candidate, f64)],
         (planner, workspace): (&'c Planner, &'c Workspace),
@@ -139,15 +78,15 @@ impl<'m, 'c> Touch<'m, 'c> {
         })
     }
 
-    /// Slide `si` of `of`: stroked, made again beside its candidate where its first stroke's
-    /// ends read unlike each other, then the print check over its candidate.
-    pub(super) fn slide(
+    /// Slide `si` of `of`: stroked, and made again beside its candidate where its first
+    /// stroke's ends read unlike each other. What it left for the print check.
+    pub(crate) fn slide(
         &mut self,
         rig: &mut Rig<'_>,
         report: &mut InspectReport,
         (si, of): (usize, usize),
         planned: &Slide,
-    ) -> Result<(), MissionError> {
+    ) -> Result<Touched, MissionError> {
         let mut again: Option<Slide> = None;
         let strokes = loop {
             let slide = again.as_ref().unwrap_or(planned);
@@ -159,16 +98,23 @@ impl<'m, 'c> Touch<'m, 'c> {
                 Stroked::Judged(strokes) => break strokes,
             }
         };
-        let slide = again.as_ref().unwrap_or(planned);
-        let cand = slide.candidates.first().copied();
-        if let (Some(c), Some(h)) = (cand, self.config.print_check_mm) {
-            let rules = self.rules;
-            let felt = self.felt.iter_mut().find(|(k, _)| *k == c).map(|(_, f)| f);
-            if let Some(f) = felt.filter(|f| f.reads_as_crack(&rules)) {
-                print_check(rig, self.planner, self.workspace, slide, c, h, &strokes, f)?;
-            }
-        }
-        Ok(())
+        let slide = again.unwrap_or_else(|| planned.clone());
+        Ok(Touched {
+            candidate: slide.candidates.first().copied(),
+            slide,
+            strokes,
+        })
+    }
+
+    /// What was felt over `candidate`, where it reads as a crack by the contact strokes (the
+    /// print check's turn).
+    pub(crate) fn reads_as_crack(&mut self, candidate: u64) -> Option<&mut Felt> {
+        let rules = self.rules;
+        self.felt
+            .iter_mut()
+            .find(|(k, _)| *k == candidate)
+            .map(|(_, f)| f)
+            .filter(|f| f.reads_as_crack(&rules))
     }
 
     /// The slide's passes, unit by unit, each judged; or the slide beside it, where its first
@@ -201,7 +147,8 @@ impl<'m, 'c> Touch<'m, 'c> {
             // A candidate's first stroke that began or ended off the sound surface is made once
             // more beside it.
             if let (Some(id), false, 0) = (cand, again, p) {
-                if let Some((beside, ends)) = self.beside_if_uneven(slide, id, &strokes) {
+                let dark = rig.config.site.fibre.dark_counts;
+                if let Some((beside, ends)) = self.beside_if_uneven(slide, id, &strokes, dark) {
                     let moved = (beside.moved_along_mm - slide.moved_along_mm).abs();
                     Self::not_judged(rig, report, (si, of), (cand, moved), ends, &unit);
                     return Ok(Stroked::Again(beside));
@@ -245,7 +192,7 @@ impl<'m, 'c> Touch<'m, 'c> {
             let dir = u8::from(!forth);
             let ((s, x), attempts) =
                 rig.slide_and_record(id, (a, b), slide.speed_mm_s, dir, &mut self.feel)?;
-            let recording = self.config.out_dir.join(format!("slide-{id:03}.csv"));
+            let recording = rig.out_dir.join(format!("slide-{id:03}.csv"));
             save_pass(&recording, &s, &x, dir)?;
             // Positions along the slide's axis, from its start.
             let on_axis: Vec<f64> = x
@@ -272,29 +219,31 @@ impl<'m, 'c> Touch<'m, 'c> {
     }
 
     /// A candidate's first stroke that began or ended off the sound surface
-    /// ([`UNEVEN_ENDS_SHARE`]) is made once more beside it ([`RESTROKE_ALONG_MM`]), where the
-    /// candidate reaches that far ([`RESTROKE_KEEP_MM`]): that slide, and what the uneven
-    /// stroke's ends read (counts).
+    /// ([`TouchConfig::uneven_ends_share`], over the fibre's `dark` level) is made once more
+    /// beside it ([`TouchConfig::restroke_along_mm`]), where the candidate reaches that far
+    /// ([`TouchConfig::restroke_keep_mm`]): that slide, and what the uneven stroke's ends read
+    /// (counts).
     fn beside_if_uneven(
         &self,
         slide: &Slide,
         id: u64,
         strokes: &Strokes,
+        dark: f64,
     ) -> Option<(Slide, [f64; 2])> {
-        let dark = self.config.site.fibre.dark_counts;
+        let share = self.config.uneven_ends_share;
         let (uneven, _) = strokes
             .profiles
             .iter()
-            .find(|(p, _)| !passes::ends_agree(p, dark, UNEVEN_ENDS_SHARE))?;
+            .find(|(p, _)| !ends_agree(p, dark, share))?;
         let (c, _) = self.candidates.iter().find(|(c, _)| c.id == id)?;
-        let beside = passes::slide_along(
+        let beside = crackbot_planner::slide_along(
             slide,
             c,
             self.workspace,
-            RESTROKE_ALONG_MM,
-            RESTROKE_KEEP_MM,
+            self.config.restroke_along_mm,
+            self.config.restroke_keep_mm,
         )?;
-        Some((beside, passes::end_levels(uneven).unwrap_or_default()))
+        Some((beside, end_levels(uneven).unwrap_or_default()))
     }
 
     /// The strokes of a unit made again beside: kept (a front end lists every stroke), their
@@ -334,7 +283,10 @@ impl<'m, 'c> Touch<'m, 'c> {
     /// ([`split_by_travel`]), each classified (the context reaches back over the candidate's
     /// earlier strokes, as over the authors' back-and-forth strokes; a new candidate or row
     /// starts afresh), localised, kept in the report and added to what was felt.
-    #[allow(clippy::too_many_arguments)]
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the unit, where it lies and what it adds to are all this step's; a struct would only rename them"
+    )]
     fn judge_unit(
         &mut self,
         rig: &mut Rig<'_>,
@@ -348,7 +300,7 @@ impl<'m, 'c> Touch<'m, 'c> {
     ) -> Result<(), MissionError> {
         let cand = slide.candidates.first().copied();
         let pieces: Vec<(usize, usize)> = if cand.is_none() {
-            split_by_travel(&unit.along, self.config.site.arm.stroke_mm)
+            split_by_travel(&unit.along, rig.config.site.arm.stroke_mm)
         } else {
             vec![(0, unit.samples.len())]
         };
@@ -402,7 +354,7 @@ impl<'m, 'c> Touch<'m, 'c> {
     /// Where the unit's piece `p0..p1` crossed a crack: the localiser with the mission's
     /// shallowest dip; where the one stroke also crossed a second crack or a print beside its
     /// candidate, the localiser spans both dips, and the one nearest the candidate is its
-    /// ([`passes::own_dip`], whose samples go into `strokes` for the print check).
+    /// ([`own_dip`], whose samples go into `strokes` for the print check).
     fn locate(
         &self,
         slide: &Slide,
@@ -428,7 +380,8 @@ impl<'m, 'c> Touch<'m, 'c> {
                         .width_mm
                         .unwrap_or(self.planner.settings().assumed_width_mm);
                     let near = axis.along(c.centre_mm);
-                    passes::own_dip(samples, along, &extent, w, near, &config)
+                    let dips = &self.config.separate_dips;
+                    own_dip(samples, along, &extent, w, near, &config, dips)
                 }),
             _ => None,
         };
@@ -451,34 +404,5 @@ impl<'m, 'c> Touch<'m, 'c> {
             }
         };
         &mut self.felt[i].1
-    }
-}
-
-/// The report's record of one stroke of a judged unit.
-fn pass_record(
-    s: &Stroke,
-    candidate: Option<u64>,
-    samples: usize,
-    verdict: Option<&SlideVerdict>,
-    width: Option<&SlideVerdict>,
-    extent: &Option<CrackExtent>,
-) -> PassRecord {
-    PassRecord {
-        id: s.id,
-        candidate,
-        start_mm: s.from,
-        end_mm: s.to,
-        samples,
-        class: verdict.map(|v| v.name.clone()),
-        confidence: verdict.map_or(0.0, |v| v.confidence),
-        width_mm: width.map(|w| w.label),
-        doubt: verdict.and_then(|v| v.doubt.as_ref()).map(PassDoubt::from),
-        dip: extent.as_ref().map(|e| Dip {
-            centre_mm: e.centre_mm,
-            width_mm: e.width_mm,
-            confidence: e.confidence,
-        }),
-        recording: s.recording.display().to_string(),
-        attempts: s.attempts,
     }
 }

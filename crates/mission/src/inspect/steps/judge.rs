@@ -2,243 +2,16 @@
 //! confirmed as a crack, or rejected with the reason. Pure functions of [`Felt`] and [`Rules`],
 //! tested without sockets or threads.
 
-use crackbot_tactile::model::Doubt;
-use crackbot_tactile::online::SlideVerdict;
-use crackbot_tactile::print_check;
+use crackbot_planner::Candidate;
 
-use super::config::InspectConfig;
-use super::passes::Crossing;
-use super::report::{CrackDoubt, Width};
-use crate::MissionError;
-
-/// A "no crack" verdict whose confidence is below this is doubted by
-/// `doubted_no_crack_with_dip` even where the model's own gate lets it stand (0.5 for the
-/// committed recognition model). Since the committed model learned the simulator's plates too
-/// (2026-11-27), it no longer doubts every simulated slide as novel, and the
-/// thinnest cracks of the trial scenes (0.5–0.7 mm, thinner than any plate it learned) come out
-/// as weak "no crack" votes. On the trials 10620–10739 (real time, looked at) every "no crack"
-/// verdict over a dip of confidence ≥ 0.6 had a confidence of 0.33–0.53: 25 over cracks (two of
-/// them 0.50 and 0.52, over 0.6 and 0.68 mm cracks that the mission then lost), 9 over printed
-/// decoys, 1 over sound surface (`crates/research/EXPERIMENTS.md`, "The recognition model that
-/// knows the simulated finger").
-pub const WEAK_NO_CRACK_CONFIDENCE: f64 = 0.6;
-
-/// Whether a pass whose recognition verdict `v` is not "crack" still stands for a crack's
-/// crossing: the verdict is "no crack" (class `no_crack`), doubted as novel or weak (a
-/// [`Doubt`], or a confidence below [`WEAK_NO_CRACK_CONFIDENCE`]), and the pass's proximity dip
-/// (its confidence `dip`, `None`: no dip) is at least `min_confidence`.
-fn doubted_no_crack_with_dip(
-    v: &SlideVerdict,
-    no_crack: Option<usize>,
-    dip: Option<f64>,
-    min_confidence: Option<f64>,
-) -> bool {
-    let doubted = match v.doubt {
-        Some(Doubt::Novel { .. } | Doubt::LowConfidence { .. }) => true,
-        Some(Doubt::DeadChannel { .. } | Doubt::OutOfRange { .. }) => false,
-        None => v.confidence < WEAK_NO_CRACK_CONFIDENCE,
-    };
-    let deep = match (dip, min_confidence) {
-        (Some(d), Some(c)) => d >= c,
-        _ => false,
-    };
-    Some(v.class as usize) == no_crack && doubted && deep
-}
-
-/// The least print ratio ([`print_check::print_ratio`]) a crack can give with the finger raised
-/// `height_mm`: a crack's floor, `δ` below the plate, darkens the fibre by `1 − f(d + δ)/f(d)`
-/// at distance `d`, and the shallower the crack the smaller the share kept raised, down to the
-/// ratio of the curve's logarithmic slopes at the raised and the contact distance as `δ → 0`
-/// (0.37 for the fitted fibre 2 mm up). Ink keeps its whole share (1); deeper cracks keep more
-/// than the shallowest.
-pub fn shallowest_crack_ratio(fibre: &crackbot_fibre::ProximityFibre, height_mm: f64) -> f64 {
-    let log_slope = |d: f64| {
-        let f = |x: f64| fibre.intensity(x);
-        let e = 1e-4;
-        (f(d + e).ln() - f(d - e).ln()) / (2.0 * e)
-    };
-    let d0 = fibre.height_mm;
-    log_slope(d0 + height_mm) / log_slope(d0)
-}
-
-/// A candidate whose print ratio is below this share of [`shallowest_crack_ratio`] is neither a
-/// crack nor a print, and is rejected: something else brightened the raised pass at the
-/// crossing or darkened the contact stroke (a screw head or a bump beside it). On the simulated
-/// trials 9000–9119, 9180–9299 and 9300–9419 (real time) no crack's ratio was below 0.47, and
-/// eight prints or empty candidates, all beside a screw or a bump, came out at −0.05 to 0.27
-/// (four of them confirmed).
-pub const IMPLAUSIBLE_RATIO_SHARE: f64 = 0.8;
-
-/// The class with the most votes (the last of those tied; 0 when there are none).
-pub(super) fn top_class(votes: &[f64]) -> usize {
-    votes
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .map_or(0, |(i, _)| i)
-}
-
-/// What the finger felt over one candidate (or one stroke-long piece of a tactile row): the
-/// recognition votes and width verdicts of its passes, where they crossed it, and what the
-/// print check's raised passes read.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub(super) struct Felt {
-    /// Recognition votes per class, summed over the passes.
-    pub(super) votes: Vec<f64>,
-    /// The slides (link ids) of its passes.
-    pub(super) slides: Vec<u32>,
-    /// Each pass's width verdict: its class and the vote's 10–90 % range, mm.
-    pub(super) widths: Vec<(f64, [f64; 2])>,
-    /// Doubts raised, in words.
-    pub(super) doubts: Vec<CrackDoubt>,
-    /// Where the passes that stood for a crack crossed it.
-    pub(super) crossings: Vec<Crossing>,
-    /// Passes read as something other than a crack (a doubted "no crack" over a deep dip
-    /// does not count).
-    pub(super) vetoes: usize,
-    /// Passes with a dead or saturated channel.
-    pub(super) unknown: usize,
-    /// Passes judged.
-    pub(super) passes: usize,
-    /// The print check's ratio that decides ([`super::Evidence::height_ratio`]).
-    pub(super) height_ratio: Option<f64>,
-    /// The print check's ratio of each raised pass.
-    pub(super) print_ratios: Vec<f64>,
-    /// Each raised pass's floor ratio, where the first print ratio was in doubt.
-    pub(super) floor_ratios: Vec<Option<f64>>,
-    /// The print check's raised pass was stopped before it could judge the crossing (before
-    /// it had passed it, or with no ratio from what it read): something stands there.
-    pub(super) stands: bool,
-}
-
-/// One judged pass, as the rules read it.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct PassReading<'a> {
-    /// The recognition verdict (`None`: too short to classify).
-    pub(super) verdict: Option<&'a SlideVerdict>,
-    /// The width verdict's class and the vote's 10–90 % range, mm.
-    pub(super) width: Option<(f64, [f64; 2])>,
-    /// The confidence of the pass's proximity dip (`None`: no dip).
-    pub(super) dip_confidence: Option<f64>,
-    /// Where the pass crossed what it felt.
-    pub(super) crossing: Crossing,
-    /// The pass was over a candidate (not a piece of a tactile row).
-    pub(super) on_candidate: bool,
-    /// The first slide of the pass's classification unit (named in doubts).
-    pub(super) slide: u32,
-}
-
-/// The classes and settings the decisions read, checked once.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Rules {
-    /// The recognition model's `crack` class.
-    pub(super) crack_class: usize,
-    /// Its `no crack` class, if it has one.
-    pub(super) no_crack_class: Option<usize>,
-    /// A confirmed crack needs a pass with a proximity dip ([`InspectConfig::require_dip`]).
-    pub(super) require_dip: bool,
-    /// The dip confidence that lets a doubted "no crack" stand for a crack: only where the
-    /// print check follows ([`InspectConfig::doubted_dip_confidence`]).
-    pub(super) dip_outweighs_doubt: Option<f64>,
-    /// The print check's height, mm (`None`: off).
-    pub(super) print_check_mm: Option<f64>,
-    /// The least print ratio a crack gives at that height ([`shallowest_crack_ratio`]).
-    pub(super) ratio_floor: Option<f64>,
-}
-
-impl Rules {
-    /// The rules of a mission with `config` and a recognition model of `classes`.
-    pub(super) fn new(classes: &[String], config: &InspectConfig) -> Result<Rules, MissionError> {
-        let crack_class = classes
-            .iter()
-            .position(|c| c == "crack")
-            .ok_or(MissionError::MissingClass { class: "crack" })?;
-        Ok(Rules {
-            crack_class,
-            no_crack_class: classes.iter().position(|c| c == "no crack"),
-            require_dip: config.require_dip,
-            dip_outweighs_doubt: config.print_check_mm.and(config.doubted_dip_confidence),
-            print_check_mm: config.print_check_mm,
-            ratio_floor: config
-                .print_check_mm
-                .map(|h| shallowest_crack_ratio(&config.site.fibre, h)),
-        })
-    }
-}
-
-impl Felt {
-    /// Nothing felt yet, with `classes` vote counters.
-    pub(super) fn new(classes: usize) -> Felt {
-        Felt {
-            votes: vec![0.0; classes],
-            ..Felt::default()
-        }
-    }
-
-    /// Adds one pass: its slides, vote, doubts, width, and its crossing where it stands for a
-    /// crack (read as one, or a doubted "no crack" over a deep dip), a veto where not.
-    pub(super) fn add_pass(&mut self, slides: &[u32], pass: &PassReading<'_>, rules: &Rules) {
-        self.slides.extend_from_slice(slides);
-        self.passes += 1;
-        if let Some(v) = pass.verdict {
-            for (acc, x) in self.votes.iter_mut().zip(&v.votes) {
-                *acc += x;
-            }
-            // A dead or saturated channel makes the slide unusable; a novel surface is
-            // reported as a doubt (the simulated finger is still unlike the real one, see
-            // models/tactile/MODEL_CARD.md) but its vote counts.
-            if matches!(
-                v.doubt,
-                Some(Doubt::DeadChannel { .. } | Doubt::OutOfRange { .. })
-            ) {
-                self.unknown += 1;
-            }
-            if let Some(d) = &v.doubt {
-                self.doubts.push(CrackDoubt::Pass {
-                    slide: pass.slide,
-                    doubt: d.into(),
-                });
-            }
-            let doubted_dip = pass.on_candidate
-                && doubted_no_crack_with_dip(
-                    v,
-                    rules.no_crack_class,
-                    pass.dip_confidence,
-                    rules.dip_outweighs_doubt,
-                );
-            if v.class as usize == rules.crack_class || doubted_dip {
-                self.crossings.push(pass.crossing);
-            } else {
-                self.vetoes += 1;
-            }
-            if doubted_dip {
-                self.doubts.push(CrackDoubt::DoubtedNoCrack {
-                    slide: pass.slide,
-                    confidence: v.confidence,
-                    dip_confidence: pass.dip_confidence.unwrap_or(0.0),
-                });
-            }
-        }
-        if let Some(w) = pass.width {
-            self.widths.push(w);
-        }
-    }
-
-    /// The contact passes read the candidate as a crack: the vote (or a "no crack" vote whose
-    /// every pass was doubted over a deep dip), a judged pass, a crossing, and the proximity
-    /// dip a crack makes (unless not required). The print check comes after.
-    pub(super) fn reads_as_crack(&self, rules: &Rules) -> bool {
-        let top = top_class(&self.votes);
-        (top == rules.crack_class || (Some(top) == rules.no_crack_class && self.vetoes == 0))
-            && self.unknown < self.passes
-            && !self.crossings.is_empty()
-            && (self.crossings.iter().any(|c| c.1.is_some()) || !rules.require_dip)
-    }
-}
+use super::felt::{top_class, Crossing, Felt};
+use super::rules::Rules;
+use crate::inspect::doubts::Width;
+use crate::inspect::report::{Evidence, RejectedCandidate, ReportedCrack};
 
 /// Why the finger rejected a candidate.
 #[derive(Debug, Clone, PartialEq)]
-pub(super) enum Rejection {
+pub(crate) enum Rejection {
     /// Dead or saturated channels on every pass: the finger could not judge.
     Unjudged,
     /// Read as a crack, but the raised pass was stopped before it could judge the crossing.
@@ -261,7 +34,7 @@ pub(super) enum Rejection {
 
 /// The verdict on what was felt over one candidate.
 #[derive(Debug, Clone, PartialEq)]
-pub(super) enum Judgement {
+pub(crate) enum Judgement {
     /// A crack: where the passes crossed it (mean), the extent along the first pass that
     /// located one, and the mean width verdict and its spread.
     Crack {
@@ -277,7 +50,7 @@ pub(super) enum Judgement {
 }
 
 /// The judge's verdict on `f`, with the class reported and its share of the votes.
-pub(super) fn judge(f: &Felt, rules: &Rules) -> (Judgement, usize, f64) {
+pub(crate) fn judge(f: &Felt, rules: &Rules) -> (Judgement, usize, f64) {
     let total: f64 = f.votes.iter().sum();
     let reads = f.reads_as_crack(rules);
     let class = if reads {
@@ -290,12 +63,12 @@ pub(super) fn judge(f: &Felt, rules: &Rules) -> (Judgement, usize, f64) {
     } else {
         0.0
     };
-    let print = f.height_ratio.is_some_and(|r| r > print_check::PRINT_RATIO);
+    let print = f.height_ratio.is_some_and(|r| r > rules.print_ratio);
     // Below what the shallowest crack gives: something else brightened the raised pass.
     let too_low = f
         .height_ratio
         .zip(rules.ratio_floor)
-        .is_some_and(|(r, least)| r < IMPLAUSIBLE_RATIO_SHARE * least);
+        .is_some_and(|(r, least)| r < rules.implausible_share * least);
     let judgement = if reads && !print && !f.stands && !too_low {
         Judgement::Crack {
             position_mm: mean_crossing(&f.crossings),
@@ -355,7 +128,7 @@ fn mean_width(widths: &[(f64, [f64; 2])]) -> Option<Width> {
 impl Rejection {
     /// What the finger felt instead, in words (`class` is the name of the top class), as the
     /// report's `felt` says it, with the print check's height from `rules`.
-    pub(super) fn felt(&self, class: &str, rules: &Rules) -> String {
+    pub(crate) fn felt(&self, class: &str, rules: &Rules) -> String {
         let height = rules.print_check_mm.unwrap_or(0.0);
         match self {
             Rejection::Unjudged => "unknown".into(),
@@ -380,10 +153,76 @@ impl Rejection {
     }
 }
 
+/// The judge step over every candidate (and tactile row piece) felt: confirmed cracks, and
+/// the candidates rejected with what the finger felt instead (row pieces that are not cracks
+/// are not listed). `names` are the recognition model's classes.
+pub(crate) fn judge_all(
+    felt: Vec<(u64, Felt)>,
+    candidates: &[(Candidate, f64)],
+    rules: &Rules,
+    names: &[String],
+) -> (Vec<ReportedCrack>, Vec<RejectedCandidate>) {
+    let (mut cracks, mut rejected) = (Vec::new(), Vec::new());
+    for (key, f) in felt {
+        let (judgement, class, confidence) = judge(&f, rules);
+        let name = names.get(class).cloned().unwrap_or_default();
+        let detection = candidates.iter().find(|(c, _)| c.id == key);
+        match judgement {
+            Judgement::Crack {
+                position_mm,
+                extent_mm,
+                width,
+            } => cracks.push(ReportedCrack {
+                candidate: detection.map(|(c, _)| c.id),
+                position_mm,
+                extent_mm,
+                class: name,
+                width_mm: width.map(|w| w.mm),
+                width_range_mm: width.map(|w| w.range_mm),
+                confidence,
+                evidence: Evidence {
+                    detector_score: detection.map(|d| d.1),
+                    slides: f.slides,
+                    votes: f.votes,
+                    doubts: f.doubts,
+                    height_ratio: f.height_ratio,
+                    print_ratios: f.print_ratios,
+                    floor_ratios: f.floor_ratios,
+                    pieces: Vec::new(),
+                },
+            }),
+            Judgement::Rejected(why) => {
+                if let Some((c, score)) = detection {
+                    rejected.push(RejectedCandidate {
+                        candidate: c.id,
+                        position_mm: c.centre_mm,
+                        felt: why.felt(&name, rules),
+                        detector_score: *score,
+                        slides: f.slides,
+                        height_ratio: f.height_ratio,
+                        print_ratios: f.print_ratios,
+                        floor_ratios: f.floor_ratios,
+                        votes: f.votes,
+                    });
+                }
+            }
+        }
+    }
+    (cracks, rejected)
+}
+
 #[cfg(test)]
 mod tests {
+    use super::super::felt::PassReading;
+    use super::super::rules::{
+        doubted_no_crack_with_dip, shallowest_crack_ratio, JudgeConfig, DOUBTED_DIP_CONFIDENCE,
+        IMPLAUSIBLE_RATIO_SHARE, WEAK_NO_CRACK_CONFIDENCE,
+    };
     use super::*;
-    use crate::inspect::DOUBTED_DIP_CONFIDENCE;
+    use crate::inspect::doubts::CrackDoubt;
+    use crate::MissionError;
+    use crackbot_tactile::model::Doubt;
+    use crackbot_tactile::online::SlideVerdict;
 
     #[test]
     fn the_shallowest_crack_keeps_about_a_third_of_its_dip_two_millimetres_up() {
@@ -420,8 +259,9 @@ mod tests {
         let weak = Some(Doubt::LowConfidence { confidence: 0.3 });
         let on = Some(DOUBTED_DIP_CONFIDENCE);
         // "No crack" is class 0 here.
+        let weak_cut = WEAK_NO_CRACK_CONFIDENCE;
         let stands = |class, doubt, dip, rule| {
-            doubted_no_crack_with_dip(&verdict(class, doubt), Some(0), dip, rule)
+            doubted_no_crack_with_dip(&verdict(class, doubt), Some(0), dip, (weak_cut, rule))
         };
         // "No crack", doubted either way, over a dip deep enough.
         assert!(stands(0, novel(), Some(0.8), on));
@@ -429,7 +269,12 @@ mod tests {
         // An undoubted "no crack" weaker than WEAK_NO_CRACK_CONFIDENCE counts as doubted; a
         // dead channel never does.
         let undoubted = |confidence| {
-            doubted_no_crack_with_dip(&verdict_of(0, None, confidence), Some(0), Some(0.8), on)
+            doubted_no_crack_with_dip(
+                &verdict_of(0, None, confidence),
+                Some(0),
+                Some(0.8),
+                (weak_cut, on),
+            )
         };
         assert!(undoubted(0.52));
         assert!(!undoubted(WEAK_NO_CRACK_CONFIDENCE));
@@ -437,7 +282,7 @@ mod tests {
             &verdict_of(0, Some(Doubt::DeadChannel { channel: "P" }), 0.3),
             Some(0),
             Some(0.8),
-            on
+            (weak_cut, on)
         ));
         // A shallow dip, no dip, an undoubted verdict, another class, a dead channel, the
         // rule off, or a model without a "no crack" class: the verdict stands.
@@ -456,7 +301,7 @@ mod tests {
             &verdict(0, novel()),
             None,
             Some(0.8),
-            on
+            (weak_cut, on)
         ));
     }
 
@@ -488,6 +333,9 @@ mod tests {
             dip_outweighs_doubt: Some(DOUBTED_DIP),
             print_check_mm: Some(2.0),
             ratio_floor: Some(0.37),
+            print_ratio: crackbot_tactile::print_check::PRINT_RATIO,
+            weak_no_crack: WEAK_NO_CRACK_CONFIDENCE,
+            implausible_share: IMPLAUSIBLE_RATIO_SHARE,
         }
     }
 
@@ -638,16 +486,18 @@ mod tests {
         let classes: Vec<String> = ["no crack", "crack", "bump", "wavy"]
             .map(String::from)
             .into();
-        let mut config = InspectConfig::at(crate::inspect::Site::default(), "unused");
-        let r = Rules::new(&classes, &config).unwrap();
+        let config = JudgeConfig::default();
+        let fibre = crackbot_fibre::ProximityFibre::default();
+        let ratio = crackbot_tactile::print_check::PRINT_RATIO;
+        let r = Rules::new(&classes, &config, (Some(2.0), ratio), &fibre).unwrap();
         assert_eq!((r.crack_class, r.no_crack_class), (1, Some(0)));
         assert_eq!(r.dip_outweighs_doubt, config.doubted_dip_confidence);
         assert!(r.ratio_floor.is_some_and(|f| (0.35..0.39).contains(&f)));
+        assert_eq!(r.print_ratio, ratio);
         // Without the print check, a doubted "no crack" never stands for a crack.
-        config.print_check_mm = None;
-        let r = Rules::new(&classes, &config).unwrap();
+        let r = Rules::new(&classes, &config, (None, ratio), &fibre).unwrap();
         assert_eq!((r.dip_outweighs_doubt, r.ratio_floor), (None, None));
-        let e = Rules::new(&classes[2..], &config).unwrap_err();
+        let e = Rules::new(&classes[2..], &config, (None, ratio), &fibre).unwrap_err();
         assert!(
             matches!(e, MissionError::MissingClass { class: "crack" }),
             "{e}"

@@ -1,7 +1,7 @@
 //! What the front ends and the mission log see of the streams as they arrive: each sensor
 //! sample with the finger's position along the stroke under way, and each arm state as a pose
 //! on the host's clock. Shown and logged only; the passes' verdicts use their own positions,
-//! interpolated when a stroke ends ([`super::passes`]).
+//! interpolated when a stroke ends (`slide.rs`).
 //!
 //! Times never go back within a stream: each is mapped through the clock fit as it is then,
 //! and a fit that moves (drift re-estimated under load) could put a later state before an
@@ -10,9 +10,9 @@
 use crackbot_link::Mode;
 
 use super::arm::{newest_mapped, pose, position_at, Arm};
-use super::passes::{along, unit};
-use super::report::{ArmPose, LiveSample};
 use super::sensor::Sensor;
+use crate::inspect::geometry::{along, unit};
+use crate::inspect::progress::{ArmPose, LiveSample};
 
 /// Arm states (100 Hz) looked at to place a batch of samples: the last 0.3 s.
 const RECENT_STATES: usize = 30;
@@ -20,18 +20,18 @@ const RECENT_STATES: usize = 30;
 /// The line the finger is moving along: a slide (finger down) or a raised pass of the print
 /// check (no slide id).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Stroke {
+pub(crate) struct Stroke {
     /// The slide's id on the link; `None` for a raised pass.
-    pub(super) slide: Option<u32>,
+    pub(crate) slide: Option<u32>,
     /// Where the line starts, mm.
-    pub(super) start: [f64; 2],
+    pub(crate) start: [f64; 2],
     /// Its unit direction.
-    pub(super) dir: [f64; 2],
+    pub(crate) dir: [f64; 2],
 }
 
 impl Stroke {
     /// The line from `a` towards `b`.
-    pub(super) fn new(slide: Option<u32>, a: [f64; 2], b: [f64; 2]) -> Self {
+    pub(crate) fn new(slide: Option<u32>, a: [f64; 2], b: [f64; 2]) -> Self {
         Stroke {
             slide,
             start: a,
@@ -50,7 +50,7 @@ impl Stroke {
 }
 
 /// The sensor's samples from index `from` on, as shown, each placed on `stroke`.
-pub(super) fn live_samples(
+pub(crate) fn live_samples(
     arm: &mut Arm,
     sensor: &mut Sensor,
     from: usize,
@@ -83,7 +83,7 @@ pub(super) fn live_samples(
 }
 
 /// The arm's states newer than controller time `after_us`, as poses on the host's clock.
-pub(super) fn new_poses(
+pub(crate) fn new_poses(
     arm: &mut Arm,
     after_us: Option<u64>,
     stroke: Option<&Stroke>,
