@@ -9,7 +9,7 @@
 
 use crackbot_link::{Contact, ErrorCode, ErrorReport, Message};
 
-use crate::world::{Limits, MAX_MOVE_HEIGHT_MM, MIN_MOVE_HEIGHT_MM};
+use crate::limits::{Limits, MAX_MOVE_HEIGHT_MM, MIN_MOVE_HEIGHT_MM};
 
 /// Slowest speed a move or slide may ask, mm/s (slower reads as "stay Moving for ever": a
 /// subnormal speed would keep the arm busy until the watchdog).

@@ -14,14 +14,16 @@
 //! it in-process for the no-argument mission.
 
 pub mod command;
+pub mod limits;
 pub mod sensor;
 pub mod server;
 pub mod world;
 
 pub use command::{check, Checked, CommandError};
+pub use limits::{Limits, Refusal};
 pub use sensor::{Shared, SharedWorld, SimSensor};
 pub use server::{ControllerError, Faults, SensorStall, ServerConfig, ServerReport, SimController};
-pub use world::{Limits, Mode, Refusal, Tick, World};
+pub use world::{Mode, Tick, World};
 
 /// The controller's clock as its state stream reports it: the world's ticks (1/400 s of
 /// simulated time each, `1/(400·speedup)` s of wall time), shifted by `offset_us` and running

@@ -22,8 +22,9 @@ use crackbot_sim::Scene;
 use serde::Serialize;
 
 use crate::command::check;
+use crate::limits::Refusal;
 use crate::sensor::{lock, Shared, SharedWorld, SimSensor};
-use crate::world::{Mode, Refusal, World};
+use crate::world::{Mode, World};
 use crate::ControllerClock;
 
 /// Errors of the simulated controller.

@@ -8,8 +8,7 @@ use crate::error::PlanError;
 use crate::geometry::{dot, OrientedRect, Point};
 use crate::MAX_COORD_MM;
 
-/// A candidate's id, as the detector numbered it; unique within one request.
-pub type CandidateId = u64;
+pub use crate::CandidateId;
 
 /// A place where a crack may be: a rectangle along the crack's main axis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -74,8 +74,9 @@ pub mod order;
 pub mod plan;
 mod planner;
 pub mod scan;
+mod settings;
 
-pub use candidate::{Candidate, CandidateId};
+pub use candidate::Candidate;
 pub use crack_length::{
     mean_crack_length, measure_mask, BinaryMask, CrackLengthEstimate, MaskMeasure, PaperEq1,
     PAPER_EQ1,
@@ -87,10 +88,14 @@ pub use plan::{
     raised_pass, slide_along, slide_time_s, travel_time_s, Move, Plan, PlanKind, Slide,
     TimeEstimate, Unreachable,
 };
-pub use planner::{OnUnreachable, Overlap, Planner, RaisedPass, Settings};
+pub use planner::Planner;
 pub use scan::{
     paper_mean_length_mm, scan_rows_count, scan_rows_exact, PaperTimeRow, PAPER_TABLE_II,
 };
+pub use settings::{OnUnreachable, Overlap, RaisedPass, Settings};
+
+/// A candidate's id, as the detector numbered it; unique within one request.
+pub type CandidateId = u64;
 
 /// The papers' sliding speed: "The average sliding velocity was 3.89 mm/s" (both papers).
 pub const PAPER_SLIDE_SPEED_MM_S: f64 = 3.89;

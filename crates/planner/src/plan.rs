@@ -4,7 +4,8 @@ use serde::Serialize;
 
 use crate::candidate::{Candidate, CandidateId};
 use crate::geometry::{dist, Point, Workspace};
-use crate::{Order, Overlap, Settings};
+use crate::order::Order;
+use crate::settings::{Overlap, Settings};
 
 /// One slide: the finger down on the surface, from `start_mm` to `end_mm` and, for an even
 /// number of passes, back.

@@ -1,8 +1,8 @@
 //! The sensor frame and its encoding.
 
+use crate::error::DecodeError;
 use crate::{
-    crc32c, DecodeError, COBS_LEN, CRC_COVERED_LEN, DELIMITER, PAYLOAD_LEN, PROTOCOL_VERSION,
-    WIRE_LEN,
+    crc32c, COBS_LEN, CRC_COVERED_LEN, DELIMITER, PAYLOAD_LEN, PROTOCOL_VERSION, WIRE_LEN,
 };
 
 /// Number of ADC channels in a frame.

@@ -35,9 +35,11 @@
 #![no_std]
 
 mod decoder;
+mod error;
 mod frame;
 
-pub use decoder::{DecodeError, Decoder, DecoderStats};
+pub use decoder::{Decoder, DecoderStats};
+pub use error::DecodeError;
 pub use frame::{Channel, Flags, Frame, CHANNELS};
 
 /// Protocol version carried in every frame; frames of other versions are rejected.

@@ -5,7 +5,8 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crackbot_dsp::{
-    FeatureExtractor, FeatureSpec, Segment, SegmentationMethod, Segmenter, WindowConfig,
+    FeatureExtractor, FeatureMatrix, FeatureSpec, Segment, SegmentationMethod, Segmenter,
+    WindowConfig,
 };
 use crackbot_recording::Recording;
 use serde::{Deserialize, Serialize};
@@ -292,20 +293,11 @@ impl Pipeline {
                 std::array::from_fn(|i| c[i] - offset[i])
             };
             // The whole recording, offset-corrected, and its directions: what context spans see.
-            let (all_samples, all_directions): (Vec<[f64; 4]>, Vec<u8>) = if context.is_some() {
-                rec.rows.iter().map(|r| (corrected(r), r.direction)).unzip()
+            let (all_samples, all_directions) = if context.is_some() {
+                whole_recording(path, rec, offset)?
             } else {
                 (Vec::new(), Vec::new())
             };
-            // Context spans reach outside the windows (and across slides): every sample they may
-            // see must be finite, as the streaming form refuses such samples.
-            for (i, s) in all_samples.iter().enumerate() {
-                crackbot_dsp::check_sample(i, s).map_err(|source| TactileError::Features {
-                    path: path.clone(),
-                    slide: rec.rows.get(i).map_or(0, |r| r.slide),
-                    source,
-                })?;
-            }
             // The fast path streams the recording once; the shape values have no streaming form.
             let mut streamed = match context {
                 Some(c) if !c.shape && !self.reference_context => Some(ContextRows::new(
@@ -321,22 +313,7 @@ impl Pipeline {
                 }
                 let rows = &rec.rows[range.clone()];
                 let samples: Vec<[f64; 4]> = rows.iter().map(corrected).collect();
-                let segment = match &self.segmenter {
-                    None => Segment {
-                        ranges: std::iter::once(0..samples.len()).collect(),
-                        trial_len: samples.len(),
-                    },
-                    Some(segmenter) => {
-                        let p: Vec<f64> = rows.iter().map(|r| r.p).collect();
-                        segmenter
-                            .segment(&p)
-                            .map_err(|source| TactileError::Segmentation {
-                                path: path.clone(),
-                                slide: rows[0].slide,
-                                source,
-                            })?
-                    }
-                };
+                let segment = self.segment(path, rows, samples.len())?;
                 let m = self
                     .extractor
                     .extract_segment(&samples, &segment)
@@ -350,30 +327,9 @@ impl Pipeline {
                 match context {
                     None => set.x.extend_from_slice(&m.data),
                     Some(c) => {
-                        for (k, &end) in m.window_ends.iter().enumerate() {
-                            if c.keep_window {
-                                set.x.extend_from_slice(m.row(k).unwrap_or(&[]));
-                            }
-                            let place = WindowPlace {
-                                samples: &all_samples,
-                                directions: &all_directions,
-                                slide_start: range.start,
-                                end: range.start + end,
-                            };
-                            let done = match streamed.as_mut() {
-                                Some(streamed) => streamed.extend(place, &mut set.x)?,
-                                None => false,
-                            };
-                            if !done {
-                                context_row(
-                                    c,
-                                    place,
-                                    spec.set.channels(),
-                                    self.extractor.window().len,
-                                    &mut set.x,
-                                );
-                            }
-                        }
+                        let whole = (&all_samples[..], &all_directions[..]);
+                        let rows_of = (&m, range.start);
+                        self.context_rows(c, whole, rows_of, streamed.as_mut(), &mut set.x)?;
                     }
                 }
                 set.y.extend(std::iter::repeat_n(class, n));
@@ -392,6 +348,97 @@ impl Pipeline {
         }
         Ok(set)
     }
+
+    /// The segment of a slide's `rows` (`n` samples) the windows are cut from: the whole slide,
+    /// or where the segmenter finds the stroke.
+    fn segment(
+        &self,
+        path: &Path,
+        rows: &[crackbot_recording::Row],
+        n: usize,
+    ) -> Result<Segment, TactileError> {
+        match &self.segmenter {
+            None => Ok(Segment {
+                ranges: std::iter::once(0..n).collect(),
+                trial_len: n,
+            }),
+            Some(segmenter) => {
+                let p: Vec<f64> = rows.iter().map(|r| r.p).collect();
+                segmenter
+                    .segment(&p)
+                    .map_err(|source| TactileError::Segmentation {
+                        path: path.to_path_buf(),
+                        slide: rows[0].slide,
+                        source,
+                    })
+            }
+        }
+    }
+
+    /// Each window's row of `m` (a slide starting at `slide_start` of its recording) with its
+    /// context features (`c`, over the `whole` recording's samples and directions), streamed
+    /// where `streamed` can, into `out`.
+    fn context_rows(
+        &self,
+        c: &ContextConfig,
+        whole: (&[[f64; 4]], &[u8]),
+        (m, slide_start): (&FeatureMatrix, usize),
+        mut streamed: Option<&mut ContextRows>,
+        out: &mut Vec<f32>,
+    ) -> Result<(), TactileError> {
+        let spec = self.extractor.spec();
+        for (k, &end) in m.window_ends.iter().enumerate() {
+            if c.keep_window {
+                out.extend_from_slice(m.row(k).unwrap_or(&[]));
+            }
+            let place = WindowPlace {
+                samples: whole.0,
+                directions: whole.1,
+                slide_start,
+                end: slide_start + end,
+            };
+            let done = match streamed.as_mut() {
+                Some(streamed) => streamed.extend(place, out)?,
+                None => false,
+            };
+            if !done {
+                context_row(
+                    c,
+                    place,
+                    spec.set.channels(),
+                    self.extractor.window().len,
+                    out,
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The whole recording at `path`, offset-corrected (`offset` per channel), and its directions:
+/// what context spans see. Context spans reach outside the windows (and across slides): every
+/// sample they may see must be finite, as the streaming form refuses such samples.
+fn whole_recording(
+    path: &Path,
+    rec: &Recording,
+    offset: [f64; 4],
+) -> Result<(Vec<[f64; 4]>, Vec<u8>), TactileError> {
+    let (samples, directions): (Vec<[f64; 4]>, Vec<u8>) = rec
+        .rows
+        .iter()
+        .map(|r| {
+            let c = r.channels();
+            (std::array::from_fn(|i| c[i] - offset[i]), r.direction)
+        })
+        .unzip();
+    for (i, s) in samples.iter().enumerate() {
+        crackbot_dsp::check_sample(i, s).map_err(|source| TactileError::Features {
+            path: path.to_path_buf(),
+            slide: rec.rows.get(i).map_or(0, |r| r.slide),
+            source,
+        })?;
+    }
+    Ok((samples, directions))
 }
 
 /// The context rows of one recording's windows, from a [`StreamingContext`] that the recording's

@@ -257,3 +257,14 @@ impl TactileError {
         }
     }
 }
+
+/// Refuses a forest of no trees: `--trees must be at least 1`, as the command line names it.
+pub(crate) fn check_n_trees(n_trees: usize) -> Result<(), TactileError> {
+    if n_trees == 0 {
+        return Err(TactileError::TooSmall {
+            argument: "--trees",
+            min: 1,
+        });
+    }
+    Ok(())
+}

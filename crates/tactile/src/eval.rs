@@ -69,17 +69,6 @@ impl ForestTuning {
 /// time, in order (see [`RandomForest::fit_with_progress`]). KNN and QDA report nothing.
 pub use crackbot_forest::TrainProgress;
 
-/// Refuses a forest of no trees: `--trees must be at least 1`, as the command line names it.
-pub(crate) fn check_n_trees(n_trees: usize) -> Result<(), TactileError> {
-    if n_trees == 0 {
-        return Err(TactileError::TooSmall {
-            argument: "--trees",
-            min: 1,
-        });
-    }
-    Ok(())
-}
-
 /// Trains `kind` on every window of `train`, reporting no progress.
 pub fn train_classifier(
     train: &WindowSet,
@@ -228,7 +217,7 @@ fn outcome(
         }
         let r = slide.windows.start * k..slide.windows.end * k;
         let tables: Vec<&[f32]> = slide_proba.iter().map(|p| &p[r.clone()]).collect();
-        let mean = crate::online::slide_means(&tables, slide.windows.len(), k);
+        let mean = crate::vote::slide_means(&tables, slide.windows.len(), k);
         let mean32: Vec<f32> = mean.iter().map(|&m| m as f32).collect();
         slides.add(slide.class, crackbot_forest::argmax(&mean32))?;
     }

@@ -14,41 +14,19 @@ use std::time::Instant;
 
 use crackbot_dsp::WindowConfig;
 use crackbot_recording::{collect_recordings, Recording};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::context::ContextConfig;
 use crate::dataset::{choose_experiment, Experiment, PipelineConfig, WindowSet};
+use crate::error::check_n_trees;
 use crate::eval::{
-    check_n_trees, test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
+    test_classifier, test_classifier_with_slide_voters, train_classifier_tuned,
     width_regression_tuned, ClassificationOutcome, ClassifierKind, ForestTuning, WidthOutcome,
 };
 use crate::model::TactileModel;
 use crate::TactileError;
 
-/// Who decides a slide's verdict when the windows carry context features.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SlideVote {
-    /// The context forest and a forest on the paper's window features: their slide means are summed
-    /// ([`test_classifier_with_slide_voters`]).
-    #[default]
-    Both,
-    /// The context forest alone. Every context feature is relative to the slide's own baseline,
-    /// so the verdict does not move with the offsets that the fibres' mounting puts on the
-    /// channels; the paper's window features are absolute counts, and a forest on them learns
-    /// each plate's offsets along with its surface.
-    Context,
-}
-
-impl SlideVote {
-    /// How the reports name it: `context+paper` or `context`.
-    pub fn name(self) -> &'static str {
-        match self {
-            SlideVote::Both => "context+paper",
-            SlideVote::Context => "context",
-        }
-    }
-}
+pub use crate::vote::SlideVote;
 
 /// What [`evaluate`] does.
 #[derive(Debug, Clone, PartialEq)]

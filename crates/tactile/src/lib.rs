@@ -39,5 +39,6 @@ pub mod stream;
 pub mod stroke;
 #[cfg(feature = "research")]
 pub mod tradeoff;
+pub mod vote;
 
 pub use error::TactileError;

@@ -364,6 +364,51 @@ pub fn localise_pass(
     localise_checked(samples, positions, config)
 }
 
+/// The noise of P from the sample-to-sample differences (robust: median absolute
+/// difference), at least a quantisation step's worth, counts.
+fn p_noise(samples: &[[f64; 4]]) -> f64 {
+    let mut diffs: Vec<f64> = samples
+        .windows(2)
+        .map(|w| (w[1][P] - w[0][P]).abs())
+        .collect();
+    if diffs.is_empty() {
+        0.5
+    } else {
+        let mid = diffs.len() / 2;
+        let (_, m, _) = diffs.select_nth_unstable_by(mid, f64::total_cmp);
+        (*m / (0.6745 * std::f64::consts::SQRT_2)).max(0.5)
+    }
+}
+
+/// Where the smoothed P crosses `level` at the dip's first and last samples below it
+/// (`[first, last]`), interpolated between `positions`, mm; and whether either edge is the
+/// pass's own end (the dip runs off it).
+fn dip_edges(
+    smooth: &[f64],
+    positions: &[f64],
+    level: f64,
+    [first, last]: [usize; 2],
+) -> ([f64; 2], bool) {
+    let n = smooth.len();
+    let at = |i: usize, f: f64| positions[i] + f * (positions[i + 1] - positions[i]);
+    let mut truncated = false;
+    let edge_a = if first == 0 {
+        truncated = true;
+        positions[0]
+    } else {
+        let (u, v) = (smooth[first - 1], smooth[first]);
+        at(first - 1, (u - level) / (u - v))
+    };
+    let edge_b = if last == n - 1 {
+        truncated = true;
+        positions[n - 1]
+    } else {
+        let (u, v) = (smooth[last], smooth[last + 1]);
+        at(last, (level - u) / (v - u))
+    };
+    ([edge_a, edge_b], truncated)
+}
+
 fn localise_checked(
     samples: &[[f64; 4]],
     positions: &[f64],
@@ -383,19 +428,7 @@ fn localise_checked(
     // Smoothed P: centred moving average, windows shrinking at the ends.
     let smooth = centred_moving_average(samples.iter().map(|s| s[P]), config.smooth_samples);
 
-    // Noise of P from the sample-to-sample differences (robust: median absolute difference), at least a
-    // quantisation step's worth.
-    let mut diffs: Vec<f64> = samples
-        .windows(2)
-        .map(|w| (w[1][P] - w[0][P]).abs())
-        .collect();
-    let noise = if diffs.is_empty() {
-        0.5
-    } else {
-        let mid = diffs.len() / 2;
-        let (_, m, _) = diffs.select_nth_unstable_by(mid, f64::total_cmp);
-        (*m / (0.6745 * std::f64::consts::SQRT_2)).max(0.5)
-    };
+    let noise = p_noise(samples);
 
     let mut sorted = smooth.clone();
     sorted.sort_unstable_by(f64::total_cmp);
@@ -414,22 +447,7 @@ fn localise_checked(
     else {
         return Ok(None);
     };
-    let at = |i: usize, f: f64| positions[i] + f * (positions[i + 1] - positions[i]);
-    let mut truncated = false;
-    let edge_a = if first == 0 {
-        truncated = true;
-        positions[0]
-    } else {
-        let (u, v) = (smooth[first - 1], smooth[first]);
-        at(first - 1, (u - level) / (u - v))
-    };
-    let edge_b = if last == n - 1 {
-        truncated = true;
-        positions[n - 1]
-    } else {
-        let (u, v) = (smooth[last], smooth[last + 1]);
-        at(last, (level - u) / (v - u))
-    };
+    let ([edge_a, edge_b], truncated) = dip_edges(&smooth, positions, level, [first, last]);
     let inside = last + 1 - first;
     let fill = (first..=last).filter(|&i| below(i)).count() as f64 / inside as f64;
 

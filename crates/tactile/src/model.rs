@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::context::ContextConfig;
 use crate::dataset::{detect_experiment, Experiment, Pipeline, PipelineConfig, WindowSet};
-pub use crate::evaluation::SlideVote;
+pub use crate::vote::SlideVote;
 use crate::TactileError;
 
 /// Magic number at the start of every model file.
@@ -334,6 +334,32 @@ pub struct TactileModel {
 /// Reports progress of training: `(forest name, trees done, trees in all)`.
 pub type ModelProgress<'a> = &'a mut (dyn FnMut(&'static str, usize, usize) + Send);
 
+/// What a model records of its training: the recordings' names, the windows and slides of the
+/// context `set`, the `config`, and the seconds since `started`.
+fn training_info(
+    recordings: &[(PathBuf, Recording)],
+    set: &WindowSet,
+    config: &TrainConfig,
+    started: Instant,
+) -> TrainingInfo {
+    TrainingInfo {
+        recordings: recordings
+            .iter()
+            .map(|(p, _)| {
+                p.file_name()
+                    .map_or_else(|| p.display().to_string(), |f| f.to_string_lossy().into())
+            })
+            .collect(),
+        windows: set.n_rows(),
+        slides: set.slides.iter().filter(|s| !s.windows.is_empty()).count(),
+        config: config.clone(),
+        // To the millisecond: a number of few digits reads back from the JSON header exactly
+        // (serde_json's default parser can miss a 17-digit one by an ulp).
+        seconds: (started.elapsed().as_secs_f64() * 1e3).round() / 1e3,
+        crackbot_version: env!("CARGO_PKG_VERSION").to_string(),
+    }
+}
+
 impl TactileModel {
     /// Trains the deployed models on every slide of `recordings` (the experiment detected from
     /// their labels unless given).
@@ -361,7 +387,7 @@ impl TactileModel {
         pipeline_config: PipelineConfig,
         progress: ModelProgress<'_>,
     ) -> Result<Self, TactileError> {
-        crate::eval::check_n_trees(config.n_trees)?;
+        crate::error::check_n_trees(config.n_trees)?;
         let experiment = match experiment {
             Some(e) => e,
             None => detect_experiment(recordings)?,
@@ -417,6 +443,7 @@ impl TactileModel {
         };
         let channels = pipeline_config.spec.set.channels().to_vec();
         let gate = UnknownGate::fit(&context_set, recordings, &channels);
+        let training = training_info(recordings, &context_set, config, started);
         let header = ModelHeader {
             format_version: FORMAT_VERSION,
             experiment,
@@ -431,26 +458,7 @@ impl TactileModel {
             pipeline: pipeline_config,
             gate,
             slide_vote: config.slide_vote,
-            training: TrainingInfo {
-                recordings: recordings
-                    .iter()
-                    .map(|(p, _)| {
-                        p.file_name()
-                            .map_or_else(|| p.display().to_string(), |f| f.to_string_lossy().into())
-                    })
-                    .collect(),
-                windows: context_set.n_rows(),
-                slides: context_set
-                    .slides
-                    .iter()
-                    .filter(|s| !s.windows.is_empty())
-                    .count(),
-                config: config.clone(),
-                // To the millisecond: a number of few digits reads back from the JSON header
-                // exactly (serde_json's default parser can miss a 17-digit one by an ulp).
-                seconds: (started.elapsed().as_secs_f64() * 1e3).round() / 1e3,
-                crackbot_version: env!("CARGO_PKG_VERSION").to_string(),
-            },
+            training,
             sections: Vec::new(),
         };
         let model = TactileModel {

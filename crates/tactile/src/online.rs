@@ -21,6 +21,7 @@ use serde::Serialize;
 use crate::dataset::Segmentation;
 use crate::model::{Doubt, SlideVote, TactileModel};
 use crate::stream::StreamingContext;
+use crate::vote::slide_means;
 use crate::TactileError;
 
 /// The verdict so far during a slide.
@@ -316,26 +317,7 @@ impl<'m> OnlineClassifier<'m> {
         if n < self.min_slide_len {
             return Ok(None);
         }
-        let w = self.window_cfg;
-        self.ends.clear();
-        let mut segment = (0, 0);
-        if let Some(segmenter) = &self.segmenter {
-            let seg = segmenter.segment(&self.p).map_err(TactileError::Pipeline)?;
-            for r in &seg.ranges {
-                for k in 0..w.n_windows(r.len()) {
-                    self.ends.push(r.start + k * w.step + w.len - 1);
-                }
-            }
-            let span = seg.span();
-            segment = (span.start, span.end);
-        }
-        let segmented = !self.ends.is_empty();
-        if !segmented {
-            for k in 0..w.n_windows(n) {
-                self.ends.push(k * w.step + w.len - 1);
-            }
-            segment = (0, n);
-        }
+        let (segment, segmented) = self.window_ends()?;
         if self.ends.is_empty() {
             return Ok(None);
         }
@@ -367,46 +349,7 @@ impl<'m> OnlineClassifier<'m> {
         let votes32: Vec<f32> = votes.iter().map(|&v| v as f32).collect();
         let class = crackbot_forest::argmax(&votes32);
         let confidence = votes.get(class as usize).copied().unwrap_or(0.0) / self.voters();
-        let width = match &self.model.width {
-            None => None,
-            Some(reg) => {
-                self.estimates.clear();
-                for &e in &self.ends {
-                    let ctx = &self.ctx_rows[e * self.n_ctx..(e + 1) * self.n_ctx];
-                    self.estimates.push(f64::from(reg.predict(ctx)));
-                }
-                let mm = median(&mut self.estimates);
-                for v in self.estimates.iter_mut() {
-                    *v = (*v - mm).abs();
-                }
-                let mad = median(&mut self.estimates);
-                let total: f64 = votes.iter().sum();
-                let labels = &self.model.header.labels;
-                let mean = votes
-                    .iter()
-                    .zip(labels)
-                    .map(|(v, w)| v / total * w)
-                    .sum::<f64>();
-                // The estimate is the winning class's width (chosen over the posterior mean and
-                // the regressor by leave-one-repetition-out on repetitions 1–3: slide MAE
-                // 0.00–0.03 mm against 1.28–1.41 and 0.07–1.42 mm, models/tactile/MODEL_CARD.md);
-                // its uncertainty is the vote's spread around it.
-                let mode = labels.get(class as usize).copied().unwrap_or(mean);
-                let var = votes
-                    .iter()
-                    .zip(labels)
-                    .map(|(v, w)| v / total * (w - mode).powi(2))
-                    .sum::<f64>();
-                Some(WidthEstimate {
-                    mm: mode,
-                    posterior_mean_mm: mean,
-                    std_mm: var.sqrt(),
-                    range_mm: vote_range_mm(&votes, labels, 0.1),
-                    regressor_mm: mm,
-                    regressor_spread_mm: 1.4826 * mad,
-                })
-            }
-        };
+        let width = self.width_estimate(&votes, class);
         let novel_fraction = novel as f64 / m as f64;
         let doubt =
             self.model
@@ -429,21 +372,74 @@ impl<'m> OnlineClassifier<'m> {
             samples: n,
         }))
     }
-}
 
-/// Summed per-class means over `m` windows of each `k`-column probability table, in the order of
-/// `crate::eval`'s slide verdicts (table by table, window by window, `f32` → `f64` / m).
-pub(crate) fn slide_means(tables: &[&[f32]], m: usize, k: usize) -> Vec<f64> {
-    let n = m as f64;
-    let mut mean = vec![0f64; k];
-    for table in tables {
-        for j in 0..m {
-            for (s, &v) in mean.iter_mut().zip(&table[j * k..(j + 1) * k]) {
-                *s += f64::from(v) / n;
+    /// The ends of the slide's windows into `self.ends`: over the segment the segmenter finds,
+    /// or the whole slide where it finds none. The segment, and whether it was found.
+    fn window_ends(&mut self) -> Result<((usize, usize), bool), TactileError> {
+        let n = self.samples.len();
+        let w = self.window_cfg;
+        self.ends.clear();
+        let mut segment = (0, 0);
+        if let Some(segmenter) = &self.segmenter {
+            let seg = segmenter.segment(&self.p).map_err(TactileError::Pipeline)?;
+            for r in &seg.ranges {
+                for k in 0..w.n_windows(r.len()) {
+                    self.ends.push(r.start + k * w.step + w.len - 1);
+                }
             }
+            let span = seg.span();
+            segment = (span.start, span.end);
         }
+        let segmented = !self.ends.is_empty();
+        if !segmented {
+            for k in 0..w.n_windows(n) {
+                self.ends.push(k * w.step + w.len - 1);
+            }
+            segment = (0, n);
+        }
+        Ok((segment, segmented))
     }
-    mean
+
+    /// The slide's width from the `votes` that chose `class` (`None` for a model without a
+    /// width regressor).
+    fn width_estimate(&mut self, votes: &[f64], class: u32) -> Option<WidthEstimate> {
+        let reg = self.model.width.as_ref()?;
+        self.estimates.clear();
+        for &e in &self.ends {
+            let ctx = &self.ctx_rows[e * self.n_ctx..(e + 1) * self.n_ctx];
+            self.estimates.push(f64::from(reg.predict(ctx)));
+        }
+        let mm = median(&mut self.estimates);
+        for v in self.estimates.iter_mut() {
+            *v = (*v - mm).abs();
+        }
+        let mad = median(&mut self.estimates);
+        let total: f64 = votes.iter().sum();
+        let labels = &self.model.header.labels;
+        let mean = votes
+            .iter()
+            .zip(labels)
+            .map(|(v, w)| v / total * w)
+            .sum::<f64>();
+        // The estimate is the winning class's width (chosen over the posterior mean and
+        // the regressor by leave-one-repetition-out on repetitions 1–3: slide MAE
+        // 0.00–0.03 mm against 1.28–1.41 and 0.07–1.42 mm, models/tactile/MODEL_CARD.md);
+        // its uncertainty is the vote's spread around it.
+        let mode = labels.get(class as usize).copied().unwrap_or(mean);
+        let var = votes
+            .iter()
+            .zip(labels)
+            .map(|(v, w)| v / total * (w - mode).powi(2))
+            .sum::<f64>();
+        Some(WidthEstimate {
+            mm: mode,
+            posterior_mean_mm: mean,
+            std_mm: var.sqrt(),
+            range_mm: vote_range_mm(votes, labels, 0.1),
+            regressor_mm: mm,
+            regressor_spread_mm: 1.4826 * mad,
+        })
+    }
 }
 
 /// Median (sorts `v`; mean of the two middle values for an even count; 0 when empty).

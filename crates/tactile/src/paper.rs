@@ -15,7 +15,8 @@ use crackbot_recording::{collect_recordings, Recording};
 use serde::Serialize;
 
 use crate::dataset::{detect_experiment, Experiment, PipelineConfig, WindowSet};
-use crate::eval::{check_n_trees, test_classifier, train_classifier, ClassifierKind};
+use crate::error::check_n_trees;
+use crate::eval::{test_classifier, train_classifier, ClassifierKind};
 use crate::metrics::ConfusionMatrix;
 use crate::stats::{kruskal_wallis, mean_std, KruskalWallis};
 use crate::TactileError;

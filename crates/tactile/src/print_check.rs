@@ -101,17 +101,9 @@ pub fn dip_area(p: &[f64], along: &[f64], dark: f64) -> Result<DipArea, TactileE
     dip_area_within(p, along, dark, None)
 }
 
-/// As [`dip_area`], with the dip's floor searched only among the samples within `within` (mm
-/// along the pass; the whole pass when `None` or when no sample lies there): where a pass
-/// also crosses something else dark, the dip of the line being judged rather than the deepest.
-///
-/// Errors as [`dip_area`].
-pub fn dip_area_within(
-    p: &[f64],
-    along: &[f64],
-    dark: f64,
-    within: Option<[f64; 2]>,
-) -> Result<DipArea, TactileError> {
+/// A pass the dip's measures can use: as many positions as samples, enough of them, every one
+/// finite, and a finite dark level.
+fn check_pass(p: &[f64], along: &[f64], dark: f64) -> Result<(), TactileError> {
     if p.len() != along.len() {
         return Err(err(format!(
             "{} proximity samples but {} positions",
@@ -134,20 +126,15 @@ pub fn dip_area_within(
     if !dark.is_finite() {
         return Err(err(format!("the dark level {dark} is not a finite number")));
     }
-    let mut order: Vec<usize> = (0..p.len()).collect();
-    order.sort_by(|&a, &b| along[a].total_cmp(&along[b]));
-    let x: Vec<f64> = order.iter().map(|&i| along[i]).collect();
-    let v: Vec<f64> = order.iter().map(|&i| p[i]).collect();
+    Ok(())
+}
+
+/// `v` at sorted positions `x` (mm) averaged over ±`SMOOTH_MM`/2 of position (two pointers over
+/// the sorted samples).
+fn smooth_by_position(x: &[f64], v: &[f64]) -> Vec<f64> {
     let n = v.len();
-    if x[n - 1] - x[0] < 1.0 {
-        return Err(err(format!(
-            "the pass spans {:.3} mm; at least 1 mm needed",
-            x[n - 1] - x[0]
-        )));
-    }
-    // Moving average over ±SMOOTH_MM/2 of position (two pointers over the sorted samples).
     let (mut a, mut b, mut sum) = (0usize, 0usize, 0.0);
-    let smooth: Vec<f64> = (0..n)
+    (0..n)
         .map(|i| {
             while b < n && x[b] <= x[i] + SMOOTH_MM / 2.0 {
                 sum += v[b];
@@ -159,7 +146,49 @@ pub fn dip_area_within(
             }
             sum / (b - a) as f64
         })
-        .collect();
+        .collect()
+}
+
+/// The area between `baseline` and `v` at sorted positions `x` inside `window` (mm), counts ×
+/// mm. Trapezoid weights: each sample stands for half the gaps to its neighbours.
+fn area_below(x: &[f64], v: &[f64], baseline: f64, window: [f64; 2]) -> f64 {
+    let n = v.len();
+    let mut area = 0.0;
+    for i in 0..n {
+        if x[i] < window[0] || x[i] > window[1] {
+            continue;
+        }
+        let left = if i > 0 { x[i] - x[i - 1] } else { 0.0 };
+        let right = if i + 1 < n { x[i + 1] - x[i] } else { 0.0 };
+        area += (baseline - v[i]) * 0.5 * (left + right);
+    }
+    area
+}
+
+/// As [`dip_area`], with the dip's floor searched only among the samples within `within` (mm
+/// along the pass; the whole pass when `None` or when no sample lies there): where a pass
+/// also crosses something else dark, the dip of the line being judged rather than the deepest.
+///
+/// Errors as [`dip_area`].
+pub fn dip_area_within(
+    p: &[f64],
+    along: &[f64],
+    dark: f64,
+    within: Option<[f64; 2]>,
+) -> Result<DipArea, TactileError> {
+    check_pass(p, along, dark)?;
+    let mut order: Vec<usize> = (0..p.len()).collect();
+    order.sort_by(|&a, &b| along[a].total_cmp(&along[b]));
+    let x: Vec<f64> = order.iter().map(|&i| along[i]).collect();
+    let v: Vec<f64> = order.iter().map(|&i| p[i]).collect();
+    let n = v.len();
+    if x[n - 1] - x[0] < 1.0 {
+        return Err(err(format!(
+            "the pass spans {:.3} mm; at least 1 mm needed",
+            x[n - 1] - x[0]
+        )));
+    }
+    let smooth = smooth_by_position(&x, &v);
     let searched = |xi: f64| within.is_none_or(|[lo, hi]| xi >= lo && xi <= hi);
     let deepest = |keep: &dyn Fn(f64) -> bool| {
         smooth
@@ -206,16 +235,7 @@ pub fn dip_area_within(
              fibre's dark level {dark:.1}: too far away to judge"
         )));
     }
-    // Trapezoid weights: each sample stands for half the gaps to its neighbours.
-    let mut area = 0.0;
-    for i in 0..n {
-        if !inside(x[i]) {
-            continue;
-        }
-        let left = if i > 0 { x[i] - x[i - 1] } else { 0.0 };
-        let right = if i + 1 < n { x[i + 1] - x[i] } else { 0.0 };
-        area += (baseline - v[i]) * 0.5 * (left + right);
-    }
+    let area = area_below(&x, &v, baseline, window);
     Ok(DipArea {
         baseline,
         area,

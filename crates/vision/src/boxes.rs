@@ -119,7 +119,7 @@ pub struct Detection {
     /// Where the crack runs inside the box (detectors that predict a crack map; `None` for box
     /// detectors).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shape: Option<crate::crack_map::CrackShape>,
+    pub shape: Option<crate::shape::CrackShape>,
     /// Which part of the detector found it.
     #[serde(default, skip_serializing_if = "DetectionSource::is_primary")]
     pub source: DetectionSource,

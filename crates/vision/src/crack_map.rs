@@ -38,8 +38,6 @@
 //! is a [`CrackPiece`]: a centre-line point near its middle and away from junctions (where a
 //! stroke across meets that crack alone), its local direction and its length.
 
-use serde::{Deserialize, Serialize};
-
 use crate::boxes::{BoundingBox, Detection};
 use crate::preprocess::{Letterbox, PostprocessParams};
 use crate::VisionError;
@@ -47,69 +45,16 @@ use crate::VisionError;
 mod centre_line;
 use centre_line::pieces;
 
+pub use crate::preprocess::MIN_AREA_FRACTION;
+pub use crate::shape::{CrackPiece, CrackShape, MAX_POLYLINE_POINTS};
+pub use centre_line::{BRIDGE_CELLS, CONTINUATION_DEG, CORNER_DEG, MIN_PIECE_CELLS, SPUR_CELLS};
+
 /// Canvas pixels per map cell, along each axis.
 pub const MAP_STRIDE: usize = 2;
 /// A cell at or above this probability is a crack cell.
 pub const MAP_THRESHOLD: f32 = 0.5;
 /// The dilation radius, as a fraction of the image's longer side (the dataset rule's 0.02).
 pub const DILATION_FRACTION: f32 = 0.02;
-/// Boxes smaller than this fraction of the image are dropped (the dataset rule's 0.1%).
-pub const MIN_AREA_FRACTION: f32 = 0.001;
-/// Most points of a crack's centre-line polyline.
-pub const MAX_POLYLINE_POINTS: usize = 9;
-
-/// Where a detected crack runs, in image pixels.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CrackShape {
-    /// The main axis: the two ends of the crack along its principal direction.
-    pub axis: [[f32; 2]; 2],
-    /// The centre line from one end to the other (2 to [`MAX_POLYLINE_POINTS`] points).
-    pub polyline: Vec<[f32; 2]>,
-    /// Length of the polyline, pixels.
-    pub length_px: f32,
-    /// The cracks the component holds, longest first, where the finger should touch each (see
-    /// the [module docs](self)); empty when none is at least [`MIN_PIECE_CELLS`] long.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub pieces: Vec<CrackPiece>,
-}
-
-/// One crack of a detection, where a stroke across it should go (image pixels).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CrackPiece {
-    /// A point of its centre line near its middle, away from junctions with other cracks.
-    pub touch: [f32; 2],
-    /// Its direction at `touch`: the ends of a segment through `touch`, as long as the piece.
-    pub axis: [[f32; 2]; 2],
-    /// Length of its centre line, pixels.
-    pub length_px: f32,
-    /// Its width at `touch`: the run of crack cells across its direction there, pixels (a map
-    /// cell's resolution).
-    pub width_px: f32,
-}
-
-/// Branches of the centre line with a free end shorter than this (map cells) are spurs.
-pub const SPUR_CELLS: usize = 3;
-/// A branch between two junctions at most this long (map cells) is a bridge within one crossing:
-/// thinned, two lines crossing at 30–75° meet at two junctions (or one cell touching both), and
-/// each line went on through neither, so a crack crossed by a print or another crack became
-/// three or four pieces. On the rendered trial scenes 8000–8359 (one frame each): candidates on a
-/// crack that already had one 66 → 24, other candidates 615 → 585, cracks left without a
-/// candidate 30 → 35 (thick cracks side by side or crossing, merged with their neighbour); with
-/// 6 cells 27, 586 and 35 (`crates/research/EXPERIMENTS.md`, "Crossings thinned to two junctions").
-pub const BRIDGE_CELLS: usize = 10;
-/// Pieces shorter than this (map cells) are not touched on their own.
-pub const MIN_PIECE_CELLS: usize = 4;
-/// Two branches continue each other through a junction (or across a gap) when their directions
-/// are within this many degrees of a straight line.
-pub const CONTINUATION_DEG: f64 = 40.0;
-/// A centre line that turns by more than this many degrees (over [`DIRECTION_CELLS`] cells
-/// either side) is two cracks meeting at a corner: one crack of the simulated trial scenes
-/// bends by at most 34° at a vertex, and two pieces of one crack met at 33–38°.
-pub const CORNER_DEG: f64 = 60.0;
-/// Cells along a branch over which its direction at an end is taken.
-const DIRECTION_CELLS: usize = 4;
-/// Touch points keep at least this many cells from a junction when the piece allows.
-const JUNCTION_CLEARANCE_CELLS: f64 = 3.0;
 
 /// A crack map of one letterboxed frame: `cells × cells` probabilities, row-major.
 #[derive(Debug, Clone, PartialEq)]

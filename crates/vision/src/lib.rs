@@ -41,6 +41,7 @@ pub mod pieces;
 pub mod pixel;
 pub mod preprocess;
 pub mod scene_recall;
+pub mod shape;
 #[cfg(feature = "research")]
 pub mod tradeoff;
 

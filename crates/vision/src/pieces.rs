@@ -13,7 +13,7 @@
 use serde::Serialize;
 
 use crate::crack_map::CrackPiece;
-use crate::scene_recall::FrameTruth;
+use crackbot_imaging::scene_truth::FrameTruth;
 
 /// Distance from a piece's touch point to a centre line that still counts as on it, pixels
 /// (the map's 2-pixel cells and the renderer's line both blur by about a pixel), plus half the

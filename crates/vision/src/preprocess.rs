@@ -16,6 +16,9 @@
 use crate::boxes::{nms, BoundingBox, Detection};
 use crate::VisionError;
 
+/// Boxes smaller than this fraction of the image are dropped (the dataset rule's 0.1%).
+pub const MIN_AREA_FRACTION: f32 = 0.001;
+
 /// How an image was fitted into the square input.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Letterbox {
@@ -120,7 +123,7 @@ impl Default for PostprocessParams {
             score_threshold: 0.25,
             iou_threshold: 0.5,
             max_detections: 100,
-            min_area_fraction: crate::crack_map::MIN_AREA_FRACTION,
+            min_area_fraction: MIN_AREA_FRACTION,
             box_head: false,
         }
     }

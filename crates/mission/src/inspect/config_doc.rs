@@ -41,7 +41,7 @@ pub(crate) const COMMENTS: &[(&str, &str)] = &[
     ("plan.planner", "The planner's settings (crackbot_planner::Settings); the mission's defaults differ from the planner's: EXPERIMENTS.md, \"Strokes as long as the finger's reach\"."),
     ("plan.planner.slide_speed_mm_s", "Sliding speed, mm/s: the simulator's fit to the authors' recordings, which the tactile models learned (SIM_SLIDE_SPEED_MM_S)."),
     ("plan.planner.travel_speed_mm_s", "Speed of moves with the finger lifted, mm/s (the site's)."),
-    ("plan.planner.acceleration_mm_s2", "Acceleration of moves, mm/s^2 (left out: constant speed)."),
+    ("plan.planner.travel_accel_mm_s2", "Acceleration of moves, mm/s^2 (left out: constant speed)."),
     ("plan.planner.settle_s", "Per slide: lowering, settling, lifting the finger, s (an assumption)."),
     ("plan.planner.reversal_s", "Length of each start/stop ramp of a stroke, s (the simulator's arm: 0.05)."),
     ("plan.planner.passes", "Strokes across each candidate: one was as accurate as four on the trials at a third of the time (EXPERIMENTS.md, \"Error against run time before the print check: strokes, stroke length, margin\")."),
@@ -185,7 +185,7 @@ mod tests {
         // but for the optional ones.
         let optional = [
             "rig.hardware",
-            "plan.planner.acceleration_mm_s2",
+            "plan.planner.travel_accel_mm_s2",
             "plan.planner.along_spacing_mm",
             "plan.planner.start_mm",
             "plan.planner.raised_pass",

@@ -4,7 +4,8 @@
 use crackbot_tactile::model::Doubt;
 use serde::Serialize;
 
-use super::report::NOT_JUDGED;
+/// How an unjudged pass's doubt begins (a stroke whose ends read unlike each other).
+pub const NOT_JUDGED: &str = "not judged";
 
 /// Why a pass's verdict is not to be trusted (the recognition model's own doubt), or why the
 /// pass was not judged. In the JSON report, an object tagged by `kind`.

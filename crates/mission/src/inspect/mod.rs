@@ -71,11 +71,11 @@ pub(crate) mod steps;
 pub use config::{CheckedConfig, InspectConfig};
 #[cfg(feature = "foxglove")]
 pub use crackbot_mcap::DEFAULT_LIVE_ADDR;
-pub use doubts::{CrackDoubt, PassDoubt, Width};
+pub use doubts::{CrackDoubt, PassDoubt, Width, NOT_JUDGED};
 pub use progress::{ArmPose, Feeling, LiveSample, Progress, StreamHealth, StrokeSample};
 pub use report::{
     Dip, Evidence, FrameInfo, InspectMode, InspectReport, LinkCounters, PassRecord,
-    RejectedCandidate, ReportedCrack, StageTimes, NOT_JUDGED,
+    RejectedCandidate, ReportedCrack, StageTimes,
 };
 pub use rig::backend::{Connection, HardwareRig, RigBackend};
 pub use rig::log::LOG_FILE;

@@ -244,6 +244,3 @@ pub struct LinkCounters {
     /// Duplicates dropped.
     pub duplicates: u64,
 }
-
-/// How an unjudged pass's doubt begins (a stroke whose ends read unlike each other).
-pub const NOT_JUDGED: &str = "not judged";

@@ -6,10 +6,31 @@
 
 use crackbot_imaging::thinning::{neighbours, pixel, thin, NEIGHBOUR_OFFSETS};
 
-use super::{
-    CrackPiece, BRIDGE_CELLS, CONTINUATION_DEG, CORNER_DEG, DIRECTION_CELLS,
-    JUNCTION_CLEARANCE_CELLS, MIN_PIECE_CELLS, SPUR_CELLS,
-};
+use crate::shape::CrackPiece;
+
+/// Branches of the centre line with a free end shorter than this (map cells) are spurs.
+pub const SPUR_CELLS: usize = 3;
+/// A branch between two junctions at most this long (map cells) is a bridge within one crossing:
+/// thinned, two lines crossing at 30–75° meet at two junctions (or one cell touching both), and
+/// each line went on through neither, so a crack crossed by a print or another crack became
+/// three or four pieces. On the rendered trial scenes 8000–8359 (one frame each): candidates on a
+/// crack that already had one 66 → 24, other candidates 615 → 585, cracks left without a
+/// candidate 30 → 35 (thick cracks side by side or crossing, merged with their neighbour); with
+/// 6 cells 27, 586 and 35 (`crates/research/EXPERIMENTS.md`, "Crossings thinned to two junctions").
+pub const BRIDGE_CELLS: usize = 10;
+/// Pieces shorter than this (map cells) are not touched on their own.
+pub const MIN_PIECE_CELLS: usize = 4;
+/// Two branches continue each other through a junction (or across a gap) when their directions
+/// are within this many degrees of a straight line.
+pub const CONTINUATION_DEG: f64 = 40.0;
+/// A centre line that turns by more than this many degrees (over [`DIRECTION_CELLS`] cells
+/// either side) is two cracks meeting at a corner: one crack of the simulated trial scenes
+/// bends by at most 34° at a vertex, and two pieces of one crack met at 33–38°.
+pub const CORNER_DEG: f64 = 60.0;
+/// Cells along a branch over which its direction at an end is taken.
+pub(crate) const DIRECTION_CELLS: usize = 4;
+/// Touch points keep at least this many cells from a junction when the piece allows.
+pub(crate) const JUNCTION_CLEARANCE_CELLS: f64 = 3.0;
 
 /// A grid cell, (row, column).
 type Cell = (isize, isize);

@@ -51,8 +51,6 @@ impl Rig<'_> {
     ) -> Result<(Recorded, Option<Obstruction>), MissionError> {
         let first_sample = self.sensor.samples.len();
         self.stroke = Some(Stroke::new(None, line_start, to));
-        let mut reference: Option<f64> = None;
-        let mut obstruction: Option<Obstruction> = None;
         self.arm.errors.clear();
         let seq = self.arm.command(&Message::MoveTo(crackbot_link::MoveTo {
             pose: crackbot_link::Pose {
@@ -63,6 +61,35 @@ impl Rig<'_> {
             speed_mm_s: speed as f32,
             valid_until_us: self.arm.deadline_us()?,
         }))?;
+        let guarded = guard.map(|g| (g, first_sample));
+        let (reference, obstruction) =
+            self.follow_hover(seq, (line_start, to), z, speed, guarded)?;
+        self.stroke = None;
+        self.await_lagging_samples()?;
+        let (mut samples, mut positions) = self.level_samples(first_sample, (line_start, to), z);
+        // A stopped pass keeps what it read before the rise began (a quarter of the guard).
+        if let (Some(g), Some(r), Some(_)) = (guard, reference, obstruction) {
+            let rise = samples.iter().position(|s| s[3] - r > g / 4.0);
+            if let Some(i) = rise {
+                samples.truncate(i);
+                positions.truncate(i);
+            }
+        }
+        Ok(((samples, positions), obstruction))
+    }
+
+    /// Follows the move `seq` towards `to` at height `z` and `speed` until the arm arrives,
+    /// stopping it where the guard `(counts, first sample)` sees something rise under the line
+    /// (from `line_start`): the guard's reference level and the obstruction, if any.
+    fn follow_hover(
+        &mut self,
+        seq: u32,
+        (line_start, to): ([f64; 2], [f64; 2]),
+        z: f64,
+        speed: f64,
+        guard: Option<(f64, usize)>,
+    ) -> Result<(Option<f64>, Option<Obstruction>), MissionError> {
+        let mut reference: Option<f64> = None;
         let here = self.arm.here();
         let dist = (to[0] - here[0]).hypot(to[1] - here[1]);
         let budget = Duration::from_secs_f64(dist / speed / self.config.speedup * 1.5 + 3.0);
@@ -74,15 +101,10 @@ impl Rig<'_> {
                 return Err(MissionError::Interrupted);
             }
             self.pump(Duration::from_millis(2))?;
-            if let Some(g) = guard {
+            if let Some((g, first_sample)) = guard {
                 let p = &self.sensor.samples[first_sample..];
                 if reference.is_none() && p.len() >= GUARD_REFERENCE_SAMPLES {
-                    let mut first: Vec<f64> = p[..GUARD_REFERENCE_SAMPLES]
-                        .iter()
-                        .map(|s| f64::from(s.raw[3]))
-                        .collect();
-                    first.sort_by(f64::total_cmp);
-                    reference = Some(first[GUARD_REFERENCE_SAMPLES / 2]);
+                    reference = Some(guard_reference(p));
                 }
                 if let Some(r) = reference {
                     let latest = &p[p.len() - GUARD_MEAN_SAMPLES..];
@@ -91,11 +113,11 @@ impl Rig<'_> {
                     if mean - r > g {
                         self.arm.stop();
                         let here = self.arm.here();
-                        obstruction = Some(Obstruction {
+                        let obstruction = Obstruction {
                             rise_counts: mean - r,
                             at_mm: along(line_start, unit(line_start, to), here),
-                        });
-                        break;
+                        };
+                        return Ok((reference, Some(obstruction)));
                     }
                 }
             }
@@ -115,9 +137,12 @@ impl Rig<'_> {
             }
             self.check_progress(deadline, budget, || "the print check's raised pass".into())?;
         }
-        // The sensor's samples lag the arm's states: wait (100 ms at most) until one taken
-        // after the arm arrived (or was stopped) has come in.
-        self.stroke = None;
+        Ok((reference, None))
+    }
+
+    /// The sensor's samples lag the arm's states: waits (100 ms at most) until one taken after
+    /// the arm arrived (or was stopped) has come in.
+    fn await_lagging_samples(&mut self) -> Result<(), MissionError> {
         let arrived_us = mapped_states(self.arm).last().map(|(h, _)| *h);
         let wait_until = Instant::now() + Duration::from_millis(100);
         while let Some(t) = arrived_us {
@@ -131,6 +156,18 @@ impl Rig<'_> {
             }
             self.pump(Duration::from_millis(2))?;
         }
+        Ok(())
+    }
+
+    /// The samples from `first_sample` on taken while the arm was held at height `z` (moving,
+    /// or at rest at either end), with their positions along the line from `line_start`
+    /// towards `to`, mm.
+    fn level_samples(
+        &mut self,
+        first_sample: usize,
+        (line_start, to): ([f64; 2], [f64; 2]),
+        z: f64,
+    ) -> Recorded {
         let u = unit(line_start, to);
         let mapped = mapped_states(self.arm);
         let (mut samples, mut positions) = (Vec::new(), Vec::new());
@@ -150,14 +187,17 @@ impl Rig<'_> {
                 positions.push(along(line_start, u, p));
             }
         }
-        // A stopped pass keeps what it read before the rise began (a quarter of the guard).
-        if let (Some(g), Some(r), Some(_)) = (guard, reference, obstruction) {
-            let rise = samples.iter().position(|s| s[3] - r > g / 4.0);
-            if let Some(i) = rise {
-                samples.truncate(i);
-                positions.truncate(i);
-            }
-        }
-        Ok(((samples, positions), obstruction))
+        (samples, positions)
     }
+}
+
+/// The sound surface's level at a guarded pass's start: the median proximity of its first
+/// [`GUARD_REFERENCE_SAMPLES`] samples (`samples` holds at least as many), counts.
+fn guard_reference(samples: &[super::sensor::TimedSample]) -> f64 {
+    let mut first: Vec<f64> = samples[..GUARD_REFERENCE_SAMPLES]
+        .iter()
+        .map(|s| f64::from(s.raw[3]))
+        .collect();
+    first.sort_by(f64::total_cmp);
+    first[GUARD_REFERENCE_SAMPLES / 2]
 }

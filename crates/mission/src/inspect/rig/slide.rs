@@ -55,7 +55,6 @@ impl Rig<'_> {
         dir: u8,
         feel: &mut Feel<'_>,
     ) -> Result<Recorded, MissionError> {
-        let config = self.config;
         let first_sample = self.sensor.samples.len();
         feel.begin(id, (a, b), dir, first_sample);
         self.stroke = Some(Stroke::new(Some(id), a, b));
@@ -76,6 +75,22 @@ impl Rig<'_> {
             contact: Contact::DepthMm(1.0),
             valid_until_us: self.arm.deadline_us()?,
         }))?;
+        self.follow_slide(id, seq, (a, b), speed, feel)?;
+        self.stroke_samples(id, (a, b), speed, first_sample)
+    }
+
+    /// Follows slide `id` (command `seq`, from `a` to `b` at `speed`) until the controller says
+    /// it is done, showing what the finger feels; fails when it is refused, the controller
+    /// restarts, the sensor stalls, the arm's state stream stops or it takes far too long.
+    fn follow_slide(
+        &mut self,
+        id: u32,
+        seq: u32,
+        (a, b): ([f64; 2], [f64; 2]),
+        speed: f64,
+        feel: &mut Feel<'_>,
+    ) -> Result<(), MissionError> {
+        let config = self.config;
         let here = self.arm.here();
         let travel = (a[0] - here[0]).hypot(a[1] - here[1]) / config.site.arm.travel_speed_mm_s;
         let stroke = (b[0] - a[0]).hypot(b[1] - a[1]) / speed;
@@ -114,6 +129,20 @@ impl Rig<'_> {
             }
             self.check_progress(deadline, budget, || format!("slide {id}"))?;
         }
+        Ok(())
+    }
+
+    /// The samples of slide `id` from `a` to `b` at `speed` (those from `first_sample` on,
+    /// taken while the arm was down in it) with their positions along it, shown to the front
+    /// end; fails as a stall where the sensor fell silent inside the stroke.
+    fn stroke_samples(
+        &mut self,
+        id: u32,
+        (a, b): ([f64; 2], [f64; 2]),
+        speed: f64,
+        first_sample: usize,
+    ) -> Result<Recorded, MissionError> {
+        let config = self.config;
         // A few more states, so the end of the stroke is bracketed.
         let settle = Instant::now() + Duration::from_millis(40);
         while Instant::now() < settle {

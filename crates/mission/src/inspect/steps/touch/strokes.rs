@@ -9,9 +9,9 @@ use crackbot_planner::Slide;
 use crackbot_tactile::localise::CrackExtent;
 use crackbot_tactile::online::{OnlineClassifier, SlideVerdict};
 
-use crate::inspect::doubts::PassDoubt;
+use crate::inspect::doubts::{PassDoubt, NOT_JUDGED};
 use crate::inspect::progress::Progress;
-use crate::inspect::report::{Dip, InspectReport, PassRecord, NOT_JUDGED};
+use crate::inspect::report::{Dip, InspectReport, PassRecord};
 use crate::MissionError;
 
 /// The contact strokes over one candidate, as the print check compares raised passes with
