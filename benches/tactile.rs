@@ -87,7 +87,7 @@ impl<'a> Stream<'a> {
     }
 }
 
-#[allow(
+#[expect(
     clippy::too_many_lines,
     reason = "one criterion group per stage, set up in order"
 )]

@@ -648,3 +648,62 @@ fn the_mission_library_keeps_its_files_and_functions_short() {
     }
     assert!(found.is_empty(), "too long:\n{}", found.join("\n"));
 }
+
+/// The `…` spans of `text` that name a file or folder of the mission library (`steps/x.rs`,
+/// `rig/`, `mod.rs`).
+fn named_paths(text: &str) -> BTreeSet<String> {
+    text.split('`')
+        .skip(1)
+        .step_by(2)
+        .filter(|s| s.ends_with(".rs") || s.ends_with('/'))
+        .filter(|s| !s.contains(' ') && !s.starts_with("crates/") && !s.starts_with("tests/"))
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn the_architectures_mission_tables_name_every_file_of_the_mission_library_and_no_other() {
+    let arch = std::fs::read_to_string(root().join("ARCHITECTURE.md")).expect("ARCHITECTURE.md");
+    let section = arch
+        .split("## A mission, step by step")
+        .nth(1)
+        .expect("ARCHITECTURE.md has the section \"A mission, step by step\"");
+    let named = named_paths(section);
+    let inspect = root().join("crates/mission/src/inspect");
+    // Every name is a file or folder there.
+    let missing: Vec<&String> = named
+        .iter()
+        .filter(|n| {
+            let n = n.trim_end_matches('/');
+            // The rig's files are named bare in its row.
+            !(inspect.join(n).exists() || inspect.join("rig").join(n).exists())
+        })
+        .collect();
+    assert!(missing.is_empty(), "named but not there: {missing:?}");
+    // Every file of the report layer, the rig and the steps is named (a folder's own files
+    // through the folder).
+    let mut unnamed = Vec::new();
+    for f in rust_files(&inspect) {
+        let rel = f
+            .strip_prefix(&inspect)
+            .expect("a file of the mission library")
+            .to_string_lossy()
+            .replace('\\', "/");
+        let folder = rel.rsplit_once('/').map(|(d, _)| format!("{d}/"));
+        let in_named_folder = folder
+            .as_ref()
+            .is_some_and(|d| named.contains(d) && d.matches('/').count() > 1);
+        let bare = rel.rsplit('/').next().unwrap_or(&rel).to_string();
+        let listed = named.contains(&rel)
+            || in_named_folder
+            || (rel.starts_with("rig/") && named.contains(&bare))
+            || (rel.starts_with("steps/") && !rel.contains("/mod.rs") && named.contains(&rel));
+        if !listed && rel != "steps/mod.rs" && rel != "rig/mod.rs" {
+            unnamed.push(rel);
+        }
+    }
+    assert!(
+        unnamed.is_empty(),
+        "files the tables do not name: {unnamed:?}"
+    );
+}

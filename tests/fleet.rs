@@ -2,7 +2,6 @@
 //! (`crackbot-robot --telemetry`) and stations in this process. A station joining mid-mission
 //! catches up; signed commands are obeyed, unsigned, wrongly signed and replayed ones refused;
 //! a robot that dies is shown as lost within 2 s.
-#![allow(clippy::unwrap_used)]
 
 use std::process::{Child, Command as Process, Stdio};
 use std::time::{Duration, Instant};
@@ -86,7 +85,7 @@ fn phase(f: &Fleet, robot: &str) -> Option<Phase> {
 }
 
 #[test]
-#[allow(
+#[expect(
     clippy::too_many_lines,
     reason = "one scenario test that reads top to bottom"
 )]

@@ -175,6 +175,99 @@ fn the_robot_drives_the_controller_process_over_the_link_and_refuses_a_bad_key()
 }
 
 #[test]
+fn a_mission_file_names_the_rig_and_the_settings_and_flags_override_it() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let key = dir.path().join("link.key");
+    key_file(&key, "5a");
+    // The defaults as a file, every key explained, and read back by the robot unchanged.
+    let o = Command::new(binary("crackbot-robot"))
+        .arg("--print-config")
+        .output()
+        .expect("crackbot-robot --print-config");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let printed = text(&o.stdout);
+    for section in [
+        "[rig]",
+        "[perceive]",
+        "[plan.planner]",
+        "[touch]",
+        "[print_check]",
+        "[judge]",
+        "[pieces]",
+        "[output]",
+    ] {
+        assert!(printed.contains(section), "{section} missing:\n{printed}");
+    }
+    assert!(printed.contains("# Height of the raised pass"), "{printed}");
+    let defaults = dir.path().join("defaults.toml");
+    std::fs::write(&defaults, &printed).expect("defaults.toml");
+    let again = Command::new(binary("crackbot-robot"))
+        .args([
+            "--config",
+            defaults.to_str().expect("utf-8"),
+            "--print-config",
+        ])
+        .output()
+        .expect("crackbot-robot --config --print-config");
+    assert_eq!(text(&again.stdout), printed, "{}", text(&again.stderr));
+
+    let c = start_controller(dir.path(), &key, "8");
+    let (mut controller, pty, cport, hport) = (c.child, c.pty, c.port, c.host_port);
+    let _stdout = c._stdout;
+    // A site's mission written down: the hardware, the site's box, the mode and a step's
+    // setting; the speed-up comes from the flags.
+    let file = dir.path().join("mission.toml");
+    let out = dir.path().join("mission");
+    std::fs::write(
+        &file,
+        format!(
+            "mode = \"tactile\"\n\
+             [rig.hardware]\nserial = \"{pty}\"\ncontroller = \"127.0.0.1:{cport}\"\n\
+             bind = \"127.0.0.1:{hport}\"\nkey_file = \"{key}\"\n\
+             [rig.site]\nname = \"test plate\"\n\
+             [rig.site.arm]\nworkspace_min_mm = [0.0, 0.0]\nworkspace_max_mm = [40.0, 24.0]\n\
+             [plan]\ngamma = 0.75\n[output]\nout_dir = \"{out}\"\n",
+            key = key.display(),
+            out = out.display(),
+        ),
+    )
+    .expect("mission.toml");
+    let o = Command::new(binary("crackbot-robot"))
+        .args([
+            "--config",
+            file.to_str().expect("utf-8"),
+            "--speedup",
+            "8",
+            "--json",
+        ])
+        .output()
+        .expect("crackbot-robot --config");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert_eq!(report["mode"], "tactile");
+    assert_eq!(report["scene"], "test plate");
+    assert!(!report["passes"].as_array().expect("passes").is_empty());
+    assert!(out.join("report.json").is_file());
+    controller.kill().ok();
+    controller.wait().ok();
+
+    // A key the configuration does not have, and a value out of range, are named.
+    let bad = dir.path().join("bad.toml");
+    for (body, named) in [
+        ("[print_check]\nhieght_mm = 2.0\n", "hieght_mm"),
+        ("[touch]\nmin_dip_counts = -3.0\n", "touch.min_dip_counts"),
+    ] {
+        std::fs::write(&bad, body).expect("bad.toml");
+        let o = Command::new(binary("crackbot-robot"))
+            .args(["--config", bad.to_str().expect("utf-8")])
+            .output()
+            .expect("crackbot-robot --config bad.toml");
+        assert!(!o.status.success());
+        assert!(text(&o.stderr).contains(named), "{}", text(&o.stderr));
+    }
+}
+
+#[test]
 fn crackbot_run_takes_the_robots_flags() {
     let robot = Command::new(binary("crackbot-robot"))
         .arg("--help")

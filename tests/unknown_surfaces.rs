@@ -46,7 +46,7 @@ impl Rates {
 }
 
 #[test]
-#[allow(
+#[expect(
     clippy::too_many_lines,
     reason = "one scenario test that reads top to bottom"
 )]

@@ -1,6 +1,9 @@
 //! linfa's random forest on the real windows, and its conversion into our flat [`RandomForest`]
 //! (`benches/tactile.rs`'s baseline; checked by `tests/linfa_flat_conversion.rs`).
-#![allow(dead_code)] // each including crate uses a different subset
+#![allow(
+    dead_code,
+    reason = "included by several test or bench crates, each using a subset: dead in some, not in others"
+)]
 
 use crackbot_forest::{Node, RandomForest};
 use crackbot_tactile::dataset::WindowSet;

@@ -4,7 +4,10 @@
 //! `tests/forest_onnx.rs`.
 //!
 //! Errors are strings that say what to do (run `bash scripts/setup.sh`, or the exporter's message).
-#![allow(dead_code)] // each including crate uses a different subset
+#![allow(
+    dead_code,
+    reason = "included by several test or bench crates, each using a subset: dead in some, not in others"
+)]
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;

@@ -2,7 +2,10 @@
 //! test on repetition 2). Shared, through `#[path]`, by `benches/tactile.rs`,
 //! `tests/linfa_flat_conversion.rs` and the examples `export_windows` and `per_window_instructions` of
 //! crackbot-tactile, so every benchmark sees the same windows.
-#![allow(dead_code)] // each including crate uses a different subset
+#![allow(
+    dead_code,
+    reason = "included by several test or bench crates, each using a subset: dead in some, not in others"
+)]
 
 use std::path::{Path, PathBuf};
 

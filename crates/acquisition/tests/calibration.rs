@@ -1,6 +1,9 @@
 //! Tests of the per-sensor calibration file.
 
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::{Path, PathBuf};
 

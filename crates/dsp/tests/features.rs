@@ -1,6 +1,10 @@
 //! Windowed features: layout, alignment, numerics and input checks, batch and streaming.
 
-#![allow(clippy::unwrap_used, clippy::single_range_in_vec_init)]
+#![expect(
+    clippy::unwrap_used,
+    clippy::single_range_in_vec_init,
+    reason = "a test stops at the first thing it did not expect; one-range vectors are the data under test"
+)]
 
 use crackbot_dsp::{
     extract_features, extract_segment_features, mav, rms, Channel, DspError, Feature, FeatureSet,
@@ -461,7 +465,10 @@ fn segment_features_stay_inside_ranges() {
         extract_segment_features(&samples, &bad, &spec, WindowConfig::default()),
         Err(DspError::InvalidConfig { .. })
     ));
-    #[allow(clippy::reversed_empty_ranges)]
+    #[expect(
+        clippy::reversed_empty_ranges,
+        reason = "an empty range is the case under test"
+    )]
     let reversed = Segment {
         ranges: vec![50..40],
         trial_len: 100,

@@ -1,7 +1,5 @@
 //! Segmentation on synthetic signals: the paper's eq. 2 and its variants, the robust method, the measurement.
 
-#![allow(clippy::unwrap_used, clippy::single_range_in_vec_init)]
-
 use crackbot_dsp::{
     measure_segmentation, segment_paper, segment_robust, Channel, DspError, Extent, MarginBase,
     PaperSegmentation, RobustSegmentation, Segment, SegmentationMethod,

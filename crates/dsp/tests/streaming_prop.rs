@@ -1,7 +1,5 @@
 //! Property: the streaming form emits exactly the batch form's rows, bit for bit, at the same window ends.
 
-#![allow(clippy::unwrap_used, clippy::single_range_in_vec_init)]
-
 use crackbot_dsp::{
     extract_features, Feature, FeatureSet, FeatureSpec, StreamingFeatures, WindowConfig,
 };

@@ -1,7 +1,5 @@
 //! Random-forest classifier: training semantics, determinism, inference paths, bad input.
 
-#![allow(clippy::unwrap_used)] // tests may unwrap
-
 use std::time::Instant;
 
 use crackbot_forest::{

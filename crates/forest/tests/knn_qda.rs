@@ -1,7 +1,5 @@
 //! KNN and QDA: accuracy on Gaussian blobs, determinism, and robustness of QDA to singular classes.
 
-#![allow(clippy::unwrap_used)] // tests may unwrap
-
 use crackbot_forest::{accuracy, synthetic, Classifier, Dataset, Knn, KnnParams, Qda, QdaParams};
 
 fn assert_proper(p: &[f32], what: &str) {

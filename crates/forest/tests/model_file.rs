@@ -1,6 +1,9 @@
 //! Model file: round trips and every kind of corruption.
 
-#![allow(clippy::unwrap_used)] // tests may unwrap
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::Path;
 

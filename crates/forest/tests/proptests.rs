@@ -1,6 +1,9 @@
 //! Property tests: training and prediction never panic and always give proper probabilities.
 
-#![allow(clippy::unwrap_used)] // tests may unwrap
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use crackbot_forest::{
     Classifier, Dataset, ForestParams, Knn, KnnParams, MaxFeatures, Qda, QdaParams, RandomForest,

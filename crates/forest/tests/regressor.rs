@@ -1,7 +1,5 @@
 //! Random-forest regressor (crack width in mm) on y = f(x) + noise.
 
-#![allow(clippy::unwrap_used)] // tests may unwrap
-
 use crackbot_forest::{synthetic, ForestParams, RandomForestRegressor, RegressionDataset};
 
 #[test]

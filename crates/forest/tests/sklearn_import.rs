@@ -1,7 +1,10 @@
 //! Import of a scikit-learn forest (fixtures written by `sklearn/export_forest.py fixture tests/fixtures`,
 //! scikit-learn 1.9.1): every test row's prediction must equal scikit-learn's, probabilities within 1e-6.
 
-#![allow(clippy::unwrap_used)] // tests may unwrap
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::PathBuf;
 

@@ -338,7 +338,6 @@ pub fn save_results(path: impl AsRef<Path>, results: &[CocoResult]) -> Result<()
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
 
     fn dataset() -> CocoDataset {

@@ -221,7 +221,6 @@ pub struct ReprojectionStats {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
 
     /// A camera looking down at the plate from 250 mm, slightly tilted: plate → image.

@@ -96,7 +96,6 @@ pub fn write_in_background(
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
 
     #[test]

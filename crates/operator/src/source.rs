@@ -160,7 +160,10 @@ impl SimBackend {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "each argument is one the step needs, and a struct would only rename them"
+)]
 fn run_sim(
     n: u32,
     mode: InspectMode,

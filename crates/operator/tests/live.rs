@@ -3,7 +3,10 @@
 //! runs) in this process, with a simulated scene behind it; the app connects to it, shows it,
 //! starts a mission through the confirm step with a signed command, watches it stream, and
 //! sends the emergency stop.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 mod common;
 

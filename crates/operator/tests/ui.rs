@@ -1,7 +1,10 @@
 //! The app's UI logic and layout, headless with egui_kittest: queries by label, clicks, the
 //! confirm step before anything moves an arm, the emergency stop, a whole simulated mission
 //! streaming into the views, exports, and the replay of the mission it saved.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 mod common;
 

@@ -1,7 +1,10 @@
 //! Degenerate inputs give a plan or a clear error: an empty scene, a candidate on the workspace
 //! edge or outside it, overlapping candidates (slid one by one or merged), a zero-length crack,
 //! non-finite coordinates, duplicate ids, γ out of range, speeds above the limits.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use crackbot_planner::{
     brute_force_order, targeted, Candidate, Limits, OnUnreachable, Order, Overlap, Plan, PlanError,

@@ -3,7 +3,6 @@
 //! `w̄` measured two independent ways agrees, `L̄` is the centre-line length eq. 1 approximates,
 //! and the figures stay where they were measured (printed with `--nocapture`, next to the
 //! paper's).
-#![allow(clippy::unwrap_used)]
 
 #[path = "support/masks.rs"]
 mod masks;

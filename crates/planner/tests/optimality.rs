@@ -3,7 +3,6 @@
 //! 2-opt + Or-opt (the default) against the exact optimum of `brute_force_order`, for the
 //! default forth-and-back slides, one-way slides (which end on the other side) and several
 //! slides along each crack. Prints the worst and mean ratios (`--nocapture`).
-#![allow(clippy::unwrap_used)]
 
 use crackbot_planner::{brute_force_order, Candidate, Limits, Order, Planner, Settings, Workspace};
 

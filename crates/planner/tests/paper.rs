@@ -1,7 +1,6 @@
 //! The paper's eq. 1 and 2 and its exploration-time table (Table II), recomputed: eq. 2 gives
 //! its 13 / 7 / 5 rows, the tactile-only estimates grow with `N_s` as its measured times do, and
 //! the targeted plans take a fraction of the scan's time. `--nocapture` prints the table.
-#![allow(clippy::unwrap_used)]
 
 #[path = "support/paper.rs"]
 mod paper;

@@ -2,7 +2,10 @@
 //! settings and candidates (inside, on the edge, outside, overlapping, zero-length, huge), every
 //! slide endpoint and every travel waypoint inside, every speed within the limits, every
 //! candidate either slid across (from sound surface to sound surface) or reported.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use crackbot_planner::{
     Candidate, Limits, Order, Overlap, Plan, PlanError, PlanKind, Planner, RaisedPass, Settings,

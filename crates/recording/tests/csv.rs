@@ -1,6 +1,9 @@
 //! Tests of the CSV reader, writer and streaming recorder.
 
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::{Path, PathBuf};
 

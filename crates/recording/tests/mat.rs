@@ -1,7 +1,10 @@
 //! Tests of the MAT-file reader and writer on the authors' 30 recordings, on files built by hand, and on damaged
 //! files; and of the extension-based loaders.
 
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::io::Write;
 use std::path::PathBuf;

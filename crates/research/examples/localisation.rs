@@ -102,7 +102,7 @@ struct Real {
     rec: Recording,
 }
 
-#[allow(
+#[expect(
     clippy::too_many_lines,
     reason = "a research probe (to leave the library's examples with issue 58)"
 )]

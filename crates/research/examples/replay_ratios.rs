@@ -65,7 +65,7 @@ fn fmt(v: &[Option<f64>]) -> String {
         .join(",")
 }
 
-#[allow(
+#[expect(
     clippy::too_many_lines,
     reason = "a research probe (to leave the library's examples with issue 58)"
 )]

@@ -38,7 +38,7 @@
 //! fused figure between scenes whose lines keep [`APART_MM`] from every other feature
 //! ([`clearance_mm`]) and the rest, so a reader sees which kind of scene the errors come from.
 
-#![allow(
+#![expect(
     clippy::result_large_err,
     reason = "the missions' own error (crackbot_mission::MissionError) is returned as it is"
 )]

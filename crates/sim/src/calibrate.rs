@@ -839,7 +839,7 @@ fn fit_optics(
 /// then gets its optics fitted from several starts with `max_evals`. The deformation channels'
 /// resting levels are set so that the simulated flat plate has the real one's medians.
 /// `progress(done, total)` is called per candidate.
-#[allow(
+#[expect(
     clippy::too_many_lines,
     reason = "the calibration procedure, one fit after another over shared intermediates; not yet split into steps"
 )]

@@ -262,7 +262,6 @@ impl Camera {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
 
     fn spec(position: [f64; 3], look_at: [f64; 2], roll: f64) -> CameraSpec {

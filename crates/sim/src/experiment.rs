@@ -427,7 +427,10 @@ fn fmt_width(w: f64) -> String {
 
 /// Simulates one recording of `slides` slides over `surface` mounted as `mount`: the arm starts
 /// `start_mm` before `edge_x` on the line y = `line_y`.
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "each argument is one the step needs, and a struct would only rename them"
+)]
 pub fn simulate_recording(
     config: &ExperimentConfig,
     surface: &Surface,

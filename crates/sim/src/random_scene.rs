@@ -488,7 +488,6 @@ pub fn as_printed(scene: &Scene) -> Scene {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
 
     fn inside(p: &RandomSceneParams, path: &[Point]) -> bool {

@@ -136,7 +136,6 @@ pub fn compare_slides(real: &[Recording], simulated: &[Recording], slide: u32) -
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
     use crackbot_recording::Row;
 

@@ -13,7 +13,10 @@
 //!
 //! Every sample of every run is checked: all fields finite, ADC counts whole numbers in
 //! `0..=1023`. The sensor is the calibrated one (its tip radius unless a case sets one).
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use crackbot_sim::calibrate::calibrated_sensor;
 use crackbot_sim::finger::{

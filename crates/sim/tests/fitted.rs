@@ -2,7 +2,6 @@
 //! proximity spike as the real finger's stick-slip over it does (not a broad rise), and the
 //! fitted sensor reproduces the channel statistics of repetition 1 (the repetition it was fitted
 //! on) within the calibration's tolerance.
-#![allow(clippy::unwrap_used)]
 
 use crackbot_recording::Recording;
 use crackbot_sim::calibrate::{fit_rms, fit_speed_rms};

@@ -1,6 +1,9 @@
 //! Parameter files (`sim dataset --params`, `sim calibrate --start/--params-out`) and the
 //! calibration's measured targets: the tip-speed quantiles and the proximity dark level.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use crackbot_recording::{Recording, Row};
 use crackbot_sim::calibrate::{real_dark_counts, speed_quantiles, QUANTILES};

@@ -1,7 +1,10 @@
 //! Rendering scenes with real crack appearance: image size, determinism, ground-truth boxes,
 //! darkness of cracks, decoys, screws as occluders, the homography, width scaling, errors and
 //! the COCO export.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;

@@ -1,7 +1,10 @@
 //! Scene files: every file in `crates/sim/scenes/` loads and validates, the default file is the
 //! built-in scene, each validation rule is hit by a small snippet whose error names the field,
 //! and scenes survive a TOML round trip.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::{Path, PathBuf};
 

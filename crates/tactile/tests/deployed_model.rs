@@ -4,7 +4,10 @@
 //! slide vote; the context vote does not move with the fibres' offsets.
 
 // Helpers shared by the tests unwrap too: a failure there is a failed test.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;

@@ -3,7 +3,10 @@
 //! on random signals with random slides, configurations and extreme values (proptest).
 
 // Helpers shared by the tests unwrap too: a failure there is a failed test.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::PathBuf;
 

@@ -329,7 +329,6 @@ impl CommandGuard {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
 
     fn key(b: u8) -> Key {

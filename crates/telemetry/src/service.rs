@@ -171,7 +171,10 @@ impl RobotService {
     /// Runs one mission, publishing its stages, data and report; `progress` sees every event
     /// too (a progress bar). Publishing errors are logged, never stop the mission. (The error
     /// is the mission library's own, as large as `run_inspection`'s.)
-    #[allow(clippy::result_large_err)]
+    #[expect(
+        clippy::result_large_err,
+        reason = "the mission library's own error, returned as it is"
+    )]
     pub fn run_mission(
         &self,
         config: &InspectConfig,

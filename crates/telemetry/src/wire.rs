@@ -539,7 +539,6 @@ pub(crate) fn example_verdict(id: u32) -> PassVerdict {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
 
     fn samples() -> Vec<Telemetry> {

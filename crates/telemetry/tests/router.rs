@@ -1,6 +1,9 @@
 //! A site's topology: a Zenoh router, and a robot and a station that are both its clients
 //! (`ZenohOptions::router`), over real TCP on loopback.
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;

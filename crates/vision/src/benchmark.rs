@@ -291,7 +291,6 @@ impl EvalReport {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
     use crate::coco::{CocoAnnotation, CocoCategory, CocoImage};
 

@@ -328,7 +328,6 @@ fn draw_line(img: &mut image::RgbImage, a: [f32; 2], b: [f32; 2], colour: [u8; 3
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
 
     struct Two;

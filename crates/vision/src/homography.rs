@@ -605,7 +605,6 @@ pub fn parse_pairs(text: &str, path: &Path) -> Result<Vec<PointPair>, VisionErro
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
 
     #[test]

@@ -241,7 +241,6 @@ pub fn scene_recall(
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
     use super::*;
     use crate::coco::CocoImage;
 

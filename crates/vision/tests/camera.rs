@@ -3,7 +3,6 @@
 //! every failure (no device, a corrupt stream, no ffmpeg, a camera that never answers) is an
 //! error naming the source. A V4L2 device goes through the same process with `-f v4l2`; there
 //! is none on this machine.
-#![allow(clippy::unwrap_used)]
 
 use std::process::Command;
 use std::time::{Duration, Instant};

@@ -2,7 +2,10 @@
 //! end on real images (JPEG decoding, `detect_dataset`, `evaluate`) and finds something. The numbers
 //! are printed (`-- --nocapture`), and only loosely asserted.
 
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::PathBuf;
 

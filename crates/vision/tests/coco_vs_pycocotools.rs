@@ -1,7 +1,10 @@
 //! The COCO metrics of `crackbot_vision::coco::evaluate` against the real pycocotools (2.0.10) on the
 //! real validation splits, with synthetic detections (`tests/fixtures/make_coco_fixtures.py`).
 
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use std::path::PathBuf;
 

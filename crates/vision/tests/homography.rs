@@ -1,7 +1,10 @@
 //! Homography fitting against a synthetic pinhole camera looking at the plane z = 0 (mm), degenerate
 //! input, RANSAC with outliers, the calibration file, and a round-trip property.
 
-#![allow(clippy::unwrap_used)]
+#![expect(
+    clippy::unwrap_used,
+    reason = "a test stops at the first thing it did not expect, and says where"
+)]
 
 use crackbot_vision::homography::{
     fit_dlt, fit_ransac, Homography, HomographyCalibration, PointPair,

@@ -1,7 +1,6 @@
 //! A missing or wrong ONNX Runtime library is a clear error naming the version and the fix, never a
 //! panic. One test per file: the runtime is loaded once per process.
 
-#![allow(clippy::unwrap_used)]
 #![cfg(feature = "onnx")]
 
 use crackbot_vision::onnx::OnnxDetector;

@@ -1,6 +1,9 @@
 //! Test harness: endpoints on 127.0.0.1, one pumped in its own thread, a tap between host and
 //! controller that records (and may withhold) what the host sends, and an attacker socket.
-#![allow(dead_code)]
+#![allow(
+    dead_code,
+    reason = "included by several test or bench crates, each using a subset: dead in some, not in others"
+)]
 
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;

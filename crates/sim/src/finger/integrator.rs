@@ -214,7 +214,10 @@ impl Stepper {
     /// Solves the stage equation `k = f(t, base + a k)` by Newton's method on `I - a J`: the
     /// factorisation `lu` of the step's Jacobian is reused (simplified Newton) and refreshed at
     /// the current iterate when the iteration stalls (a contact switching inside the step).
-    #[allow(clippy::too_many_arguments)]
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "each argument is one the step needs, and a struct would only rename them"
+    )]
     fn stage(
         &mut self,
         model: &FingerModel,
@@ -338,7 +341,10 @@ impl Stepper {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "each argument is one the step needs, and a struct would only rename them"
+    )]
     fn dopri(
         &mut self,
         model: &FingerModel,

@@ -262,7 +262,7 @@ fn bilinear(grid: &[f32], w: usize, h: usize, x: f64, y: f64) -> Option<f32> {
 
 /// Cuts the crack inside `bbox` out of a photo (`luma`) and its mask and straightens it, or
 /// `None` when it is too short, too fragmented, branched or not darker than its surroundings.
-#[allow(
+#[expect(
     clippy::too_many_lines,
     reason = "one image-processing pass (mask, skeleton, straightening) over shared buffers; not yet split"
 )]

@@ -240,7 +240,7 @@ fn evaluate_img(
 /// `COCOeval(gt, dt, "bbox").evaluate(); accumulate(); summarize()` does (see the module docs).
 ///
 /// Errors when a result is for an image not in `gt`, or has a non-finite value or a negative size.
-#[allow(
+#[expect(
     clippy::too_many_lines,
     reason = "mirrors pycocotools' evaluate/accumulate/summarize line by line, so the two can be compared"
 )]
