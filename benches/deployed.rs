@@ -135,7 +135,7 @@ fn bench(c: &mut Criterion) {
                 .predict_proba_batch(&win.x, win.n_features, &mut out_win)
                 .expect("batch");
             black_box((&out_ctx, &out_win));
-        })
+        });
     });
     group.finish();
 }

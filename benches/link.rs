@@ -61,12 +61,12 @@ fn codec(c: &mut Criterion) {
     g.throughput(Throughput::Elements(1));
     let mut out = [0u8; MAX_DATAGRAM];
     g.bench_function("state, unsigned (baseline)", |b| {
-        b.iter(|| wire::encode(black_box(&h), black_box(&body), None, &mut out).expect("encode"))
+        b.iter(|| wire::encode(black_box(&h), black_box(&body), None, &mut out).expect("encode"));
     });
     g.bench_function("state, signed", |b| {
         b.iter(|| {
             wire::encode(black_box(&h), black_box(&body), Some(&signer), &mut out).expect("encode")
-        })
+        });
     });
     g.finish();
 
@@ -77,16 +77,16 @@ fn codec(c: &mut Criterion) {
     let mut g = c.benchmark_group("link/decode");
     g.throughput(Throughput::Elements(1));
     g.bench_function("state, unsigned (baseline)", |b| {
-        b.iter(|| wire::decode(black_box(&unsigned[..nu]), None).expect("decode"))
+        b.iter(|| wire::decode(black_box(&unsigned[..nu]), None).expect("decode"));
     });
     g.bench_function("state, verify and decode", |b| {
-        b.iter(|| wire::decode(black_box(&signed[..ns]), Some(&signer)).expect("decode"))
+        b.iter(|| wire::decode(black_box(&signed[..ns]), Some(&signer)).expect("decode"));
     });
     g.bench_function("state, verify only", |b| {
         b.iter(|| {
             let p = wire::parse(black_box(&signed[..ns])).expect("parse");
             assert!(p.verify(&signer));
-        })
+        });
     });
     g.finish();
 
@@ -119,7 +119,7 @@ fn codec(c: &mut Criterion) {
                 let sent = a.encode_message(&m, false, &mut buf).expect("encode");
                 let r = b.receive(&buf[..sent.len], &mut reply);
                 black_box(r.event);
-            })
+            });
         });
     }
     g.finish();
@@ -218,7 +218,7 @@ fn round_trip(c: &mut Criterion) {
             "send_reliable, unsigned (baseline)"
         };
         g.bench_function(name, |b| {
-            b.iter(|| host.send_reliable(black_box(&command)).expect("acked"))
+            b.iter(|| host.send_reliable(black_box(&command)).expect("acked"));
         });
         let s = host.stats();
         assert_eq!(s.timeouts, 0, "{s:?}");

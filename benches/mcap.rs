@@ -39,7 +39,7 @@ fn bench(c: &mut Criterion) {
             for &(t, raw) in &samples {
                 black_box(serde_json::to_vec(&value(t, raw)).expect("json"));
             }
-        })
+        });
     });
     let log = LogWriter::create(&dir.path().join("bench.mcap"), 0).expect("the log");
     g.bench_function("log_400", |b| {
@@ -51,7 +51,7 @@ fn bench(c: &mut Criterion) {
                     log.finger_at(t, [t * 4.6, 10.0, 0.0]);
                 }
             }
-        })
+        });
     });
     g.bench_function("open_and_close", |b| {
         let path = dir.path().join("small.mcap");
@@ -60,7 +60,7 @@ fn bench(c: &mut Criterion) {
             log.json(JsonTopic::Status, 0.0, &serde_json::json!({"stage": "x"}))
                 .expect("logged");
             black_box(log.finish().expect("closed"));
-        })
+        });
     });
     g.finish();
     log.finish().expect("closed");

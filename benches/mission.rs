@@ -58,7 +58,7 @@ fn bench_mission(c: &mut Criterion) {
                 });
             }
             total
-        })
+        });
     });
     group.finish();
 

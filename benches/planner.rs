@@ -62,7 +62,7 @@ fn targeted(c: &mut Criterion) {
                 plan.estimated_s
             );
             g.bench_with_input(BenchmarkId::new(name, n), &cands, |b, cands| {
-                b.iter(|| p.targeted_with(black_box(cands), order).expect("plan"))
+                b.iter(|| p.targeted_with(black_box(cands), order).expect("plan"));
             });
         }
     }
@@ -75,7 +75,7 @@ fn targeted(c: &mut Criterion) {
     );
     g.sample_size(10);
     g.bench_with_input(BenchmarkId::new("brute_force", 8), &eight, |b, cands| {
-        b.iter(|| brute_force_order(&p, black_box(cands)).expect("plan"))
+        b.iter(|| brute_force_order(&p, black_box(cands)).expect("plan"));
     });
     g.finish();
 }
@@ -87,7 +87,7 @@ fn scan(c: &mut Criterion) {
     let mut g = c.benchmark_group("planner_tactile_scan");
     for gamma in [0.25, 0.5, 0.75] {
         g.bench_with_input(BenchmarkId::from_parameter(gamma), &gamma, |b, &gamma| {
-            b.iter(|| p.tactile_scan(black_box(gamma), l_mm).expect("scan"))
+            b.iter(|| p.tactile_scan(black_box(gamma), l_mm).expect("scan"));
         });
     }
     g.finish();

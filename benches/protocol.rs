@@ -68,7 +68,7 @@ fn decode(c: &mut Criterion) {
             d.feed(black_box(&bytes), |r| n += usize::from(r.is_ok()));
             assert_eq!(n, FRAMES);
             n
-        })
+        });
     });
     group.bench_function("crackbot Decoder, 64-byte reads", |b| {
         b.iter(|| {
@@ -79,14 +79,14 @@ fn decode(c: &mut Criterion) {
             }
             assert_eq!(n, FRAMES);
             n
-        })
+        });
     });
     group.bench_function("baseline cobs::CobsDecoder byte by byte", |b| {
         b.iter(|| {
             let n = baseline_decode(black_box(&bytes));
             assert_eq!(n, FRAMES);
             n
-        })
+        });
     });
     group.finish();
 }
@@ -101,14 +101,14 @@ fn encode(c: &mut Criterion) {
     let mut group = c.benchmark_group("encode");
     group.throughput(Throughput::Elements(1));
     group.bench_function("Frame::to_wire", |b| {
-        b.iter(|| black_box(black_box(&frame).to_wire()))
+        b.iter(|| black_box(black_box(&frame).to_wire()));
     });
     group.bench_function("Frame::to_payload (layout + CRC only)", |b| {
         b.iter_batched(
             || frame,
             |f| black_box(f.to_payload()),
             BatchSize::SmallInput,
-        )
+        );
     });
     group.finish();
 }

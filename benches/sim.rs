@@ -40,11 +40,11 @@ fn finger(c: &mut Criterion) {
                     sim
                 },
                 BatchSize::PerIteration,
-            )
+            );
         });
     }
     g.bench_function("setup_profile_and_envelope", |b| {
-        b.iter(|| slide(Integrator::default()).expect("slide"))
+        b.iter(|| slide(Integrator::default()).expect("slide"));
     });
     g.finish();
 }
@@ -62,7 +62,7 @@ fn camera(c: &mut Criterion) {
         b.iter(|| {
             seed += 1;
             render(&scene, &assets, &RenderOptions::default(), seed).expect("frame")
-        })
+        });
     });
     g.finish();
 }

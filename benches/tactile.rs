@@ -127,21 +127,21 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements(1));
     let mut stream = Stream::new(&real.test_samples);
     g.bench_function("stream_push", |b| {
-        b.iter(|| black_box(*stream.next_window()))
+        b.iter(|| black_box(*stream.next_window()));
     });
     let mut i = 0;
     g.bench_function("forest_predict", |b| {
         b.iter(|| {
             i = if i + 1 == n_test { 0 } else { i + 1 };
             forest.predict(black_box(real.test.row(i)))
-        })
+        });
     });
     let mut stream = Stream::new(&real.test_samples);
     g.bench_function("stream_push+forest_predict", |b| {
         b.iter(|| {
             let row = *stream.next_window();
             forest.predict(black_box(&row))
-        })
+        });
     });
     g.finish();
 
@@ -181,7 +181,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 let row = *stream.next_window();
                 capped.predict(black_box(&row))
-            })
+            });
         });
         capped_forests.push((depth, capped));
     }
@@ -223,7 +223,7 @@ fn bench(c: &mut Criterion) {
                 .predict_batch(black_box(&real.test.x), nf, &mut out)
                 .expect("batch");
             black_box(&out);
-        })
+        });
     });
     for (depth, f) in &capped_forests {
         g.bench_function(format!("depth{depth}/predict_batch"), |b| {
@@ -231,7 +231,7 @@ fn bench(c: &mut Criterion) {
                 f.predict_batch(black_box(&real.test.x), nf, &mut out)
                     .expect("batch");
                 black_box(&out);
-            })
+            });
         });
     }
     g.finish();
@@ -278,26 +278,26 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             i = if i + 1 == n_test { 0 } else { i + 1 };
             rf.predict(black_box(&single[i]))
-        })
+        });
     });
     let mut i = 0;
     g.bench_function("flat_predict_row", |b| {
         b.iter(|| {
             i = if i + 1 == n_test { 0 } else { i + 1 };
             flat.predict(black_box(real.test.row(i)))
-        })
+        });
     });
     g.throughput(Throughput::Elements(n_test as u64));
     g.sample_size(10);
     g.bench_function("linfa_predict_batch", |b| {
-        b.iter(|| rf.predict(black_box(&records)))
+        b.iter(|| rf.predict(black_box(&records)));
     });
     g.bench_function("flat_predict_batch", |b| {
         b.iter(|| {
             flat.predict_batch(black_box(&real.test.x), nf, &mut out)
                 .expect("batch");
             black_box(&out);
-        })
+        });
     });
     g.finish();
 }
@@ -392,13 +392,13 @@ fn onnx_runtime(c: &mut Criterion) {
             b.iter(|| {
                 i = if i + 1 == n { 0 } else { i + 1 };
                 f.predict(black_box(&x[i * nf..(i + 1) * nf]))
-            })
+            });
         }),
         onnx_forest::Ours::Regressor(f) => g.bench_function("ours_row", |b| {
             b.iter(|| {
                 i = if i + 1 == n { 0 } else { i + 1 };
                 f.predict(black_box(&x[i * nf..(i + 1) * nf]))
-            })
+            });
         }),
     };
     let mut i = 0;
@@ -406,7 +406,7 @@ fn onnx_runtime(c: &mut Criterion) {
         b.iter(|| {
             i = if i + 1 == n { 0 } else { i + 1 };
             ort.run_one(black_box(&x[i * nf..(i + 1) * nf]))
-        })
+        });
     });
     g.throughput(Throughput::Elements(n as u64));
     g.sample_size(10);
@@ -417,7 +417,7 @@ fn onnx_runtime(c: &mut Criterion) {
                 b.iter(|| {
                     f.predict_batch(black_box(&x), nf, &mut out).expect("batch");
                     black_box(&out);
-                })
+                });
             })
         }
         onnx_forest::Ours::Regressor(f) => {
@@ -426,12 +426,12 @@ fn onnx_runtime(c: &mut Criterion) {
                 b.iter(|| {
                     f.predict_batch(black_box(&x), nf, &mut out).expect("batch");
                     black_box(&out);
-                })
+                });
             })
         }
     };
     g.bench_function("onnxruntime_batch", |b| {
-        b.iter(|| ort.run(black_box(&x)).expect("ONNX Runtime batch"))
+        b.iter(|| ort.run(black_box(&x)).expect("ONNX Runtime batch"));
     });
     g.finish();
 }

@@ -49,7 +49,7 @@ fn bench(c: &mut Criterion) {
         let mut d = OnnxDetector::load(&path, PostprocessParams::default(), 1)
             .expect("model and runtime (bash scripts/setup.sh)");
         g.bench_function(format!("onnx_{size}"), |b| {
-            b.iter(|| d.detect(black_box(uav)).expect("detect"))
+            b.iter(|| d.detect(black_box(uav)).expect("detect"));
         });
     }
     let mut with_head = OnnxDetector::load(
@@ -62,11 +62,11 @@ fn bench(c: &mut Criterion) {
     )
     .expect("model");
     g.bench_function("onnx_320_with_box_head_boxes", |b| {
-        b.iter(|| with_head.detect(black_box(uav)).expect("detect"))
+        b.iter(|| with_head.detect(black_box(uav)).expect("detect"));
     });
     let mut classical = ClassicalDetector::new(ClassicalParams::default()).expect("classical");
     g.bench_function("classical", |b| {
-        b.iter(|| classical.detect(black_box(uav)).expect("detect"))
+        b.iter(|| classical.detect(black_box(uav)).expect("detect"));
     });
     g.finish();
 
@@ -93,7 +93,7 @@ fn bench(c: &mut Criterion) {
     );
     let head = model.box_head_maps(uav).expect("box head outputs");
     g.bench_function(format!("box_head_boxes_{0}x{0}_cells", head.cells()), |b| {
-        b.iter(|| black_box(&head).detections(&benchmark::map_params()))
+        b.iter(|| black_box(&head).detections(&benchmark::map_params()));
     });
     g.finish();
 
@@ -119,7 +119,7 @@ fn bench(c: &mut Criterion) {
     let h = fit_dlt(&pairs).expect("homography");
     let mut g = c.benchmark_group("homography");
     g.bench_function("pixel_to_surface", |b| {
-        b.iter(|| h.pixel_to_surface(black_box([321.5, 250.25])))
+        b.iter(|| h.pixel_to_surface(black_box([321.5, 250.25])));
     });
     g.finish();
 }

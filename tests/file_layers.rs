@@ -337,7 +337,7 @@ impl Crate {
                 base = Vec::new();
                 rest = &segs[1..];
             }
-            Some(&"super") | Some(&"self") => {
+            Some(&"super" | &"self") => {
                 base = at.to_vec();
                 while let Some(&s) = rest.first() {
                     match s {
@@ -362,7 +362,7 @@ impl Crate {
             }
             None => return None,
         }
-        base.extend(rest.iter().map(|s| s.to_string()));
+        base.extend(rest.iter().map(std::string::ToString::to_string));
         Some(base)
     }
 
@@ -536,7 +536,11 @@ fn no_crate_has_a_circle_of_imports_between_its_files() {
         for comp in circles(&c.graph()) {
             let files: Vec<String> = comp.iter().map(|m| shown(m)).collect();
             let known = KNOWN_CIRCLES.iter().any(|(k, f, _)| {
-                *k == name && f.iter().map(|s| s.to_string()).collect::<Vec<_>>() == files
+                *k == name
+                    && f.iter()
+                        .map(std::string::ToString::to_string)
+                        .collect::<Vec<_>>()
+                        == files
             });
             if !known {
                 found.push(format!("{name}: {}", files.join(" ↔ ")));
@@ -570,7 +574,7 @@ fn the_checker_sees_a_circle_through_a_re_export_and_not_one_in_tests() {
             m.join("/")
         };
         c.files.insert(
-            m.iter().map(|s| s.to_string()).collect(),
+            m.iter().map(std::string::ToString::to_string).collect(),
             (PathBuf::from(format!("{hub}.rs")), code_of(code)),
         );
     };

@@ -262,7 +262,7 @@ fn two_robots_and_stations_watch_command_and_lose_them_over_zenoh() {
             .args([sig, &pid])
             .status()
             .unwrap()
-            .success())
+            .success());
     };
     signal("-STOP");
     let hung = Instant::now();

@@ -47,10 +47,10 @@ fn planned_slides_take_the_estimated_time_in_the_simulator_and_cross_their_crack
     for (i, f) in scene.features.iter().enumerate() {
         match f {
             Feature::Crack { path, width_mm, .. } => {
-                truth.push((i as u64, path.clone(), *width_mm, true))
+                truth.push((i as u64, path.clone(), *width_mm, true));
             }
             Feature::Decoy { path, width_mm, .. } => {
-                truth.push((i as u64, path.clone(), *width_mm, false))
+                truth.push((i as u64, path.clone(), *width_mm, false));
             }
             _ => {}
         }

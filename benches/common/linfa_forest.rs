@@ -113,7 +113,7 @@ pub fn linfa_tie(rf: &LinfaForest, row: &[f32]) -> bool {
     let n_classes = rf
         .models
         .iter()
-        .flat_map(|t| t.iter_nodes().filter_map(|n| n.prediction()))
+        .flat_map(|t| t.iter_nodes().filter_map(linfa_trees::TreeNode::prediction))
         .max()
         .unwrap_or(0)
         + 1;

@@ -56,7 +56,7 @@ pub fn load(dir: &Path) -> Real {
     let test = build_windows(&rep2, experiment, &cfg).expect("windows of repetition 2");
     let test_samples = rep2
         .iter()
-        .flat_map(|(_, rec)| rec.rows.iter().map(|r| r.channels()))
+        .flat_map(|(_, rec)| rec.rows.iter().map(crackbot_recording::Row::channels))
         .collect();
     Real {
         train,

@@ -149,7 +149,7 @@ fn decode(bytes: &[u8]) -> (Vec<Frame>, DecoderStats) {
     let mut decoder = Decoder::new();
     let mut frames = Vec::new();
     decoder.feed(bytes, |r| {
-        frames.push(r.expect("the firmware only sends whole, valid frames"))
+        frames.push(r.expect("the firmware only sends whole, valid frames"));
     });
     (frames, *decoder.stats())
 }
@@ -186,7 +186,7 @@ fn simulate(baud: u64, seconds: u64) -> Run {
     let mut frames = Vec::new();
     for &(at, byte) in &uart.sent {
         decoder.feed(&[byte], |r| {
-            frames.push((at, r.expect("no corrupted frame")))
+            frames.push((at, r.expect("no corrupted frame")));
         });
     }
     Run {

@@ -17,6 +17,11 @@
 //! The work is done by the libraries (`crackbot-mission`, `crackbot-acquisition`,
 //! `crackbot-vision`); this binary parses arguments, draws progress bars and prints reports.
 
+#![expect(
+    clippy::needless_pass_by_value,
+    reason = "each command's handler takes the arguments clap parsed for it, as its owner"
+)]
+
 use std::path::PathBuf;
 use std::time::Duration;
 

@@ -2,6 +2,11 @@
 //! the built-in default scene, starting the simulated controller and sensor itself; `crackbot run`
 //! takes the same flags.
 
+#![expect(
+    clippy::needless_pass_by_value,
+    reason = "each command's handler takes the arguments clap parsed for it, as its owner"
+)]
+
 use anyhow::Result;
 use clap::Parser;
 

@@ -445,7 +445,7 @@ fn show(bar: &indicatif::ProgressBar, p: &Progress) {
     match p {
         Progress::Starting => bar.set_message("starting the controller, the sensor and the models"),
         Progress::Perceived { candidates, .. } => {
-            bar.set_message(format!("{candidates} candidates in the frame"))
+            bar.set_message(format!("{candidates} candidates in the frame"));
         }
         Progress::Planned {
             slides,
@@ -547,7 +547,7 @@ fn fleet(args: &RunArgs, config: InspectConfig) -> Result<()> {
             if matches!(p, Progress::Starting) {
                 bar.reset();
             }
-            show(&bar, p)
+            show(&bar, p);
         },
         |n, result| {
             bar.suspend(|| match result {
@@ -557,7 +557,7 @@ fn fleet(args: &RunArgs, config: InspectConfig) -> Result<()> {
                     }
                 }
                 Err(e) => eprintln!("robot {name}: mission {n} failed: {e}"),
-            })
+            });
         },
     );
     bar.finish_and_clear();

@@ -323,10 +323,12 @@ mod tests {
 
     fn field(r: Result<Checked, CommandError>) -> &'static str {
         match r {
-            Err(CommandError::NotFinite { field, .. })
-            | Err(CommandError::OutOfRange { field, .. })
-            | Err(CommandError::Expired { field, .. })
-            | Err(CommandError::DeadlineTooFar { field, .. }) => field,
+            Err(
+                CommandError::NotFinite { field, .. }
+                | CommandError::OutOfRange { field, .. }
+                | CommandError::Expired { field, .. }
+                | CommandError::DeadlineTooFar { field, .. },
+            ) => field,
             other => panic!("not a field refusal: {other:?}"),
         }
     }

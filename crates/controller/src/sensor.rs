@@ -38,7 +38,9 @@ pub type SharedWorld = Arc<Mutex<Shared>>;
 /// Locks the shared world, recovering it if a thread panicked while holding it (the world's
 /// state is still consistent between ticks).
 pub fn lock(shared: &SharedWorld) -> MutexGuard<'_, Shared> {
-    shared.lock().unwrap_or_else(|p| p.into_inner())
+    shared
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// The world as the emulated board's analog front end: each sample is one world step.

@@ -191,7 +191,7 @@ impl SimController {
                     serve(
                         endpoint,
                         host,
-                        link_config,
+                        &link_config,
                         &config,
                         &shared,
                         &stop,
@@ -287,7 +287,7 @@ fn refusal_code(r: &Refusal) -> ErrorCode {
 fn serve(
     mut ep: LinkEndpoint,
     host: SocketAddr,
-    link_config: LinkConfig,
+    link_config: &LinkConfig,
     config: &ServerConfig,
     shared: &SharedWorld,
     stop: &AtomicBool,

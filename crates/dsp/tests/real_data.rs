@@ -73,7 +73,10 @@ fn proximity_slides(rec: &Recording) -> Vec<Vec<f64>> {
 }
 
 fn samples(rec: &Recording) -> Vec<[f64; 4]> {
-    rec.rows.iter().map(|r| r.channels()).collect()
+    rec.rows
+        .iter()
+        .map(crackbot_recording::Row::channels)
+        .collect()
 }
 
 fn methods() -> Vec<(&'static str, SegmentationMethod)> {

@@ -496,7 +496,7 @@ mod tests {
         let mut decoded = Vec::new();
         Decoder::new().feed(&out, |r| {
             if let Ok(f) = r {
-                decoded.push(f.seq)
+                decoded.push(f.seq);
             }
         });
         for seq in 0..200u16 {

@@ -405,13 +405,13 @@ impl FlatTrees {
             let mut pos = [0u32; TREE_LANES];
             pos[..lanes].copy_from_slice(&self.offsets[t..t + lanes]);
             // Unused lanes sit on tree t's root and repeat its walk; their leaves are not added.
-            for p in pos[lanes..].iter_mut() {
+            for p in &mut pos[lanes..] {
                 *p = self.offsets[t];
             }
             if most <= UNCHECKED_DEPTH {
                 // Shallow trees: every step to the deepest leaf, with no check at all.
                 for _ in 0..most {
-                    for p in pos.iter_mut() {
+                    for p in &mut pos {
                         *p = walk_step(*p, nodes[*p as usize], xs);
                     }
                 }
@@ -419,13 +419,13 @@ impl FlatTrees {
                 // Deep trees: the steps every tree takes, then only the trees not yet on a leaf
                 // step, until none is left.
                 for _ in 0..sure {
-                    for p in pos.iter_mut() {
+                    for p in &mut pos {
                         *p = walk_step(*p, nodes[*p as usize], xs);
                     }
                 }
                 loop {
                     let mut active = false;
-                    for p in pos.iter_mut() {
+                    for p in &mut pos {
                         let n = nodes[*p as usize];
                         if n.packed >> 8 != 0 {
                             *p = walk_step(*p, n, xs);
@@ -454,7 +454,7 @@ impl FlatTrees {
             pos.copy_from_slice(&self.offsets[t..t + TREE_LANES]);
             loop {
                 let mut active = false;
-                for p in pos.iter_mut() {
+                for p in &mut pos {
                     let n = self.nodes[*p as usize];
                     if !n.is_leaf() {
                         *p = step(*p, n, x);

@@ -181,7 +181,9 @@ impl RandomForest {
         {
             ob.fill(0.0);
             self.trees.accumulate_block(xb, ob, &mut scratch);
-            ob.iter_mut().for_each(|v| *v *= scale);
+            for v in ob.iter_mut() {
+                *v *= scale;
+            }
         }
         Ok(())
     }
@@ -262,7 +264,9 @@ impl Classifier for RandomForest {
             out.fill(0.0);
             self.trees.accumulate_row(x, out);
             let scale = 1.0 / self.n_trees() as f32;
-            out.iter_mut().for_each(|v| *v *= scale);
+            for v in out.iter_mut() {
+                *v *= scale;
+            }
         } else {
             let mut buf = vec![0f32; k];
             self.predict_proba_into(x, &mut buf);

@@ -307,8 +307,7 @@ pub(crate) fn save(path: &Path, p: &Parts) -> Result<(), ForestError> {
     let bytes = encode(p);
     let file_name = path
         .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "model".into());
+        .map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
     let tmp = path.with_file_name(format!(".{file_name}.tmp{}", std::process::id()));
     std::fs::write(&tmp, &bytes).map_err(wrap)?;
     std::fs::rename(&tmp, path).map_err(|e| {

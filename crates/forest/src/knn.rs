@@ -126,7 +126,9 @@ impl Knn {
         let nf = self.n_features;
         let k = self.k;
         if q.iter().any(|v| v.is_nan()) {
-            out.iter_mut().for_each(|v| *v = f32::NAN);
+            for v in out.iter_mut() {
+                *v = f32::NAN;
+            }
             return;
         }
         // Sorted ascending by (distance, row); `len` valid entries. Ties in distance go to the
@@ -189,7 +191,9 @@ impl Knn {
                 }
             }
         }
-        out.iter_mut().for_each(|v| *v = 0.0);
+        for v in out.iter_mut() {
+            *v = 0.0;
+        }
         let w = 1.0 / len.max(1) as f32;
         for &(_, r) in &best[..len] {
             if let Some(slot) = self

@@ -180,7 +180,9 @@ impl Qda {
             };
         }
         let inv = 1.0 / sum;
-        out.iter_mut().for_each(|o| *o = (*o as f64 * inv) as f32);
+        for o in out.iter_mut() {
+            *o = (*o as f64 * inv) as f32;
+        }
     }
 
     fn class_ll(&self, cm: &ClassModel, x: &[f32], d: &mut [f64], p: usize) -> f64 {

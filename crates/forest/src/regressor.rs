@@ -115,7 +115,9 @@ impl RandomForestRegressor {
         {
             ob.fill(0.0);
             self.trees.accumulate_block(xb, ob, &mut scratch);
-            ob.iter_mut().for_each(|v| *v /= scale);
+            for v in ob.iter_mut() {
+                *v /= scale;
+            }
         }
         Ok(())
     }

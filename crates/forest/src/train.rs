@@ -535,7 +535,9 @@ fn assemble(trees: Vec<TreeOut>, n_features: usize, width: usize) -> Result<(Fla
     offsets.push(nodes.len() as u32);
     let s: f64 = importances.iter().sum();
     if s > 0.0 {
-        importances.iter_mut().for_each(|v| *v /= s);
+        for v in &mut importances {
+            *v /= s;
+        }
     }
     Ok((
         FlatTrees {

@@ -193,7 +193,11 @@ fn inconsistent_indices_are_rejected_even_with_a_valid_crc() {
     // Node 0 is the root of tree 0 (internal). Node fields: feature @0, threshold @4, right @8.
     assert!(!f.nodes()[0].is_leaf());
     let tree0_end = f.tree_offsets()[1];
-    let first_leaf = f.nodes().iter().position(|n| n.is_leaf()).unwrap();
+    let first_leaf = f
+        .nodes()
+        .iter()
+        .position(crackbot_forest::Node::is_leaf)
+        .unwrap();
     let n_leaves = (f.leaf_values().len() / f.n_classes()) as u32;
     let cases: Vec<(&str, usize, u32)> = vec![
         ("right child out of range", base + 8, f.n_nodes() as u32 + 7),

@@ -78,7 +78,7 @@ fn main() -> Result<()> {
             "--width-only" => width_only = true,
             "--seed" => seed = args.next().context("--seed needs a value")?.parse()?,
             "--recordings" => {
-                recordings = Some(args.next().context("--recordings needs a value")?.parse()?)
+                recordings = Some(args.next().context("--recordings needs a value")?.parse()?);
             }
             _ => params.push(PathBuf::from(a)),
         }

@@ -11,6 +11,11 @@
 //! figures by `crackbot-plots`; this binary parses arguments, draws progress bars and prints.
 //! `crackbot <command> …` runs the same commands (it hands them to this binary).
 
+#![expect(
+    clippy::needless_pass_by_value,
+    reason = "each command's handler takes the arguments clap parsed for it, as its owner"
+)]
+
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 

@@ -480,7 +480,7 @@ fn eval(args: EvalArgs) -> Result<()> {
         None => {
             let mut tree = tree_bars(!args.json);
             evaluate(&config, &args.train, &args.test, |_, done, total| {
-                tree(done, total)
+                tree(done, total);
             })?
         }
     };
@@ -543,11 +543,11 @@ fn print_confusion(names: &[String], rows: &[Vec<u64>]) {
     const CORNER: &str = "true \\ predicted";
     let label = names
         .iter()
-        .map(|n| n.len())
+        .map(String::len)
         .max()
         .unwrap_or(0)
         .max(CORNER.len());
-    let cell = names.iter().map(|n| n.len()).max().unwrap_or(0).max(7);
+    let cell = names.iter().map(String::len).max().unwrap_or(0).max(7);
     print!("  {CORNER:>label$} |");
     for n in names {
         print!(" {n:>cell$}");
@@ -870,7 +870,7 @@ fn train(args: TrainArgs) -> Result<()> {
             "slide_vote": model.header.slide_vote,
             "context_forest_nodes": model.context_forest.n_nodes(),
             "window_forest_nodes": model.window_forest.n_nodes(),
-            "width_regressor_nodes": model.width.as_ref().map(|w| w.n_nodes()),
+            "width_regressor_nodes": model.width.as_ref().map(crackbot_forest::RandomForestRegressor::n_nodes),
         });
         std::fs::write(&summary, serde_json::to_string_pretty(&json)? + "\n")?;
         println!(

@@ -211,7 +211,7 @@ pub fn detector_tradeoff(args: DetectorTradeoffArgs) -> Result<()> {
             println!(
                 "{}: mAP50 {:.3}, mAP {:.3}, {:.1} ms/frame",
                 r.detector, r.map50, r.map, r.ms_per_frame
-            )
+            );
         },
     )?;
     let (md, md_path, json_path) = report.write(&args.out)?;

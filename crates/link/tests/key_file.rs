@@ -60,7 +60,7 @@ fn a_key_file_others_may_read_is_refused() {
     // A directory is not a key file.
     assert!(matches!(
         Key::from_file(dir.0.path()),
-        Err(KeyFileError::NotAFile { .. }) | Err(KeyFileError::Permissions { .. })
+        Err(KeyFileError::NotAFile { .. } | KeyFileError::Permissions { .. })
     ));
 }
 

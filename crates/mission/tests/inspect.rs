@@ -47,7 +47,9 @@ lighting_variation = 0.15
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn mission(config: &InspectConfig) -> Result<InspectReport, MissionError> {
-    let _one = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let _one = SERIAL
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let stop = AtomicBool::new(false);
     run_inspection(&config.check()?, &stop, |_| {})
 }
@@ -301,7 +303,9 @@ fn stopping_mid_mission_stops_the_arm_and_says_so() {
     let mut c = config(dir.path());
     c.rig.speedup = 2.0;
     let stop = std::sync::Arc::new(AtomicBool::new(false));
-    let _one = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let _one = SERIAL
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let setter = {
         let stop = stop.clone();
         std::thread::spawn(move || {
@@ -326,7 +330,9 @@ fn a_front_end_sees_the_frame_the_candidates_the_plan_every_sample_and_every_ver
     c.plan.planner.passes = 1;
     let mut events = Vec::new();
     let r = {
-        let _one = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+        let _one = SERIAL
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let stop = AtomicBool::new(false);
         run_inspection(&c.check().unwrap(), &stop, |p| events.push(p.clone())).unwrap()
     };

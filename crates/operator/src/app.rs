@@ -264,7 +264,7 @@ impl OperatorApp {
                 self.pending = Some(Pending::Start {
                     mode: self.mode,
                     robot,
-                })
+                });
             }
             None => self.say("no robot to start: none has been heard from yet"),
         }
@@ -318,11 +318,11 @@ impl OperatorApp {
             Ok(()) => {
                 self.starts += 1;
                 self.paused_end = None;
-                self.selected = Some(robot.clone());
                 self.say(format!(
                     "start ({}) -> {robot}",
                     crackbot_telemetry::wire::mode_name(mode)
                 ));
+                self.selected = Some(robot);
             }
             Err(e) => self.say(e.to_string()),
         }

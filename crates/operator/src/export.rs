@@ -54,7 +54,7 @@ pub fn screenshot_png(img: &egui::ColorImage) -> Result<Vec<u8>, OperatorError> 
     let rgba: Vec<u8> = img
         .pixels
         .iter()
-        .flat_map(|c| c.to_srgba_unmultiplied())
+        .flat_map(egui::Color32::to_srgba_unmultiplied)
         .collect();
     png(w, h, &rgba)
 }

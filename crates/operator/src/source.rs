@@ -3,7 +3,7 @@
 //! mission (replayed once, read on a thread). Each feeds a shared [`Fleet`]; nothing here blocks
 //! the UI thread.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -22,7 +22,9 @@ pub const COMMAND_TIMEOUT: Duration = Duration::from_secs(3);
 
 /// Locks the fleet (a poisoned lock still holds a usable fleet).
 pub fn lock(fleet: &Mutex<Fleet>) -> MutexGuard<'_, Fleet> {
-    fleet.lock().unwrap_or_else(|p| p.into_inner())
+    fleet
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// Where the data comes from.
@@ -146,7 +148,16 @@ impl SimBackend {
         let spawned = std::thread::Builder::new()
             .name(format!("mission-{n}"))
             .spawn(move || {
-                run_sim(n, mode, scene_path, speedup, out, &stop, &fleet, &log);
+                run_sim(
+                    n,
+                    mode,
+                    scene_path.as_deref(),
+                    speedup,
+                    &out,
+                    &stop,
+                    &fleet,
+                    &log,
+                );
                 running.store(false, Ordering::SeqCst);
                 if let Some(ctx) = wake {
                     ctx.request_repaint();
@@ -167,9 +178,9 @@ impl SimBackend {
 fn run_sim(
     n: u32,
     mode: InspectMode,
-    scene_path: Option<PathBuf>,
+    scene_path: Option<&Path>,
     speedup: f64,
-    out: PathBuf,
+    out: &Path,
     stop: &AtomicBool,
     fleet: &Mutex<Fleet>,
     log: &Sender<String>,
@@ -183,7 +194,7 @@ fn run_sim(
         r.received += 1;
         r.apply_body(body);
     };
-    let scene = match Scene::load_or_default(scene_path.as_deref()) {
+    let scene = match Scene::load_or_default(scene_path) {
         Ok(s) => s,
         Err(e) => {
             let mut feed = MissionFeed::new(n, mode, "?");
@@ -202,7 +213,7 @@ fn run_sim(
         scene.name,
         out.display()
     ));
-    let mut config = InspectConfig::new(scene, &out);
+    let mut config = InspectConfig::new(scene, out);
     config.mode = mode;
     config.rig.speedup = speedup;
     let mut wire_errors = 0u32;
@@ -290,7 +301,9 @@ impl LiveBackend {
             match Station::open(&options, key.as_ref()) {
                 Ok(st) => {
                     let st = Arc::new(st);
-                    *slot.lock().unwrap_or_else(|p| p.into_inner()) = Some(st.clone());
+                    *slot
+                        .lock()
+                        .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(st.clone());
                     let _ = log.send(format!(
                         "station up (listening on {:?}, connecting to {:?}{})",
                         options.listen,
@@ -324,7 +337,7 @@ impl LiveBackend {
     pub fn station(&self) -> Option<Arc<Station>> {
         self.station
             .lock()
-            .unwrap_or_else(|p| p.into_inner())
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
             .clone()
     }
 
@@ -417,7 +430,6 @@ pub fn replay_robot_name(dir: &std::path::Path) -> String {
     format!(
         "replay:{}",
         dir.file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "mission".into())
+            .map_or_else(|| "mission".into(), |n| n.to_string_lossy().into_owned())
     )
 }

@@ -54,8 +54,8 @@ fn the_exploration_time_table() {
             .iter()
             .map(|r| r.plan.estimated_s / r.paper_s.unwrap())
             .collect();
-        let spread = ratios.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
-            - ratios.iter().cloned().fold(f64::INFINITY, f64::min);
+        let spread = ratios.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - ratios.iter().copied().fold(f64::INFINITY, f64::min);
         assert!(spread < 0.05, "{ratios:?}");
         // Within 35 % of the measured times (the paper's rows imply ≈ 5 mm/s along 200 mm).
         assert!(ratios.iter().all(|r| (0.9..1.35).contains(r)), "{ratios:?}");

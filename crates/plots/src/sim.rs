@@ -18,7 +18,7 @@ pub const WORK_PRECISION_SIZE: (u32, u32) = (1000, 650);
 pub fn work_precision_png(path: &Path, rows: &[WorkPrecisionRow]) -> Result<(), PlotError> {
     let ok: Vec<&WorkPrecisionRow> = rows
         .iter()
-        .filter(|r| r.rms_error_counts.is_some_and(|e| e.is_finite()))
+        .filter(|r| r.rms_error_counts.is_some_and(f64::is_finite))
         .collect();
     if ok.is_empty() {
         return Err(PlotError::NoFinishedIntegrator {
@@ -124,8 +124,8 @@ pub fn compare_png(path: &Path, comparison: &Comparison) -> Result<(), PlotError
                 }
                 let len = r
                     .as_ref()
-                    .map_or(0, |v| v.len())
-                    .max(s.as_ref().map_or(0, |v| v.len()));
+                    .map_or(0, std::vec::Vec::len)
+                    .max(s.as_ref().map_or(0, std::vec::Vec::len));
                 let mut chart = ChartBuilder::on(cell)
                     .caption(
                         format!("{} — {}", class.name, Channel::ALL[ch].name()),

@@ -92,7 +92,7 @@ fn tables() -> PaperTables {
         classes: Experiment::Recognition
             .class_names()
             .iter()
-            .map(|s| s.to_string())
+            .map(std::string::ToString::to_string)
             .collect(),
         repetitions: vec![1, 2, 3],
         cells,

@@ -101,7 +101,7 @@ impl Decoder {
             if self.len == 0 && self.overlong == 0 {
                 // Fast path: a whole chunk inside this slice, nothing buffered.
                 if !segment.is_empty() {
-                    let result = self.decode_chunk(segment);
+                    let result = Self::decode_chunk(segment);
                     self.account(&result, segment.len());
                     sink(result);
                 }
@@ -150,14 +150,14 @@ impl Decoder {
             return None;
         } else {
             let buf = self.buf;
-            (self.decode_chunk(&buf[..self.len]), self.len)
+            (Self::decode_chunk(&buf[..self.len]), self.len)
         };
         self.reset();
         self.account(&result, len);
         Some(result)
     }
 
-    fn decode_chunk(&self, chunk: &[u8]) -> Result<Frame, DecodeError> {
+    fn decode_chunk(chunk: &[u8]) -> Result<Frame, DecodeError> {
         if chunk.len() > COBS_LEN {
             return Err(DecodeError::Overlong { len: chunk.len() });
         }
@@ -185,7 +185,7 @@ impl Decoder {
             Err(DecodeError::Truncated { .. }) => s.truncated += 1,
             Err(DecodeError::Overlong { .. }) => s.overlong += 1,
             Err(DecodeError::UnsupportedVersion { .. } | DecodeError::ReservedFlags { .. }) => {
-                s.version_errors += 1
+                s.version_errors += 1;
             }
         }
         s.discarded_bytes += len as u64;

@@ -125,7 +125,7 @@ fn whole_golden_stream_decodes_in_order_and_resyncs_after_each_bad_vector() {
     let mut frames = Vec::new();
     decoder.feed(&stream, |r| {
         if let Ok(f) = r {
-            frames.push(f)
+            frames.push(f);
         }
     });
     assert_eq!(frames, expected);

@@ -41,7 +41,7 @@ proptest! {
 
     #[test]
     fn encode_decode_round_trip(frames in prop::collection::vec(arb_frame(), 1..40)) {
-        let bytes: Vec<u8> = frames.iter().flat_map(|f| f.to_wire()).collect();
+        let bytes: Vec<u8> = frames.iter().flat_map(crackbot_protocol::Frame::to_wire).collect();
         prop_assert_eq!(bytes.len(), frames.len() * WIRE_LEN);
         let got: Vec<Frame> = decode_chunks(&bytes, &[]).into_iter().map(|r| r.expect("clean stream")).collect();
         prop_assert_eq!(got, frames);
@@ -78,7 +78,7 @@ proptest! {
         flips in prop::collection::vec((any::<prop::sample::Index>(), 1u8..=255), 1..20),
         drops in prop::collection::vec(any::<prop::sample::Index>(), 0..5),
     ) {
-        let clean: Vec<u8> = frames.iter().flat_map(|f| f.to_wire()).collect();
+        let clean: Vec<u8> = frames.iter().flat_map(crackbot_protocol::Frame::to_wire).collect();
         let mut bytes = clean.clone();
         let mut touched = vec![false; frames.len()];
         for (idx, mask) in &flips {

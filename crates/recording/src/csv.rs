@@ -57,7 +57,7 @@ fn read_impl<R: Read>(mut reader: R, path: &Path) -> Result<Recording, Recording
                 path: path.to_path_buf(),
             })
         }
-        Some(result) => result.map_err(|e| csv_error(path, e))?,
+        Some(result) => result.map_err(|e| csv_error(path, &e))?,
     };
     let extended = check_header(&header, path)?;
     let expected_fields = if extended {
@@ -69,8 +69,8 @@ fn read_impl<R: Read>(mut reader: R, path: &Path) -> Result<Recording, Recording
     let mut rows = Vec::new();
     let mut extras = Vec::new();
     for result in records {
-        let record = result.map_err(|e| csv_error(path, e))?;
-        let line = record.position().map_or(0, |p| p.line());
+        let record = result.map_err(|e| csv_error(path, &e))?;
+        let line = record.position().map_or(0, csv::Position::line);
         if record.len() != expected_fields {
             return Err(RecordingError::FieldCount {
                 path: path.to_path_buf(),
@@ -107,8 +107,8 @@ fn read_impl<R: Read>(mut reader: R, path: &Path) -> Result<Recording, Recording
     })
 }
 
-fn csv_error(path: &Path, error: ::csv::Error) -> RecordingError {
-    let line = error.position().map(|p| p.line());
+fn csv_error(path: &Path, error: &::csv::Error) -> RecordingError {
+    let line = error.position().map(csv::Position::line);
     let message = match error.kind() {
         ::csv::ErrorKind::Utf8 { err, .. } => format!("invalid UTF-8 in field {}", err.field() + 1),
         _ => error.to_string(),
@@ -359,7 +359,7 @@ impl CsvRecorder {
 
     /// Pushes the buffered rows to the operating system.
     pub fn flush(&mut self) -> Result<(), RecordingError> {
-        match self.writer.as_mut().map(|w| w.flush()) {
+        match self.writer.as_mut().map(std::io::Write::flush) {
             Some(Err(e)) => Err(self.io_error(e)),
             _ => Ok(()),
         }

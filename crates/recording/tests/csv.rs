@@ -373,7 +373,7 @@ fn error_invalid_utf8() {
 
 #[test]
 fn read_from_names_source() {
-    let err = read_csv_from("".as_bytes(), "serial-capture").unwrap_err();
+    let err = read_csv_from(&b""[..], "serial-capture").unwrap_err();
     assert!(err.to_string().contains("serial-capture"), "{err}");
 }
 

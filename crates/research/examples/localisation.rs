@@ -64,7 +64,7 @@ fn passes(
         if rows.len() < 1000 {
             continue;
         }
-        let samples: Vec<[f64; 4]> = rows.iter().map(|r| r.channels()).collect();
+        let samples: Vec<[f64; 4]> = rows.iter().map(crackbot_recording::Row::channels).collect();
         let positions: Vec<f64> = rows.iter().map(|r| r.x_mm).collect();
         for p in localise_passes(&samples, &positions, config)? {
             out.push(Pass {
@@ -358,7 +358,7 @@ fn simulate(
             for range in rec.slides() {
                 let rows = &rec.rows[range];
                 out.push(SimSlide {
-                    samples: rows.iter().map(|r| r.channels()).collect(),
+                    samples: rows.iter().map(crackbot_recording::Row::channels).collect(),
                     positions: rows.iter().map(|r| r.x_mm).collect(),
                     width,
                     start: offset + start,

@@ -40,5 +40,5 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn rayon_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
+    std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
 }

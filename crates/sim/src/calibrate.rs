@@ -76,7 +76,7 @@ pub fn fit_mounts(
             .iter()
             .flat_map(|r| r.rows.iter())
             .filter(|row| row.label == trace.label)
-            .map(|row| row.channels())
+            .map(crackbot_recording::Row::channels)
             .collect();
         if rows.is_empty() {
             return Err(SimError::NoRealRecordingOfPlate { label: trace.label });
@@ -178,7 +178,10 @@ pub fn real_quantiles(recordings: &[Recording]) -> Vec<ChannelQuantiles> {
 /// ([`channel_loss`] then compares those too).
 pub fn real_quantiles_with(recordings: &[Recording], p_tails: bool) -> Vec<ChannelQuantiles> {
     let tails = levels_with_tails();
-    let mut labels: Vec<f64> = recordings.iter().filter_map(|r| r.label()).collect();
+    let mut labels: Vec<f64> = recordings
+        .iter()
+        .filter_map(crackbot_recording::Recording::label)
+        .collect();
     labels.sort_by(f64::total_cmp);
     labels.dedup();
     let medians: Vec<[f64; 4]> = recordings
@@ -242,7 +245,10 @@ pub fn speed_quantiles(x_mm: &[f64]) -> Option<Vec<f64>> {
 /// every plate, the widest cracks included, at the arm's pace, stopping only where the stroke
 /// turns (about 1.5 % of the time): a simulated finger that jams in a crack misses this target.
 pub fn real_speed_quantiles(recordings: &[Recording]) -> Vec<(f64, Vec<f64>)> {
-    let mut labels: Vec<f64> = recordings.iter().filter_map(|r| r.label()).collect();
+    let mut labels: Vec<f64> = recordings
+        .iter()
+        .filter_map(crackbot_recording::Recording::label)
+        .collect();
     labels.sort_by(f64::total_cmp);
     labels.dedup();
     labels
@@ -532,7 +538,7 @@ pub fn nelder_mead(
     }
     let mut evals = n + 1;
     let sanitize = |v: f64| if v.is_finite() { v } else { f64::MAX };
-    for s in simplex.iter_mut() {
+    for s in &mut simplex {
         s.1 = sanitize(s.1);
     }
     while evals < max_evals {

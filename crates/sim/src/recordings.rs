@@ -107,7 +107,7 @@ fn pick(recs: &[Recording], label: f64, slide: u32) -> Option<SlideRows> {
         .rows
         .iter()
         .filter(|row| row.slide == slide)
-        .map(|row| row.channels())
+        .map(crackbot_recording::Row::channels)
         .collect();
     (!rows.is_empty()).then_some(rows)
 }
@@ -115,7 +115,10 @@ fn pick(recs: &[Recording], label: f64, slide: u32) -> Option<SlideRows> {
 /// Chooses what the real-vs-simulated comparison draws: for every class of `real`, slide
 /// `slide` of its first real and first simulated recording.
 pub fn compare_slides(real: &[Recording], simulated: &[Recording], slide: u32) -> Comparison {
-    let mut labels: Vec<f64> = real.iter().filter_map(|r| r.label()).collect();
+    let mut labels: Vec<f64> = real
+        .iter()
+        .filter_map(crackbot_recording::Recording::label)
+        .collect();
     labels.sort_by(f64::total_cmp);
     labels.dedup();
     let experiment = experiment_of(&labels);

@@ -1139,7 +1139,7 @@ fn a_tip_held_back_by_a_crack_wall_snaps_out_on_the_energy_it_stored() {
         "{highest} mm, bound {bound} mm"
     );
     let back = &samples[top + 4];
-    assert!(back.tip_z_mm.abs() < 0.5, "{:?}", back);
+    assert!(back.tip_z_mm.abs() < 0.5, "{back:?}");
 }
 
 proptest! {

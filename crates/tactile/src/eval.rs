@@ -169,7 +169,7 @@ pub fn test_classifier_with_slide_voters(
         }
         all.push(window_probabilities(*voter, set)?);
     }
-    let refs: Vec<&[f32]> = all.iter().map(|p| p.as_slice()).collect();
+    let refs: Vec<&[f32]> = all.iter().map(std::vec::Vec::as_slice).collect();
     outcome(test, &all[0], &refs)
 }
 

@@ -180,7 +180,7 @@ fn evaluate_checked(
     let (kind, tuning, seed) = (config.classifier, config.tuning, config.seed);
     let started = Instant::now();
     let model = train_classifier_tuned(&train_set, kind, tuning, seed, &mut |done, total| {
-        progress(EvalStage::Classifier, done, total)
+        progress(EvalStage::Classifier, done, total);
     })?;
     // With context, a forest on the paper's own window features (same segmentation and windows,
     // so the same slides) joins the slide verdicts.
@@ -190,7 +190,7 @@ fn evaluate_checked(
         let vote_test = plain.build_windows(test, experiment)?;
         let vote_model =
             train_classifier_tuned(&vote_train, kind, tuning, seed, &mut |done, total| {
-                progress(EvalStage::SlideVoter, done, total)
+                progress(EvalStage::SlideVoter, done, total);
             })?;
         Some((vote_model, vote_test))
     } else {
@@ -233,7 +233,7 @@ fn evaluate_checked(
             classes: experiment
                 .class_names()
                 .iter()
-                .map(|c| c.to_string())
+                .map(std::string::ToString::to_string)
                 .collect(),
             classifier: kind.name(),
             forest_tuning: tuning,

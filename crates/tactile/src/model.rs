@@ -450,7 +450,7 @@ impl TactileModel {
             classes: experiment
                 .class_names()
                 .iter()
-                .map(|c| c.to_string())
+                .map(std::string::ToString::to_string)
                 .collect(),
             labels: experiment.labels().to_vec(),
             n_context_features: context_set.n_features,
@@ -553,10 +553,10 @@ impl TactileModel {
                 w.n_features()
             )),
             (None, Experiment::Width) => {
-                problems.push("a width model without its regressor".into())
+                problems.push("a width model without its regressor".into());
             }
             (Some(_), Experiment::Recognition) => {
-                problems.push("a recognition model with a width regressor".into())
+                problems.push("a recognition model with a width regressor".into());
             }
             _ => {}
         }
@@ -683,13 +683,13 @@ impl TactileModel {
                 |e: crackbot_forest::ForestError| bad(format!("section {}: {e}", s.name));
             match s.name.as_str() {
                 CONTEXT_FOREST => {
-                    context_forest = Some(RandomForest::from_bytes(part).map_err(forest_err)?)
+                    context_forest = Some(RandomForest::from_bytes(part).map_err(forest_err)?);
                 }
                 WINDOW_FOREST => {
-                    window_forest = Some(RandomForest::from_bytes(part).map_err(forest_err)?)
+                    window_forest = Some(RandomForest::from_bytes(part).map_err(forest_err)?);
                 }
                 WIDTH_REGRESSOR => {
-                    width = Some(RandomForestRegressor::from_bytes(part).map_err(forest_err)?)
+                    width = Some(RandomForestRegressor::from_bytes(part).map_err(forest_err)?);
                 }
                 other => return Err(bad(format!("unknown section {other:?}"))),
             }

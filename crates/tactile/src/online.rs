@@ -410,7 +410,7 @@ impl<'m> OnlineClassifier<'m> {
             self.estimates.push(f64::from(reg.predict(ctx)));
         }
         let mm = median(&mut self.estimates);
-        for v in self.estimates.iter_mut() {
+        for v in &mut self.estimates {
             *v = (*v - mm).abs();
         }
         let mad = median(&mut self.estimates);

@@ -186,7 +186,7 @@ pub fn run_grid(
         classes: experiment
             .class_names()
             .iter()
-            .map(|s| s.to_string())
+            .map(std::string::ToString::to_string)
             .collect(),
         repetitions: repetitions.iter().map(|(r, _)| *r).collect(),
         cells,

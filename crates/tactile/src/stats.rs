@@ -41,7 +41,7 @@ pub fn kruskal_wallis(groups: &[&[f64]]) -> Result<KruskalWallis, TactileError> 
     }
     let mut all: Vec<(f64, usize)> = Vec::new();
     for (g, values) in groups.iter().enumerate() {
-        for &v in values.iter() {
+        for &v in *values {
             if !v.is_finite() {
                 return Err(TactileError::Statistics {
                     reason: format!("Kruskal–Wallis: non-finite value {v} in group {g}"),

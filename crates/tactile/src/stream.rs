@@ -399,7 +399,7 @@ impl StreamingContext {
             }
             w.n += 1;
             w.sum += i64::from(q);
-            for span in state.spans.iter_mut() {
+            for span in &mut state.spans {
                 span.update(q, leaving(span.len));
                 span.set_limits(b2);
             }

@@ -176,7 +176,7 @@ fn real_recording_slides_agree() {
     let mut pass_centres = Vec::new();
     for range in rec.slides().into_iter().filter(|r| r.len() > 1000) {
         let rows = &rec.rows[range];
-        let samples: Vec<[f64; 4]> = rows.iter().map(|r| r.channels()).collect();
+        let samples: Vec<[f64; 4]> = rows.iter().map(crackbot_recording::Row::channels).collect();
         let positions: Vec<f64> = rows.iter().map(|r| r.x_mm).collect();
         let e = localise(&samples, &positions, &config)
             .expect("valid")
@@ -200,7 +200,7 @@ fn real_recording_slides_agree() {
     let mut errs = Vec::new();
     for range in rec.slides().into_iter().filter(|r| r.len() > 1000) {
         let rows = &rec.rows[range];
-        let samples: Vec<[f64; 4]> = rows.iter().map(|r| r.channels()).collect();
+        let samples: Vec<[f64; 4]> = rows.iter().map(crackbot_recording::Row::channels).collect();
         let positions: Vec<f64> = rows.iter().map(|r| r.x_mm).collect();
         for p in localise_passes(&samples, &positions, &config).expect("valid") {
             errs.push((p.extent.expect("the crack").width_mm - 2.0).abs());
@@ -240,7 +240,8 @@ fn simulated_slides_within_measured_error() {
         let truth = offset + start + width / 2.0;
         for range in rec.slides() {
             let rows = &rec.rows[range];
-            let samples: Vec<[f64; 4]> = rows.iter().map(|r| r.channels()).collect();
+            let samples: Vec<[f64; 4]> =
+                rows.iter().map(crackbot_recording::Row::channels).collect();
             let positions: Vec<f64> = rows.iter().map(|r| r.x_mm).collect();
             for p in
                 localise_passes(&samples, &positions, &LocaliseConfig::default()).expect("valid")

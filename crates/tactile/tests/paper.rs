@@ -26,7 +26,7 @@ fn grid_on_two_repetitions_of_the_recognition_experiment() {
     let base = PipelineConfig::default();
     let mut seen = 0;
     let tables = run_grid(experiment, &reps, &[ClassifierKind::Qda], &base, 1, |_| {
-        seen += 1
+        seen += 1;
     })
     .expect("grid");
     assert_eq!(seen, 12);

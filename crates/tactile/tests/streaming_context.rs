@@ -85,7 +85,11 @@ fn every_real_recording_streams_to_the_offline_rows_bit_for_bit() {
         .par_iter()
         .enumerate()
         .map(|(k, (path, rec))| {
-            let samples: Vec<[f64; 4]> = rec.rows.iter().map(|r| r.channels()).collect();
+            let samples: Vec<[f64; 4]> = rec
+                .rows
+                .iter()
+                .map(crackbot_recording::Row::channels)
+                .collect();
             let directions: Vec<u8> = rec.rows.iter().map(|r| r.direction).collect();
             let mut starts = vec![false; samples.len()];
             for r in rec.slides() {
@@ -179,7 +183,7 @@ fn config_strategy() -> impl Strategy<Value = ContextConfig> {
 
 fn value_strategy() -> impl Strategy<Value = f64> {
     prop_oneof![
-        8 => (400.0f64..700.0).prop_map(|v| v.round()),
+        8 => (400.0f64..700.0).prop_map(f64::round),
         2 => -1.0e7f64..1.0e7,
         1 => Just(8191.4),
         1 => Just(-4096.6),

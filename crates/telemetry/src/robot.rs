@@ -113,7 +113,7 @@ impl RobotNode {
                     .unwrap_or_default();
                 let checked = guard
                     .lock()
-                    .unwrap_or_else(|p| p.into_inner())
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
                     .check(&payload, unix_ms());
                 let reply = match checked {
                     Ok(command) => match on_command(&command) {
@@ -139,7 +139,10 @@ impl RobotNode {
                 .name(format!("telemetry-{robot}"))
                 .spawn(move || {
                     while !shared.closed.load(Ordering::Relaxed) {
-                        let stream = *shared.stream.lock().unwrap_or_else(|p| p.into_inner());
+                        let stream = *shared
+                            .stream
+                            .lock()
+                            .unwrap_or_else(std::sync::PoisonError::into_inner);
                         let h = Telemetry::Health(Health {
                             uptime_s: shared.started.elapsed().as_secs_f64(),
                             stream,
@@ -173,7 +176,11 @@ impl RobotNode {
 
     /// The stream counters the next heartbeats carry (`None`: no mission running).
     pub fn set_stream_health(&self, h: Option<StreamHealth>) {
-        *self.shared.stream.lock().unwrap_or_else(|p| p.into_inner()) = h;
+        *self
+            .shared
+            .stream
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner) = h;
     }
 
     /// Publishes what a mission's progress event carries (see [`wire::from_progress`]); the
@@ -204,7 +211,10 @@ impl Shared {
         };
         let bytes = wire::encode(&env)?;
         {
-            let mut latest = self.latest.lock().unwrap_or_else(|p| p.into_inner());
+            let mut latest = self
+                .latest
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
             match topic {
                 Topic::Tactile => {}
                 // A running verdict is stale once its pass is judged: not kept for catch-up.
@@ -248,7 +258,10 @@ impl Shared {
 
     /// The state a joining station needs: the mission first, then the rest, verdicts last.
     fn snapshot(&self) -> Vec<Envelope> {
-        let latest = self.latest.lock().unwrap_or_else(|p| p.into_inner());
+        let latest = self
+            .latest
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let mut out: Vec<Envelope> = latest
             .by_topic
             .get(&Topic::Mission)

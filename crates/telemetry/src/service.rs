@@ -93,7 +93,7 @@ impl RobotService {
                             scene_toml: scene_toml.clone(),
                         };
                         tx.lock()
-                            .unwrap_or_else(|p| p.into_inner())
+                            .unwrap_or_else(std::sync::PoisonError::into_inner)
                             .send(request)
                             .map_err(|_| "this robot no longer takes missions".to_string())
                     }
@@ -148,7 +148,7 @@ impl RobotService {
         }
         self.starts
             .lock()
-            .unwrap_or_else(|p| p.into_inner())
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
             .recv_timeout(timeout)
             .ok()
     }

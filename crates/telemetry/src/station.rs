@@ -203,7 +203,7 @@ impl Station {
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|p| p.into_inner())
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 fn apply(fleet: &Mutex<Fleet>, key: &str, bytes: &[u8]) {

@@ -139,8 +139,7 @@ impl Benchmark {
             Some(d) => d.to_path_buf(),
             None => coco
                 .parent()
-                .map(Path::to_path_buf)
-                .unwrap_or_else(|| PathBuf::from(".")),
+                .map_or_else(|| PathBuf::from("."), Path::to_path_buf),
         };
         let err = |message: &str| VisionError::Coco {
             path: coco.to_path_buf(),

@@ -590,7 +590,7 @@ pub fn parse_pairs(text: &str, path: &Path) -> Result<Vec<PointPair>, VisionErro
             .collect();
         match nums {
             Ok(n) if n.len() == 4 => pairs.push(PointPair::new([n[0], n[1]], [n[2], n[3]])),
-            Err(_) if i == 0 => continue, // header
+            Err(_) if i == 0 => {} // header
             _ => {
                 return Err(VisionError::PointPairs {
                     path: path.to_path_buf(),

@@ -175,20 +175,23 @@ impl OnnxDetector {
         if inputs.len() != 1 || inputs[0].name() != "images" {
             return Err(fail(&format!(
                 "expected one input named `images`, found {:?}",
-                inputs.iter().map(|i| i.name()).collect::<Vec<_>>()
+                inputs
+                    .iter()
+                    .map(ort::value::Outlet::name)
+                    .collect::<Vec<_>>()
             )));
         }
-        let output = match outputs.first().map(|o| o.name()) {
+        let output = match outputs.first().map(ort::value::Outlet::name) {
             Some("detections") => ModelOutput::Boxes,
             Some("crack_map") => ModelOutput::CrackMap,
             _ => {
                 return Err(fail(&format!(
                     "expected an output named `detections` (boxes) or `crack_map` (a crack map), found {:?}",
-                    outputs.iter().map(|o| o.name()).collect::<Vec<_>>()
+                    outputs.iter().map(ort::value::Outlet::name).collect::<Vec<_>>()
                 )))
             }
         };
-        let names: Vec<&str> = outputs.iter().map(|o| o.name()).collect();
+        let names: Vec<&str> = outputs.iter().map(ort::value::Outlet::name).collect();
         let box_head = match (names.contains(&"box_heat"), names.contains(&"box_reg")) {
             (false, false) => false,
             (true, true) if output == ModelOutput::CrackMap => true,

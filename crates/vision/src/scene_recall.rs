@@ -228,7 +228,7 @@ pub fn scene_recall(
         }
         out.other_detections += useful.iter().filter(|u| !**u).count();
         if let (Some(counts), Some(pieces)) = (out.pieces.as_mut(), pieces) {
-            let own = pieces.get(&image.id).map(Vec::as_slice).unwrap_or(&[]);
+            let own = pieces.get(&image.id).map_or(&[][..], Vec::as_slice);
             counts.add_frame(frame, own, &held);
         }
     }

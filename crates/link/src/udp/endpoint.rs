@@ -216,24 +216,32 @@ impl LinkEndpoint {
         peer: SocketAddr,
         config: LinkConfig,
     ) -> Result<Self, LinkError> {
-        let epoch = match &config.epoch {
-            EpochSource::File(path) => EpochFile::new(path.clone()).advance()?,
-            EpochSource::Fixed(e) => *e,
+        let LinkConfig {
+            security,
+            epoch,
+            core,
+            ack_timeout,
+            max_attempts,
+            inbox_capacity,
+        } = config;
+        let epoch = match epoch {
+            EpochSource::File(path) => EpochFile::new(path).advance()?,
+            EpochSource::Fixed(e) => e,
         };
-        let signer = match &config.security {
+        let signer = match &security {
             Security::Signed(key) => Some(Signer::new(key)),
             Security::UnsignedInsecure => None,
         };
-        let core = LinkCore::new(config.core, signer, epoch)?;
+        let core = LinkCore::new(core, signer, epoch)?;
         let local = socket.local_addr()?;
         let mut ep = Self {
             socket,
             local,
             peer,
             core,
-            ack_timeout: config.ack_timeout,
-            max_attempts: config.max_attempts.max(1),
-            inbox_capacity: config.inbox_capacity.max(1),
+            ack_timeout,
+            max_attempts: max_attempts.max(1),
+            inbox_capacity: inbox_capacity.max(1),
             started: Instant::now(),
             inbox: VecDeque::new(),
             faults: None,

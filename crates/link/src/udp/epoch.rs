@@ -98,8 +98,7 @@ impl EpochFile {
         let last = self.last()?;
         let now = SystemTime::now()
             .duration_since(UNIX_EPOCH)
-            .map(|d| d.as_secs())
-            .unwrap_or(0);
+            .map_or(0, |d| d.as_secs());
         let floor = u32::try_from(now)
             .unwrap_or(CLOCK_FLOOR_MAX)
             .min(CLOCK_FLOOR_MAX);

@@ -140,6 +140,10 @@ impl Remote {
     }
 
     /// Lets the thread run a little longer (so that what is in flight gets processed).
+    #[expect(
+        clippy::unused_self,
+        reason = "a verb of the remote, as the tests read it: `remote.settle()`"
+    )]
     pub fn settle(&self) {
         std::thread::sleep(Duration::from_millis(30));
     }

@@ -175,7 +175,7 @@ pub fn render(
         std::mem::take(&mut canvas.crack_mask),
     )
     .ok_or(SimError::Buffer { what: "crack mask" })?;
-    let image = develop(&ctx, canvas, noise_sigma, &mut noise_gen)?;
+    let image = develop(&ctx, &canvas, noise_sigma, &mut noise_gen)?;
     Ok(Frame {
         image,
         boxes,
@@ -523,7 +523,7 @@ fn draw_screws(ctx: &Ctx<'_>, cover: &ScrewCover, canvas: &mut Canvas) -> Vec<Gr
 /// Step 6: the frame's lighting, sensor noise, and quantisation to 8-bit sRGB.
 fn develop(
     ctx: &Ctx<'_>,
-    canvas: Canvas,
+    canvas: &Canvas,
     noise_sigma: f64,
     noise_gen: &mut NoiseGen,
 ) -> Result<RgbImage, SimError> {

@@ -161,7 +161,7 @@ mod tests {
         }
         let mut seen = Vec::new();
         let r = detect_dataset(&mut Fixed, &gt, dir.path(), 1, |p| {
-            seen.push((p.done, p.total))
+            seen.push((p.done, p.total));
         })
         .unwrap();
         assert_eq!(r.len(), 2);

@@ -97,10 +97,7 @@ impl Arm {
 
     /// Where the arm last said it was (the origin before any state came).
     pub(crate) fn here(&self) -> [f64; 3] {
-        self.states
-            .back()
-            .map(|s| pose(&s.state))
-            .unwrap_or([0.0; 3])
+        self.states.back().map_or([0.0; 3], |s| pose(&s.state))
     }
 
     /// The host's link counters so far.

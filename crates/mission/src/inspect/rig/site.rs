@@ -179,19 +179,19 @@ mod tests {
         }
         match load("[arm]\ntravel_speed_mm_s = -1.0\n") {
             Err(MissionError::Setting { field, value, .. }) => {
-                assert_eq!((field, value), ("travel_speed_mm_s", -1.0))
+                assert_eq!((field, value), ("travel_speed_mm_s", -1.0));
             }
             other => panic!("{other:?}"),
         }
         match load("[fibre]\npeak_mm = 0.0\n") {
             Err(MissionError::Fibre(crackbot_fibre::FibreError::Setting { field, .. })) => {
-                assert_eq!(field, "peak_mm")
+                assert_eq!(field, "peak_mm");
             }
             other => panic!("{other:?}"),
         }
         match load("[arm]\nspeed = 3\n") {
             Err(e @ MissionError::SiteFile { .. }) => {
-                assert!(e.to_string().contains("speed"), "{e}")
+                assert!(e.to_string().contains("speed"), "{e}");
             }
             other => panic!("{other:?}"),
         }

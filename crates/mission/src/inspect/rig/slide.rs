@@ -39,7 +39,6 @@ impl Rig<'_> {
                     tracing::warn!("slide {id}: {e}; sliding again");
                     self.arm.restarted = false;
                     self.wait_for_stream()?;
-                    continue;
                 }
                 Err(e) => return Err(e),
             }
