@@ -356,6 +356,63 @@ fn the_robot_path_builds_without_research_gui_or_fleet_crates() {
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
+/// The crates whose evaluation (scoring, metrics, benchmarks, the paper's protocols) sits
+/// behind their cargo feature `research`, and that feature.
+const EVALUATED: &[(&str, &str)] = &[
+    ("crackbot-tactile", "research"),
+    ("crackbot-vision", "research"),
+];
+
+#[test]
+fn the_robots_default_build_compiles_no_evaluation_module() {
+    let features = tree_lines("crackbot-cli", "features");
+    for (krate, feature) in EVALUATED {
+        let on = format!("{krate} feature \"{feature}\"");
+        assert!(
+            !features.iter().any(|l| l.starts_with(&on)),
+            "the robot's build turns on {krate}'s evaluation (feature `{feature}`):\n{}",
+            features.join("\n")
+        );
+    }
+    // The evaluation modules are behind the feature: a crate that turns it on would compile
+    // them, and they are declared only under it.
+    let sources = [
+        (
+            "crates/tactile/src/lib.rs",
+            &[
+                "eval",
+                "evaluation",
+                "metrics",
+                "paper",
+                "stats",
+                "tradeoff",
+            ][..],
+        ),
+        (
+            "crates/vision/src/lib.rs",
+            &[
+                "benchmark",
+                "coco",
+                "pieces",
+                "pixel",
+                "scene_recall",
+                "tradeoff",
+            ][..],
+        ),
+    ];
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (file, modules) in sources {
+        let text = std::fs::read_to_string(root.join(file)).expect("a crate root");
+        for m in modules {
+            let gated = format!("#[cfg(feature = \"research\")]\npub mod {m};");
+            assert!(
+                text.contains(&gated),
+                "{file}: `{m}` is not behind the feature `research`"
+            );
+        }
+    }
+}
+
 /// The simulated rig's crates: the robot's default build has them for its built-in scene; the
 /// robot built for hardware only must not compile them.
 const SIMULATED_RIG: &[&str] = &["crackbot-sim", "crackbot-controller", "crackbot-emulator"];

@@ -4,28 +4,32 @@
 //!
 //! * [`dataset`]: recordings → labelled feature windows ([`dataset::PipelineConfig`], checked once into a
 //!   [`dataset::Pipeline`]);
-//! * [`eval`]: training and testing classifiers, slide verdicts, width regression;
-//! * [`evaluation`]: the whole `crackbot tactile eval` flow as one call returning a `Serialize` report;
+//! * [`model`]: the deployed models (training them, their files, the unknown-surface gate);
+//!   [`online`]: a slide classified sample by sample, as the robot does; [`vote`]: how a slide's
+//!   windows vote;
 //! * [`context`]: causal context features of a window; [`stream`]: the same, sample by sample;
 //! * [`localise`]: where a crack starts and ends along a slide, from the proximity dip and the position stream;
 //! * [`stroke`]: what one stroke's proximity channel says (a candidate's own dip among several, the ends' levels,
 //!   a row cut into stroke-long pieces); [`print_check`] and [`raised`]: prints told from cracks by raised passes;
-//! * [`metrics`].
 //!
-//! Cargo features (default off), for research only:
-//!
-//! * `research`: the paper's grid ([`paper`], with its Kruskal–Wallis statistics in [`stats`], `statrs`) and
-//!   the random forest's accuracy/run-time sweep ([`tradeoff`]). Their figures are drawn by
-//!   `crackbot-plots`, passed in as closures.
+//! Cargo feature `research` (default off, never in the robot's build): the evaluation. `eval`,
+//! training and testing classifiers, slide verdicts, width regression; `evaluation`, the whole
+//! `crackbot-lab tactile eval` flow as one call returning a `Serialize` report; `metrics`; the
+//! paper's grid (`paper`, with its Kruskal–Wallis statistics in `stats`, `statrs`) and the random
+//! forest's accuracy/run-time sweep (`tradeoff`). Their figures are drawn by `crackbot-plots`,
+//! passed in as closures.
 //!
 //! Nothing here draws progress bars: long calls take a progress callback and the binary draws.
 
 pub mod context;
 pub mod dataset;
 mod error;
+#[cfg(feature = "research")]
 pub mod eval;
+#[cfg(feature = "research")]
 pub mod evaluation;
 pub mod localise;
+#[cfg(feature = "research")]
 pub mod metrics;
 pub mod model;
 pub mod online;

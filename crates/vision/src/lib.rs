@@ -10,24 +10,25 @@
 //!   convention, below the crack map's).
 //! * [`crack_map`]: detections from a segmentation detector's crack map (boxes by the crack
 //!   datasets' rule, each crack's main axis and centre line).
-//! * [`coco`]: COCO files and the COCO detection metrics (mAP@[.5:.95], mAP@0.5, AR@100), as
-//!   pycocotools computes them.
-//! * [`pixel`]: pixel-level precision, recall and F1 (ODS, OIS) of a crack map against a mask.
-//! * [`scene_recall`]: cracks found and decoys proposed on rendered plates (`features.json`).
+//! * Evaluation, behind the cargo feature `research` (never in the robot's build): `coco`, COCO
+//!   files and the COCO detection metrics (mAP@[.5:.95], mAP@0.5, AR@100) as pycocotools
+//!   computes them; `pixel`, pixel-level precision, recall and F1 (ODS, OIS) of a crack map
+//!   against a mask; `scene_recall` and `pieces`, cracks found, decoys proposed and cracks in one
+//!   piece on rendered plates (`features.json`); `benchmark`, a detector over a COCO ground truth
+//!   and the `crackbot-lab eval-detector` report; `tradeoff`, accuracy against run time.
 //! * [`fusion`]: combining detections over several frames of one view.
 //! * [`homography`]: pixel ↔ surface millimetres from point pairs (normalised DLT, RANSAC), its
 //!   calibration file, and the point-pairs CSV reader.
 //! * [`detect`]: the `crackbot detect` flow (threshold, surface mm, fusion, annotated images) and
-//!   its report; [`benchmark`]: a detector over a COCO ground truth (metrics, median ms) and the
-//!   `crackbot eval-detector` report; `tradeoff` (cargo feature `research`): accuracy against
-//!   run time over input sizes;
-//!   [`model`]: where the trained model is.
+//!   its report; [`model`]: where the trained model is.
 
+#[cfg(feature = "research")]
 pub mod benchmark;
 pub mod box_head;
 pub mod boxes;
 pub mod camera;
 pub mod classical;
+#[cfg(feature = "research")]
 pub mod coco;
 pub mod crack_map;
 pub mod detect;
@@ -37,9 +38,12 @@ pub mod homography;
 pub mod model;
 #[cfg(feature = "onnx")]
 pub mod onnx;
+#[cfg(feature = "research")]
 pub mod pieces;
+#[cfg(feature = "research")]
 pub mod pixel;
 pub mod preprocess;
+#[cfg(feature = "research")]
 pub mod scene_recall;
 pub mod shape;
 #[cfg(feature = "research")]
