@@ -326,4 +326,40 @@ mod tests {
         );
         assert!(split_by_travel(&[], 16.0).is_empty());
     }
+
+    #[test]
+    fn a_stroke_across_two_lines_gives_the_candidate_the_dip_nearest_it() {
+        // 12 mm at 0.01 mm a sample, the surface at 500 counts on every channel, two dips of
+        // 200 counts in P 5 mm apart (a crack and a print beside it).
+        let along: Vec<f64> = (0..1200).map(|i| f64::from(i) * 0.01).collect();
+        let samples: Vec<[f64; 4]> = along
+            .iter()
+            .map(|&x| {
+                let p = if (3.0..4.0).contains(&x) || (8.0..9.0).contains(&x) {
+                    300.0
+                } else {
+                    500.0
+                };
+                [500.0, 500.0, 500.0, p]
+            })
+            .collect();
+        let config = LocaliseConfig::default();
+        let extent = localise(&samples, &along, &config)
+            .expect("a pass")
+            .expect("a dip");
+        let dips = SeparateDips::default();
+        // The localiser's one dip spans both lines: wider than a 1 mm candidate by far.
+        assert!(extent.width_mm > 1.0 + dips.excess_mm, "{extent:?}");
+        let (range, own) =
+            own_dip(&samples, &along, &extent, 1.0, 8.5, &config, &dips).expect("its own dip");
+        assert!(
+            along[range.start] > 4.0 && along[range.end - 1] >= 9.0,
+            "{range:?}"
+        );
+        assert!(own.centre_mm > 7.0 && own.centre_mm < 10.0, "{own:?}");
+        assert!(own.width_mm < extent.width_mm);
+        // A candidate as wide as the dip, or lengths that differ: the stroke's dip is its own.
+        assert!(own_dip(&samples, &along, &extent, 20.0, 8.5, &config, &dips).is_none());
+        assert!(own_dip(&samples[1..], &along, &extent, 1.0, 8.5, &config, &dips).is_none());
+    }
 }

@@ -128,3 +128,44 @@ impl Default for TouchConfig {
         TouchConfig::new()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_defaults_pass_and_a_setting_out_of_range_is_named_by_its_key() {
+        let good = TouchConfig::new();
+        good.check().unwrap();
+        assert_eq!(good.min_dip_counts, MIN_DIP_COUNTS);
+        assert_eq!(good.uneven_ends_share, UNEVEN_ENDS_SHARE);
+        let refused = |change: &dyn Fn(&mut TouchConfig)| {
+            let mut c = good.clone();
+            change(&mut c);
+            match c.check() {
+                Err(MissionError::Setting { field, .. }) => field,
+                other => panic!("{other:?}"),
+            }
+        };
+        assert_eq!(
+            refused(&|c| c.min_dip_counts = -1.0),
+            "touch.min_dip_counts"
+        );
+        assert_eq!(
+            refused(&|c| c.uneven_ends_share = 1.5),
+            "touch.uneven_ends_share"
+        );
+        assert_eq!(
+            refused(&|c| c.restroke_along_mm = f64::NAN),
+            "touch.restroke_along_mm"
+        );
+        assert_eq!(
+            refused(&|c| c.separate_dips.back_share = -0.1),
+            "touch.separate_dips.back_share"
+        );
+        assert_eq!(
+            refused(&|c| c.separate_dips.gap_mm = f64::INFINITY),
+            "touch.separate_dips.gap_mm"
+        );
+    }
+}

@@ -170,3 +170,41 @@ pub(crate) fn pass_record(
         attempts: s.attempts,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_slides_axis_places_points_along_it_both_ways() {
+        let slide = Slide {
+            candidates: vec![3],
+            row: None,
+            start_mm: [10.0, 20.0],
+            end_mm: [13.0, 24.0],
+            stroke_mm: 5.0,
+            passes: 2,
+            speed_mm_s: 4.6,
+            duration_s: 2.2,
+            sound_run_mm: None,
+            shifted_mm: 0.0,
+            clipped: false,
+            moved_along_mm: 0.0,
+        };
+        let axis = Axis::of(&slide);
+        assert!((axis.len - 5.0).abs() < 1e-12);
+        assert_eq!(axis.u, [0.6, 0.8]);
+        let p = axis.at(2.5);
+        assert!((p[0] - 11.5).abs() < 1e-12 && (p[1] - 22.0).abs() < 1e-12);
+        assert!((axis.along(p) - 2.5).abs() < 1e-12);
+        // A point beside the axis is placed by its projection; one behind the start is negative.
+        assert!((axis.along([11.5 + 0.8, 22.0 - 0.6]) - 2.5).abs() < 1e-12);
+        assert!(axis.along([7.0, 16.0]) < 0.0);
+        // A slide of no length still has an axis (its length is kept above zero).
+        let still = Axis::of(&Slide {
+            end_mm: slide.start_mm,
+            ..slide
+        });
+        assert!(still.len > 0.0 && still.along([10.0, 20.0]) == 0.0);
+    }
+}
