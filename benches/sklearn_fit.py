@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Training time of scikit-learn's `RandomForestClassifier` on a CSV of windows, next to ours
-(`cargo run --release -p crackbot-forest --example fit_csv` on the same CSV and the same cores):
+(`cargo run --release -p crackbot-research --example fit_csv` on the same CSV and the same cores):
 
     bash benches/setup_venv.sh                                    # benches/.venv-bench, pinned
     benches/.venv-bench/bin/python benches/sklearn_fit.py benches/out/train.csv \\

@@ -5,7 +5,7 @@ The windows are the authors' real recordings (surface-type experiment, MAV of D1
 windows every 2 samples): repetition 1 trains, repetition 2 is predicted. They are exported by a Rust
 example so both sides see the same rows::
 
-    cargo run --release -p crackbot-tactile --example export_windows -- benches/out
+    cargo run --release -p crackbot-research --example export_windows -- benches/out
     bash benches/setup_venv.sh                   # benches/.venv-bench (ignored), benches/requirements.txt
     taskset -c 1 benches/.venv-bench/bin/python benches/sklearn_ort.py benches/out
 

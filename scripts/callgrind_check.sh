@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Instruction-count regression check of the per-window path (streaming MAV D1D2+P update + 100-tree forest
-# prediction) under callgrind: builds crackbot-tactile's example `per_window_instructions` in release,
+# prediction) under callgrind: builds crackbot-research's example `per_window_instructions` in release,
 # trains the forest natively (fixed data and seed), then counts only `per_window_loop` over N windows
 # (--collect-atstart=no --toggle-collect) and compares instructions per window with
 # benches/baselines/per_window_instructions.txt. Fails when more than 10 % above the baseline.
@@ -13,7 +13,7 @@ N="${CALLGRIND_WINDOWS:-2000}"
 baseline_file=benches/baselines/per_window_instructions.txt
 command -v valgrind > /dev/null || { echo "callgrind check: valgrind is not installed (apt-get install valgrind)" >&2; exit 1; }
 
-bin=$(cargo build --release --locked -p crackbot-tactile --example per_window_instructions --message-format=json \
+bin=$(cargo build --release --locked -p crackbot-research --example per_window_instructions --message-format=json \
     | grep -o '"executable":"[^"]*per_window_instructions"' | sed 's/"executable":"//; s/"$//' | tail -n 1)
 [ -x "$bin" ] || { echo "callgrind check: no executable found for the example" >&2; exit 1; }
 work=$(mktemp -d)

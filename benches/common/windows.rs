@@ -1,7 +1,7 @@
 //! The authors' real surface-type recordings as the paper's MAV D1D2+P windows (train on repetition 1,
 //! test on repetition 2). Shared, through `#[path]`, by `benches/tactile.rs`,
 //! `tests/linfa_flat_conversion.rs` and the examples `export_windows` and `per_window_instructions` of
-//! crackbot-tactile, so every benchmark sees the same windows.
+//! crackbot-research, so every benchmark sees the same windows.
 #![allow(
     dead_code,
     reason = "included by several test or bench crates, each using a subset: dead in some, not in others"

@@ -2,7 +2,7 @@
 //! (`benches/sklearn_fit.py` on the same CSV; `benches/summary.py` prints the ratio).
 //!
 //! ```sh
-//! cargo run --release -p crackbot-forest --example fit_csv -- benches/out/train.csv \
+//! cargo run --release -p crackbot-research --example fit_csv -- benches/out/train.csv \
 //!     --threads 2 --repeats 5 --json benches/out/ours_fit.json [--trees 100] [--max-depth D] [--save model.forest]
 //! ```
 //!

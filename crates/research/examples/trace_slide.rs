@@ -3,7 +3,7 @@
 //! simulated trace looks the way it does (e.g. the bump's stick and jump,
 //! `docs/calibration.md`).
 //!
-//! `cargo run --release -p crackbot-sim --example trace_slide -- [SURFACE] [PARAMS.toml]`
+//! `cargo run --release -p crackbot-research --example trace_slide -- [SURFACE] [PARAMS.toml]`
 //! SURFACE is a file stem of `crackbot sim dataset` (`crack_bump`, `crack_pattern`, `crack_mm8`,
 //! …; default `crack_bump`); PARAMS overrides parameters as `sim dataset --params` does.
 

@@ -2,7 +2,7 @@
 //! repetition 2 → `test.csv`; columns `mav_d1,mav_d2,mav_p,class`) for `benches/sklearn_ort.py`, the same
 //! windows `benches/tactile.rs` uses.
 //!
-//! `cargo run --release -p crackbot-tactile --example export_windows -- benches/out`
+//! `cargo run --release -p crackbot-research --example export_windows -- benches/out`
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

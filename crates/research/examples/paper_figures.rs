@@ -3,7 +3,7 @@
 //! (crackforest and uav75, train and val).
 //!
 //! ```text
-//! cargo run --release -p crackbot-planner --example paper_figures [-- DIR ...]
+//! cargo run --release -p crackbot-research --example paper_figures [-- DIR ...]
 //! ```
 
 use std::path::PathBuf;

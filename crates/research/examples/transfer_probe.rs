@@ -8,7 +8,7 @@
 //!   repetition 1 (fitting) and on repetitions 2 and 3 (held out).
 //!
 //! ```sh
-//! CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-lab --example transfer_probe -- \
+//! CRACKBOT_DATA_DIR=../shared/data cargo run --release -p crackbot-research --example transfer_probe -- \
 //!     --fit-model fold1/recognition.ctm [--fit-width-model fold1w/width.ctm] [--seed 7] \
 //!     [--recordings 5] [--width-only] [PARAMS.toml …]
 //! ```
