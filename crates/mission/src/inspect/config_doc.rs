@@ -95,6 +95,18 @@ pub(crate) const COMMENTS: &[(&str, &str)] = &[
     ("output.foxglove", "Serve the log live over the Foxglove WebSocket protocol on this address (feature foxglove)."),
 ];
 
+/// The top-level sections in the order a mission uses them.
+const SECTION_ORDER: &[&str] = &[
+    "rig",
+    "perceive",
+    "plan",
+    "touch",
+    "print_check",
+    "judge",
+    "pieces",
+    "output",
+];
+
 /// The comment of `key`, if it has one.
 fn comment(key: &str) -> Option<&'static str> {
     COMMENTS.iter().find(|(k, _)| *k == key).map(|(_, c)| *c)
@@ -126,7 +138,15 @@ fn write_table(out: &mut String, path: &str, table: &toml::Table) {
         }
         out.push_str(&format!("{} = {v}\n", toml_key(k)));
     }
-    for (k, v) in table {
+    // Sections in the order the mission uses them, then any other.
+    let mut sections: Vec<(&String, &toml::Value)> = table.iter().collect();
+    sections.sort_by_key(|(k, _)| {
+        SECTION_ORDER
+            .iter()
+            .position(|s| s == k)
+            .unwrap_or(usize::MAX)
+    });
+    for (k, v) in sections {
         if let toml::Value::Table(t) = v {
             let p = full(k);
             out.push('\n');

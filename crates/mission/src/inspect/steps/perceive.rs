@@ -49,13 +49,21 @@ pub struct PerceiveConfig {
     #[serde(default)]
     pub detector_model: Option<PathBuf>,
     /// Vision missions: detections below this score are not reported.
+    #[serde(serialize_with = "shortest_f32")]
     pub min_score: f32,
     /// Fused missions: detections below this score are not touched. Lower than
     /// [`min_score`](Self::min_score) where wanted: the finger confirms or rejects what the
     /// camera proposes, so a weak detection costs a slide, not a false report.
+    #[serde(serialize_with = "shortest_f32")]
     pub proposal_min_score: f32,
     /// What the finger touches (fused) and what is reported (vision).
     pub candidates: CandidateSource,
+}
+
+/// A score written as the shortest decimal that reads back as it (0.3, not 0.30000001192092896).
+fn shortest_f32<S: serde::Serializer>(v: &f32, s: S) -> Result<S::Ok, S::Error> {
+    let shortest: f64 = v.to_string().parse().unwrap_or(f64::from(*v));
+    s.serialize_f64(shortest)
 }
 
 impl Default for PerceiveConfig {
