@@ -83,20 +83,31 @@ pub enum MissionError {
     #[error(transparent)]
     Sim(#[from] crackbot_sim::SimError),
     /// A site file could not be parsed.
-    #[error("the site file {}: {message}", path.display())]
+    #[error("the site file {}: {}", path.display(), source.message())]
     SiteFile {
         /// The file.
         path: std::path::PathBuf,
-        /// What the TOML parser said.
-        message: String,
+        /// What the TOML parser said (boxed: it is large, and this is the rare path).
+        #[source]
+        source: Box<toml::de::Error>,
     },
-    /// A mission configuration file could not be read as one: `message` names the key.
-    #[error("the configuration file {}: {message}", path.display())]
+    /// A mission configuration file could not be read as one.
+    #[error("the configuration file {}: {}", path.display(), config_file_text(key.as_deref(), source))]
     ConfigFile {
         /// The file.
         path: std::path::PathBuf,
-        /// What is wrong, and where.
-        message: String,
+        /// The key the error is about (`print_check.height_mm`), where the file parsed as TOML.
+        key: Option<String>,
+        /// What the TOML reader said (boxed: it is large, and this is the rare path).
+        #[source]
+        source: Box<toml::de::Error>,
+    },
+    /// A configuration could not be written as TOML.
+    #[error("the configuration as TOML: {source}")]
+    ConfigWrite {
+        /// What the TOML writer said.
+        #[source]
+        source: Box<toml::ser::Error>,
     },
     /// The site's proximity fibre is out of range.
     #[error(transparent)]
@@ -182,6 +193,15 @@ pub enum MissionError {
     #[cfg(feature = "sim")]
     #[error(transparent)]
     Controller(#[from] crackbot_controller::ControllerError),
+}
+
+/// What a configuration file's error says: the key and the reader's message, or where the file
+/// is not TOML.
+fn config_file_text(key: Option<&str>, source: &toml::de::Error) -> String {
+    match key {
+        Some(k) => format!("{k}: {}", source.message()),
+        None => source.to_string(),
+    }
 }
 
 /// The link's error `source` while the mission was doing `what`.

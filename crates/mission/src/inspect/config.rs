@@ -118,22 +118,25 @@ impl InspectConfig {
         Ok(CheckedConfig(self.clone()))
     }
 
-    /// This configuration with the TOML `text` (from `source`, named in errors) laid over it:
+    /// This configuration with the TOML `text` (from the file `from`, named in errors) laid over it:
     /// every key the text gives replaces this one's, the rest stay. The scene and injected
     /// faults are not the file's and stay as they are. Not checked: see [`Self::check`].
-    pub fn overlaid(&self, text: &str, source: &Path) -> Result<InspectConfig, MissionError> {
-        let file_err = |message: String| MissionError::ConfigFile {
-            path: source.to_path_buf(),
-            message,
+    pub fn overlaid(&self, text: &str, from: &Path) -> Result<InspectConfig, MissionError> {
+        let file_err = |key: Option<String>, source| MissionError::ConfigFile {
+            path: from.to_path_buf(),
+            key,
+            source: Box::new(source),
         };
-        let given: toml::Table = toml::from_str(text).map_err(|e| file_err(e.to_string()))?;
+        let given: toml::Table = toml::from_str(text).map_err(|e| file_err(None, e))?;
         let mut merged =
-            toml::Table::try_from(self).map_err(|e| file_err(format!("the defaults: {e}")))?;
+            toml::Table::try_from(self).map_err(|source| MissionError::ConfigWrite {
+                source: Box::new(source),
+            })?;
         merge(&mut merged, given);
         let mut config: InspectConfig =
             serde_path_to_error::deserialize(toml::Value::Table(merged)).map_err(|e| {
                 let key = e.path().to_string();
-                file_err(format!("{key}: {}", e.into_inner()))
+                file_err(Some(key), e.into_inner())
             })?;
         config.rig.keep_unfiled(&self.rig);
         Ok(config)
@@ -148,9 +151,8 @@ impl InspectConfig {
     /// The configuration as a TOML file, each key with what it is and where its default comes
     /// from in a comment ([`super::config_doc::COMMENTS`]).
     pub fn to_commented_toml(&self) -> Result<String, MissionError> {
-        let table = toml::Table::try_from(self).map_err(|e| MissionError::ConfigFile {
-            path: PathBuf::from("(this configuration)"),
-            message: e.to_string(),
+        let table = toml::Table::try_from(self).map_err(|source| MissionError::ConfigWrite {
+            source: Box::new(source),
         })?;
         Ok(super::config_doc::commented(&table))
     }
@@ -333,9 +335,9 @@ mod tests {
     fn unknown_keys_wrong_types_and_broken_files_are_refused_naming_the_key() {
         let base = default_config();
         let err = |text: &str| match base.overlaid(text, Path::new("m.toml")) {
-            Err(MissionError::ConfigFile { path, message }) => {
-                assert_eq!(path, Path::new("m.toml"));
-                message
+            Err(e @ MissionError::ConfigFile { .. }) => {
+                assert!(e.to_string().contains("m.toml"), "{e}");
+                e.to_string()
             }
             other => panic!("{text:?}: {other:?}"),
         };

@@ -84,9 +84,9 @@ impl Site {
     /// A site file (TOML, see the [module docs](self)), checked.
     pub fn load(path: &Path) -> Result<Site, MissionError> {
         let text = std::fs::read_to_string(path).map_err(|e| io_err(path, e))?;
-        let site: Site = toml::from_str(&text).map_err(|e| MissionError::SiteFile {
+        let site: Site = toml::from_str(&text).map_err(|source| MissionError::SiteFile {
             path: path.to_path_buf(),
-            message: e.message().to_string(),
+            source: Box::new(source),
         })?;
         site.checked()
     }
