@@ -506,3 +506,55 @@ fn a_fused_mission_reads_its_camera_through_ffmpeg() {
     let judged = cracks.len() + pieces + report["rejected"].as_array().expect("rejected").len();
     assert_eq!(judged, candidates, "every candidate confirmed or rejected");
 }
+
+/// The states a host on link `link_id` hears from a controller process started with
+/// `--link-id 9`, in half a second of listening.
+fn states_heard_on_link(link_id: u16) -> usize {
+    use crackbot_link::{EpochSource, Key, LinkConfig, LinkEndpoint, Message, Security};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let key_path = dir.path().join("link.key");
+    key_file(&key_path, "5a");
+    let (cport, hport) = (free_port(), free_port());
+    let mut controller = Command::new(binary("crackbot-sim-controller"))
+        .args(["--bind", &format!("127.0.0.1:{cport}")])
+        .args(["--peer", &format!("127.0.0.1:{hport}")])
+        .args(["--key", key_path.to_str().expect("utf-8")])
+        .args([
+            "--state-dir",
+            dir.path().join("ctrl").to_str().expect("utf-8"),
+        ])
+        .args(["--link-id", "9", "--seconds", "20"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("starting crackbot-sim-controller");
+    let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
+    let mut line = String::new();
+    out.read_line(&mut line).expect("the PTY line");
+    let socket = UdpSocket::bind(("127.0.0.1", hport)).expect("the host's port");
+    let key = Key::from_file(&key_path).expect("the key");
+    let config =
+        LinkConfig::host(Security::Signed(key), EpochSource::Fixed(1)).with_link_id(link_id);
+    let mut ep = LinkEndpoint::from_socket(socket, ([127, 0, 0, 1], cport).into(), config)
+        .expect("the host's endpoint");
+    let end = std::time::Instant::now() + std::time::Duration::from_millis(500);
+    let mut states = 0;
+    while std::time::Instant::now() < end {
+        ep.send_unreliable(&Message::Heartbeat)
+            .expect("a heartbeat");
+        while let Ok(Some(r)) = ep.recv(std::time::Duration::from_millis(20)) {
+            states += usize::from(matches!(r.message, Message::State(_)));
+        }
+    }
+    controller.kill().ok();
+    controller.wait().ok();
+    states
+}
+
+#[test]
+fn the_controller_takes_the_link_id_the_wire_format_names() {
+    // Its own link: the 100 Hz state stream arrives. Another link's host hears nothing.
+    let same = states_heard_on_link(9);
+    assert!(same > 10, "{same} states on link 9");
+    assert_eq!(states_heard_on_link(1), 0);
+}

@@ -114,25 +114,33 @@ pub enum CommandError {
 
 impl CommandError {
     /// The link's error code for this refusal.
+    /// A value out of range or not finite gets its field's own code (the wire format's §11): a
+    /// speed `OverSpeedLimit`, a point `OutsideWorkspace`, any other `InvalidCommand`.
     pub fn code(&self) -> ErrorCode {
         match self {
-            CommandError::OutOfRange { field, .. } if field.contains("_mm_s") => {
-                ErrorCode::OverSpeedLimit
-            }
-            CommandError::OutOfRange { field, .. }
-                if field.ends_with(".x_mm") || field.ends_with(".y_mm") =>
-            {
-                ErrorCode::OutsideWorkspace
+            CommandError::OutOfRange { field, .. } | CommandError::NotFinite { field, .. } => {
+                field_code(field)
             }
             CommandError::Expired { .. } => ErrorCode::Expired,
             CommandError::NotACommand(_) => ErrorCode::Unsupported,
-            _ => ErrorCode::InvalidCommand,
+            CommandError::DeadlineTooFar { .. } => ErrorCode::InvalidCommand,
         }
     }
 
     /// The `Error` reply to the command sent as packet `seq`.
     pub fn report(&self, seq: u32) -> ErrorReport {
         ErrorReport::new(seq, self.code(), &self.to_string())
+    }
+}
+
+/// The code a bad value of `field` is refused with.
+fn field_code(field: &str) -> ErrorCode {
+    if field.contains("_mm_s") {
+        ErrorCode::OverSpeedLimit
+    } else if field.ends_with(".x_mm") || field.ends_with(".y_mm") {
+        ErrorCode::OutsideWorkspace
+    } else {
+        ErrorCode::InvalidCommand
     }
 }
 
@@ -403,6 +411,38 @@ mod tests {
         );
         // The deadline itself is still in time.
         assert!(check(&move_to(|m| m.valid_until_us = NOW), &l, NOW).is_ok());
+    }
+
+    #[test]
+    fn a_value_that_is_not_a_number_gets_its_fields_own_code() {
+        let l = limits();
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let code = |m: Message| check(&m, &l, NOW).unwrap_err().code();
+            assert_eq!(
+                code(move_to(|m| m.speed_mm_s = bad)),
+                ErrorCode::OverSpeedLimit
+            );
+            assert_eq!(
+                code(slide(|s| s.speed_mm_s = bad)),
+                ErrorCode::OverSpeedLimit
+            );
+            assert_eq!(
+                code(move_to(|m| m.pose.x_mm = bad)),
+                ErrorCode::OutsideWorkspace
+            );
+            assert_eq!(
+                code(slide(|s| s.start.y_mm = bad)),
+                ErrorCode::OutsideWorkspace
+            );
+            assert_eq!(
+                code(move_to(|m| m.pose.z_mm = bad)),
+                ErrorCode::InvalidCommand
+            );
+            assert_eq!(
+                code(slide(|s| s.contact = Contact::DepthMm(bad))),
+                ErrorCode::InvalidCommand
+            );
+        }
     }
 
     #[test]

@@ -32,6 +32,10 @@ struct Cli {
     /// Pre-shared key file (64–128 hex digits, mode 0600).
     #[arg(long)]
     key: PathBuf,
+    /// The link's id, the same on both ends (the wire format's §1: a packet of another link is
+    /// refused).
+    #[arg(long, default_value_t = 1)]
+    link_id: u16,
     /// Folder of the controller's epoch counter (kept across restarts).
     #[arg(long, default_value = "out/controller")]
     state_dir: PathBuf,
@@ -88,6 +92,7 @@ fn main() -> Result<()> {
         cli.state_dir.join("controller.epoch"),
     );
     config.seed = cli.seed;
+    config.link_id = cli.link_id;
     config.clock = ControllerClock {
         speedup: cli.speedup,
         offset_us: cli.clock_offset_us,

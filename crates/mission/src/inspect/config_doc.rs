@@ -83,7 +83,7 @@ pub(crate) const COMMENTS: &[(&str, &str)] = &[
     ("print_check.speed_mm_s", "Speed of the raised pass, mm/s, or the arm's travel limit if lower (PRINT_CHECK_SPEED_MM_S)."),
     ("judge", "From what the finger felt to a verdict."),
     ("judge.require_dip", "A confirmed crack must show the proximity dip every real crack makes (the authors' plates: 72 of 72 to 73 of 76 passes per plate)."),
-    ("judge.doubted_dip_confidence", "A doubted \"no crack\" over a dip at least this confident goes to the print check; 0: off (DOUBTED_DIP_CONFIDENCE; EXPERIMENTS.md, 'A doubted \"no crack\" over a deep dip goes to the print check')."),
+    ("judge.doubted_dip_confidence", r#"A doubted "no crack" over a dip at least this confident goes to the print check; 0: off (DOUBTED_DIP_CONFIDENCE; EXPERIMENTS.md, 'A doubted "no crack" over a deep dip goes to the print check')."#),
     ("judge.weak_no_crack_confidence", "A \"no crack\" vote weaker than this counts as doubted (WEAK_NO_CRACK_CONFIDENCE; EXPERIMENTS.md, \"The recognition model that knows the simulated finger\")."),
     ("judge.implausible_ratio_share", "A print ratio below this share of the shallowest crack's is neither crack nor print (IMPLAUSIBLE_RATIO_SHARE; trials 9000-9419)."),
     ("pieces", "Fused missions: confirmed pieces of one crack reported as one."),
