@@ -1,30 +1,35 @@
-//! The simulated manipulator controller: what answers the robot over the link when there is no
-//! arm.
+//! The manipulator controller: what answers the robot over the link, for any arm.
 //!
-//! * [`command`]: every value a command carries, checked once (finite, in range, in time)
-//!   into a [`command::Checked`] before anything moves; refusals name the field.
-//! * [`world`]: the arm and the finger over a scene (`crackbot-sim`), stepped one sensor sample
-//!   at a time, refusing any motion outside its workspace or speed limits whoever asks.
-//! * [`sensor`]: the simulated sensor behind the real firmware code, streaming 400 Hz frames into
-//!   a pseudo-terminal, so the robot reads it exactly as it reads the board.
-//! * [`server`]: the link side: commands, refusals, the 100 Hz state stream, a watchdog, and
-//!   fault injection (packet loss/delay/reordering/duplication, sensor stalls, restarts).
+//! * [`command`], [`limits`]: every value a command carries, checked once (finite, in range, in
+//!   time) into a [`command::Checked`] before anything moves; refusals name the field.
+//! * [`arm`]: the arm interface ([`Arm`]): limits, clock, checked commands in, state out.
+//! * [`server`]: the link side over any [`Arm`]: commands, refusals, the 100 Hz state stream, a
+//!   watchdog, and fault injection (packet loss/delay/reordering/duplication, sensor stalls,
+//!   restarts).
+//! * [`sim`] (feature `sim`): the simulated arm and finger over a scene, its sensor behind the
+//!   real firmware code streaming 400 Hz frames into a pseudo-terminal.
 //!
-//! The binary `crackbot-sim-controller` runs it as its own process; the mission library starts
-//! it in-process for the no-argument mission.
+//! The binary `crackbot-controller` (`--arm sim`) runs it as its own process; the mission
+//! library starts the simulated one in-process for the no-argument mission.
 
+pub mod arm;
 pub mod command;
 pub mod limits;
-pub mod sensor;
+pub mod motion;
 pub mod server;
-pub mod world;
+#[cfg(feature = "sim")]
+pub mod sim;
 
+pub use arm::{Arm, ArmState, Mode};
 pub use command::{check, Checked, CommandError};
 pub use limits::{Limits, Refusal};
-pub use sensor::{Shared, SharedWorld, SimSensor};
-pub use server::{ControllerError, Faults, SensorStall, ServerConfig, ServerReport, SimController};
-pub use world::{Mode, Tick, World};
-
+pub use server::{ControllerError, Faults, LinkServer, LinkSettings, SensorStall, ServerReport};
+#[cfg(feature = "sim")]
+pub use sim::sensor::{Shared, SharedWorld, SimSensor};
+#[cfg(feature = "sim")]
+pub use sim::world::{Tick, World};
+#[cfg(feature = "sim")]
+pub use sim::{ServerConfig, SimArm, SimController};
 /// The controller's clock as its state stream reports it: the world's ticks (1/400 s of
 /// simulated time each, `1/(400·speedup)` s of wall time), shifted by `offset_us` and running
 /// `drift_ppm` fast, so the robot's clock synchronisation is tested against a known truth.

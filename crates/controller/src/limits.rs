@@ -2,7 +2,6 @@
 //! move may hold the finger at, and the refusals a command out of them gets ([`Refusal`]). The
 //! command check (`command.rs`) and the arm (`world.rs`) both read them.
 
-use crackbot_sim::Scene;
 use serde::Serialize;
 
 /// Lowest height a move may hold the finger's tip above the plate's plane, mm (lower would
@@ -75,7 +74,8 @@ pub struct Limits {
 impl Limits {
     /// The scene's workspace; travel up to twice the scene's travel speed, slides up to four
     /// times the scene's slide speed (the finger's contact is not rated for more).
-    pub fn of_scene(scene: &Scene) -> Self {
+    #[cfg(feature = "sim")]
+    pub fn of_scene(scene: &crackbot_sim::Scene) -> Self {
         let m = &scene.manipulator;
         Limits {
             min_mm: [m.workspace_min_mm[0], m.workspace_min_mm[1]],

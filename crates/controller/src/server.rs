@@ -1,16 +1,17 @@
-//! The controller's side of the link: commands in, acknowledgements, refusals and the 100 Hz
-//! state stream out, over the authenticated UDP link (`crackbot-link`).
+//! The controller's side of the link, for any [`Arm`]: commands in, checked
+//! ([`crate::command::check`]) against the arm's limits and clock, acknowledgements, refusals by
+//! field and the 100 Hz state stream out, over the authenticated UDP link (`crackbot-link`).
 //!
 //! A watchdog stops the arm when the host goes silent (no message for
-//! [`ServerConfig::watchdog`]) while it moves. Fault injection: the link's own packet faults
+//! [`LinkSettings::watchdog`]) while it moves. Fault injection: the link's own packet faults
 //! ([`FaultConfig`]: loss, delay, reordering, duplication), the sensor stream stalling
-//! mid-slide, and the controller restarting (the arm stops, the link comes back with a new
-//! epoch, as after a power cycle).
+//! mid-slide (an arm with a simulated sensor, [`Arm::stall_sensor`]), and the controller
+//! restarting (the arm stops, the link comes back with a new epoch, as after a power cycle).
 
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -18,23 +19,22 @@ use crackbot_link::{
     EpochSource, ErrorCode, ErrorReport, FaultConfig, FaultInjector, LinkConfig, LinkEndpoint,
     LinkError, LinkStats, Message, Pose, Security, State, Velocity,
 };
-use crackbot_sim::Scene;
 use serde::Serialize;
 
+use crate::arm::{Arm, ArmState, Mode};
 use crate::command::check;
 use crate::limits::Refusal;
-use crate::sensor::{lock, Shared, SharedWorld, SimSensor};
-use crate::world::{Mode, World};
-use crate::ControllerClock;
 
-/// Errors of the simulated controller.
+/// Errors of a controller.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ControllerError {
     /// The scene or the simulator failed.
+    #[cfg(feature = "sim")]
     #[error(transparent)]
     Sim(#[from] crackbot_sim::SimError),
     /// The emulated sensor failed.
+    #[cfg(feature = "sim")]
     #[error(transparent)]
     Emulator(#[from] crackbot_emulator::EmulatorError),
     /// The link failed.
@@ -53,6 +53,9 @@ pub enum ControllerError {
         /// What it may be.
         allowed: &'static str,
     },
+    /// The arm could not be started.
+    #[error("the arm: {0}")]
+    Arm(String),
     /// The controller thread panicked.
     #[error("the controller thread panicked")]
     Panicked,
@@ -80,22 +83,16 @@ pub struct SensorStall {
     pub duration: Duration,
 }
 
-/// Settings of the simulated controller.
+/// The link side's settings, whatever the arm.
 #[derive(Debug, Clone)]
-pub struct ServerConfig {
-    /// The scene the arm works over.
-    pub scene: Scene,
-    /// Seed of the sensor's noise.
-    pub seed: u64,
+pub struct LinkSettings {
     /// Link security (the pre-shared key).
     pub security: Security,
     /// Where the controller keeps its epoch counter (survives restarts).
     pub epoch_file: PathBuf,
     /// Link id.
     pub link_id: u16,
-    /// The controller's clock (offset, drift, speed-up).
-    pub clock: ControllerClock,
-    /// State messages per second of wall time (≥ 100).
+    /// State messages per second of wall time (100–1000).
     pub state_rate_hz: f64,
     /// Stop the arm when the host has been silent this long while the arm moves.
     pub watchdog: Duration,
@@ -103,20 +100,28 @@ pub struct ServerConfig {
     pub faults: Faults,
 }
 
-impl ServerConfig {
-    /// Defaults: 100 Hz state stream, 1 s watchdog, link 1, real time, no faults.
-    pub fn new(scene: Scene, security: Security, epoch_file: impl Into<PathBuf>) -> Self {
-        ServerConfig {
-            scene,
-            seed: 7,
+impl LinkSettings {
+    /// Defaults: 100 Hz state stream, 1 s watchdog, link 1, no faults.
+    pub fn new(security: Security, epoch_file: impl Into<PathBuf>) -> Self {
+        LinkSettings {
             security,
             epoch_file: epoch_file.into(),
             link_id: 1,
-            clock: ControllerClock::default(),
             state_rate_hz: 100.0,
             watchdog: Duration::from_secs(1),
             faults: Faults::default(),
         }
+    }
+
+    fn check(&self) -> Result<(), ControllerError> {
+        if !(self.state_rate_hz.is_finite() && (100.0..=1000.0).contains(&self.state_rate_hz)) {
+            return Err(ControllerError::Setting {
+                field: "state_rate_hz",
+                value: self.state_rate_hz,
+                allowed: "[100, 1000] Hz",
+            });
+        }
+        Ok(())
     }
 }
 
@@ -140,77 +145,51 @@ pub struct ServerReport {
     pub link: LinkStats,
 }
 
-/// The simulated controller running in this process: its sensor thread and its link thread.
+/// The link side running in its own thread over an arm.
 #[derive(Debug)]
-pub struct SimController {
-    sensor: Option<SimSensor>,
+pub struct LinkServer {
     addr: SocketAddr,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<Result<ServerReport, ControllerError>>>,
-    shared: SharedWorld,
 }
 
-impl SimController {
-    /// Starts the controller on `socket` (already bound: its address is the one the host talks
-    /// to), talking to the host at `host`.
-    pub fn spawn(
-        config: ServerConfig,
+impl LinkServer {
+    /// Serves `arm` on `socket` (already bound: its address is the one the host talks to) to the
+    /// host at `host`, from a new thread.
+    pub fn spawn<A: Arm + 'static>(
+        arm: A,
+        settings: LinkSettings,
         socket: UdpSocket,
         host: SocketAddr,
-    ) -> Result<SimController, ControllerError> {
-        if !(config.state_rate_hz.is_finite() && (100.0..=1000.0).contains(&config.state_rate_hz)) {
-            return Err(ControllerError::Setting {
-                field: "state_rate_hz",
-                value: config.state_rate_hz,
-                allowed: "[100, 1000] Hz",
-            });
-        }
-        let world = World::new(&config.scene, config.seed)?;
-        let shared: SharedWorld = Arc::new(Mutex::new(Shared {
-            world,
-            last: None,
-            finished: Vec::new(),
-            fault: None,
-        }));
-        let sensor = SimSensor::spawn(shared.clone(), config.clock.speedup)?;
+    ) -> Result<LinkServer, ControllerError> {
+        settings.check()?;
         let addr = socket.local_addr()?;
         let link_config = LinkConfig::controller(
-            config.security.clone(),
-            EpochSource::File(config.epoch_file.clone()),
+            settings.security.clone(),
+            EpochSource::File(settings.epoch_file.clone()),
         )
-        .with_link_id(config.link_id);
-        let endpoint = open(socket, host, link_config.clone(), &config)?;
+        .with_link_id(settings.link_id);
+        let endpoint = open(socket, host, link_config.clone(), &settings.faults)?;
         let stop = Arc::new(AtomicBool::new(false));
-        let control = sensor.control();
         let thread = {
             let stop = stop.clone();
-            let shared = shared.clone();
             std::thread::Builder::new()
-                .name("sim-controller link".into())
+                .name("controller link".into())
                 .spawn(move || {
-                    serve(
-                        endpoint,
+                    let mut arm = arm;
+                    let link = Served {
                         host,
-                        &link_config,
-                        &config,
-                        &shared,
-                        &stop,
-                        &control,
-                    )
+                        link_config: &link_config,
+                        settings: &settings,
+                    };
+                    serve(endpoint, &link, &mut arm, &stop)
                 })?
         };
-        Ok(SimController {
-            sensor: Some(sensor),
+        Ok(LinkServer {
             addr,
             stop,
             thread: Some(thread),
-            shared,
         })
-    }
-
-    /// The sensor's pseudo-terminal (open it as the robot's serial port).
-    pub fn sensor_path(&self) -> &str {
-        self.sensor.as_ref().map_or("", |s| s.path())
     }
 
     /// The controller's UDP address.
@@ -218,26 +197,22 @@ impl SimController {
         self.addr
     }
 
-    /// The arm's true pose now (ground truth for tests), mm.
-    pub fn true_pose(&self) -> [f64; 3] {
-        lock(&self.shared).world.pose()
+    /// Whether the link thread has ended (an error, or a stop).
+    pub fn is_finished(&self) -> bool {
+        self.thread.as_ref().is_none_or(JoinHandle::is_finished)
     }
 
-    /// Stops the controller and its sensor and returns its report.
+    /// Stops the link side (the arm stops first) and returns its report.
     pub fn shutdown(mut self) -> Result<ServerReport, ControllerError> {
         self.stop.store(true, Ordering::Relaxed);
-        let report = match self.thread.take() {
+        match self.thread.take() {
             Some(t) => t.join().map_err(|_| ControllerError::Panicked)?,
             None => Err(ControllerError::Panicked),
-        };
-        if let Some(s) = self.sensor.take() {
-            s.stop()?;
         }
-        report
     }
 }
 
-impl Drop for SimController {
+impl Drop for LinkServer {
     fn drop(&mut self) {
         self.stop.store(true, Ordering::Relaxed);
         if let Some(t) = self.thread.take() {
@@ -250,32 +225,22 @@ fn open(
     socket: UdpSocket,
     host: SocketAddr,
     link: LinkConfig,
-    config: &ServerConfig,
+    faults: &Faults,
 ) -> Result<LinkEndpoint, ControllerError> {
     let mut ep = LinkEndpoint::from_socket(socket, host, link)?;
-    if let Some(f) = &config.faults.link {
+    if let Some(f) = &faults.link {
         ep.set_fault_injector(Some(FaultInjector::new(f.clone())));
     }
     Ok(ep)
 }
 
-/// Whether slide `id` is a third of the way through its stroke.
-fn mid_slide(shared: &SharedWorld, id: u32) -> bool {
-    lock(shared)
-        .last
-        .is_some_and(|t| t.mode == Mode::Sliding(id) && t.pose[2] == 0.0 && t.progress >= 0.3)
+/// Whether the arm is a third of the way through slide `id`, in contact.
+fn mid_slide(state: Option<ArmState>, id: u32) -> bool {
+    state.is_some_and(|t| t.mode == Mode::Sliding(id) && t.pose[2] <= 0.0 && t.progress >= 0.3)
 }
 
-fn to_link_mode(mode: Mode) -> crackbot_link::Mode {
-    match mode {
-        Mode::Idle => crackbot_link::Mode::Idle,
-        Mode::Moving => crackbot_link::Mode::Moving,
-        Mode::Sliding(id) => crackbot_link::Mode::Sliding { id },
-        Mode::Stopped => crackbot_link::Mode::Stopped,
-    }
-}
-
-fn refusal_code(r: &Refusal) -> ErrorCode {
+/// The link's code for a refusal by the arm.
+pub fn refusal_code(r: &Refusal) -> ErrorCode {
     match r {
         Refusal::OutsideWorkspace { .. } => ErrorCode::OutsideWorkspace,
         Refusal::OverSpeed { .. } => ErrorCode::OverSpeedLimit,
@@ -284,49 +249,160 @@ fn refusal_code(r: &Refusal) -> ErrorCode {
     }
 }
 
-fn serve(
-    mut ep: LinkEndpoint,
+/// The state message of an arm's state (a fault, when the arm reports one, is the mode).
+pub fn state_message(s: &ArmState, fault: Option<u16>) -> State {
+    let f = |v: f64| v as f32;
+    State {
+        controller_time_us: s.time_us,
+        pose: Pose {
+            x_mm: f(s.pose[0]),
+            y_mm: f(s.pose[1]),
+            z_mm: f(s.pose[2]),
+        },
+        velocity: Velocity {
+            x_mm_s: f(s.velocity[0]),
+            y_mm_s: f(s.velocity[1]),
+            z_mm_s: f(s.velocity[2]),
+        },
+        mode: match fault {
+            Some(code) => crackbot_link::Mode::Fault { code },
+            None => s.mode.to_link(),
+        },
+        slide_progress: f(s.progress),
+    }
+}
+
+/// What the serving loop needs besides the arm.
+struct Served<'a> {
     host: SocketAddr,
-    link_config: &LinkConfig,
-    config: &ServerConfig,
-    shared: &SharedWorld,
+    link_config: &'a LinkConfig,
+    settings: &'a LinkSettings,
+}
+
+/// Fault injections still to come.
+#[derive(Debug, Default)]
+struct Pending {
+    restarted: bool,
+    slides_started: u32,
+    stall: Option<u32>,
+    restart: Option<u32>,
+}
+
+/// Whether an injected restart is due.
+fn restart_due<A: Arm>(arm: &A, faults: &Faults, pending: &Pending, started: Instant) -> bool {
+    !pending.restarted
+        && (faults.restart_after.is_some_and(|a| started.elapsed() >= a)
+            || pending.restart.is_some_and(|id| mid_slide(arm.state(), id)))
+}
+
+/// An injected restart: the arm stops, the link comes back with a new epoch on the same port.
+fn restart<A: Arm>(
+    ep: LinkEndpoint,
+    link: &Served<'_>,
+    arm: &mut A,
+) -> Result<LinkEndpoint, ControllerError> {
+    arm.stop();
+    let addr = ep.local_addr();
+    drop(ep);
+    std::thread::sleep(Duration::from_millis(200));
+    let socket = UdpSocket::bind(addr)?;
+    let ep = open(
+        socket,
+        link.host,
+        link.link_config.clone(),
+        &link.settings.faults,
+    )?;
+    tracing::warn!("controller restarted (injected)");
+    Ok(ep)
+}
+
+/// Handles one command: checks it, hands it to the arm, and schedules the injections tied to
+/// the slide it starts. `None`: accepted; `Some`: the refusal to send back.
+fn handle<A: Arm>(
+    arm: &mut A,
+    message: &Message,
+    seq: u32,
+    faults: &Faults,
+    pending: &mut Pending,
+) -> Option<ErrorReport> {
+    let outcome = check(message, &arm.limits(), arm.now_us()).map(|c| arm.apply(c));
+    match outcome {
+        Ok(Ok(Some(id))) => {
+            pending.slides_started += 1;
+            if faults
+                .stall
+                .is_some_and(|st| st.slide == pending.slides_started)
+            {
+                pending.stall = Some(id);
+            }
+            if faults.restart_during_slide == Some(pending.slides_started) {
+                pending.restart = Some(id);
+            }
+            None
+        }
+        Ok(Ok(None)) => None,
+        Ok(Err(refusal)) => Some(ErrorReport::new(
+            seq,
+            refusal_code(&refusal),
+            &refusal.to_string(),
+        )),
+        Err(e) => Some(e.report(seq)),
+    }
+}
+
+/// Sends the state and the finished slides, after the watchdog had its say.
+fn stream_state<A: Arm>(
+    ep: &mut LinkEndpoint,
+    arm: &mut A,
+    silent_for: Duration,
+    watchdog: Duration,
+    report: &mut ServerReport,
+) -> Result<(), ControllerError> {
+    if arm.is_busy() && silent_for > watchdog {
+        arm.stop();
+        report.watchdog_stops += 1;
+        tracing::warn!("host silent for {watchdog:?}: arm stopped");
+    }
+    let finished = arm.take_finished();
+    if let Some(state) = arm.state() {
+        let fault = arm.fault().map(|(code, _)| code);
+        ep.send_unreliable(&Message::State(state_message(&state, fault)))?;
+        report.states_sent += 1;
+    }
+    for id in finished {
+        report.slides_done += 1;
+        // Reliable: the host must learn that the slide ended even when packets are lost.
+        if let Err(e) = ep.send_reliable(&Message::Done { slide_id: id }) {
+            tracing::warn!("slide {id} done, not acknowledged: {e}");
+        }
+    }
+    Ok(())
+}
+
+fn serve<A: Arm>(
+    mut ep: LinkEndpoint,
+    link: &Served<'_>,
+    arm: &mut A,
     stop: &AtomicBool,
-    control: &crate::sensor::SensorControl,
 ) -> Result<ServerReport, ControllerError> {
+    let settings = link.settings;
     let mut report = ServerReport::default();
-    let period = Duration::from_secs_f64(1.0 / config.state_rate_hz);
+    let period = Duration::from_secs_f64(1.0 / settings.state_rate_hz);
     let started = Instant::now();
     let mut next_state = Instant::now();
     let mut last_heard = Instant::now();
-    let mut restarted = false;
-    let mut slides_started = 0u32;
-    let mut stall_pending: Option<u32> = None;
-    let mut restart_pending: Option<u32> = None;
+    let mut pending = Pending::default();
     while !stop.load(Ordering::Relaxed) {
-        // Injected restart: the arm stops, the link comes back with a new epoch.
-        let restart_now = !restarted
-            && (config
-                .faults
-                .restart_after
-                .is_some_and(|a| started.elapsed() >= a)
-                || restart_pending.is_some_and(|id| mid_slide(shared, id)));
-        if restart_now {
-            restarted = true;
+        if restart_due(arm, &settings.faults, &pending, started) {
+            pending.restarted = true;
+            ep = restart(ep, link, arm)?;
             report.restarts += 1;
-            lock(shared).world.stop();
-            let addr = ep.local_addr();
-            drop(ep);
-            std::thread::sleep(Duration::from_millis(200));
-            let socket = UdpSocket::bind(addr)?;
-            ep = open(socket, host, link_config.clone(), config)?;
-            tracing::warn!("controller restarted (injected)");
         }
-        if let Some(id) = stall_pending {
-            // Mid-slide: once a third of the stroke is done.
-            if mid_slide(shared, id) {
-                stall_pending = None;
-                if let Some(s) = config.faults.stall {
-                    control.stall_for(s.duration);
+        if let Some(id) = pending.stall {
+            if mid_slide(arm.state(), id) {
+                pending.stall = None;
+                if let Some(s) = settings.faults.stall {
+                    arm.stall_sensor(s.duration);
                     tracing::warn!("sensor stalled for {:?} (injected)", s.duration);
                 }
             }
@@ -334,36 +410,7 @@ fn serve(
         let wait = next_state.saturating_duration_since(Instant::now());
         if let Some(r) = ep.recv(wait.min(Duration::from_millis(5)))? {
             last_heard = Instant::now();
-            let outcome = {
-                let mut s = lock(shared);
-                let now_us = config.clock.at_tick(s.world.tick_count());
-                let limits = *s.world.limits();
-                check(&r.message, &limits, now_us).map(|c| s.world.apply(c))
-            };
-            let refusal = match outcome {
-                Ok(Ok(Some(id))) => {
-                    slides_started += 1;
-                    if config
-                        .faults
-                        .stall
-                        .is_some_and(|st| st.slide == slides_started)
-                    {
-                        stall_pending = Some(id);
-                    }
-                    if config.faults.restart_during_slide == Some(slides_started) {
-                        restart_pending = Some(id);
-                    }
-                    None
-                }
-                Ok(Ok(None)) => None,
-                Ok(Err(refusal)) => Some(ErrorReport::new(
-                    r.seq,
-                    refusal_code(&refusal),
-                    &refusal.to_string(),
-                )),
-                Err(e) => Some(e.report(r.seq)),
-            };
-            match refusal {
+            match handle(arm, &r.message, r.seq, &settings.faults, &mut pending) {
                 Some(e) => {
                     report.refused += 1;
                     tracing::info!("refused: {}", e.text);
@@ -379,49 +426,15 @@ fn serve(
         if next_state < Instant::now() {
             next_state = Instant::now() + period;
         }
-        let (state, finished) = {
-            let mut s = lock(shared);
-            if s.world.is_busy() && last_heard.elapsed() > config.watchdog {
-                s.world.stop();
-                report.watchdog_stops += 1;
-                tracing::warn!("host silent for {:?}: arm stopped", config.watchdog);
-            }
-            let finished = std::mem::take(&mut s.finished);
-            let mode = if s.fault.is_some() {
-                crackbot_link::Mode::Fault { code: 1 }
-            } else {
-                to_link_mode(s.world.mode())
-            };
-            let state = s.last.map(|t| State {
-                controller_time_us: config.clock.at_tick(t.tick),
-                pose: Pose {
-                    x_mm: t.pose[0] as f32,
-                    y_mm: t.pose[1] as f32,
-                    z_mm: t.pose[2] as f32,
-                },
-                velocity: Velocity {
-                    x_mm_s: t.velocity[0] as f32,
-                    y_mm_s: t.velocity[1] as f32,
-                    z_mm_s: t.velocity[2] as f32,
-                },
-                mode,
-                slide_progress: t.progress as f32,
-            });
-            (state, finished)
-        };
-        if let Some(state) = state {
-            ep.send_unreliable(&Message::State(state))?;
-            report.states_sent += 1;
-        }
-        for id in finished {
-            report.slides_done += 1;
-            // Reliable: the host must learn that the slide ended even when packets are lost.
-            if let Err(e) = ep.send_reliable(&Message::Done { slide_id: id }) {
-                tracing::warn!("slide {id} done, not acknowledged: {e}");
-            }
-        }
+        stream_state(
+            &mut ep,
+            arm,
+            last_heard.elapsed(),
+            settings.watchdog,
+            &mut report,
+        )?;
     }
-    lock(shared).world.stop();
+    arm.stop();
     report.link = ep.stats();
     Ok(report)
 }

@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use crackbot_emulator::{run, EmulatorConfig, EmulatorError, EmulatorReport, Pty, SignalSource};
 use serialport::SerialPort as _;
 
-use crate::world::{Tick, World};
+use super::world::{Tick, World};
 
 /// The world and what the last tick produced, shared by the sensor and link threads.
 #[derive(Debug)]

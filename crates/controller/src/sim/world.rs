@@ -11,8 +11,8 @@ use crackbot_sim::run::{SlideLine, SlideSim, SAMPLE_RATE_HZ};
 use crackbot_sim::{Integrator, Scene, SensorParams, SimError, Surface};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
 
+use crate::arm::Mode;
 use crate::command::Checked;
 use crate::limits::{Limits, Refusal, MAX_MOVE_HEIGHT_MM, MIN_MOVE_HEIGHT_MM};
 
@@ -21,19 +21,6 @@ pub const TRAVEL_HEIGHT_MM: f64 = 5.0;
 
 /// Standard deviation of the noise on the lifted finger's deformation channels, counts.
 const LIFTED_NOISE_COUNTS: f64 = 0.6;
-
-/// What the arm is doing (the link's mode, with the world's details).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum Mode {
-    /// Standing still, ready.
-    Idle,
-    /// Travelling (finger lifted).
-    Moving,
-    /// Sliding the finger along slide `id`.
-    Sliding(u32),
-    /// Stopped by a `Stop`; the next command clears it.
-    Stopped,
-}
 
 /// One tick's output.
 #[derive(Debug, Clone, Copy, PartialEq)]
