@@ -15,6 +15,7 @@
 pub mod arm;
 pub mod command;
 pub mod limits;
+pub mod ros2;
 pub mod motion;
 pub mod server;
 #[cfg(feature = "sim")]

@@ -77,6 +77,28 @@ pub struct SlideSim {
     plate_reflectivity: f64,
     profile: Profile,
     finger: FingerParams,
+    /// The arm's last position when a real arm's pose drives it, m.
+    followed: Option<f64>,
+}
+
+/// An arm position given sample by sample: from the last one to the new one at a steady speed
+/// over one sample.
+#[derive(Debug, Clone, Copy)]
+struct Followed {
+    t0: f64,
+    x0: f64,
+    x1: f64,
+    dt: f64,
+}
+
+impl ArmPath for Followed {
+    fn at(&self, t: f64) -> (f64, f64) {
+        let u = ((t - self.t0) / self.dt).clamp(0.0, 1.0);
+        (
+            self.x0 + u * (self.x1 - self.x0),
+            (self.x1 - self.x0) / self.dt,
+        )
+    }
 }
 
 /// Points across the proximity fibre's spot (the midpoint rule over its diameter).
@@ -344,6 +366,7 @@ impl SlideSim {
             profile,
             finger: sensor.finger.clone(),
             plate_reflectivity,
+            followed: None,
         })
     }
 
@@ -440,9 +463,39 @@ impl SlideSim {
 
     /// Advances one output sample (1/400 s) and returns it.
     pub fn next_sample(&mut self) -> Result<Sample, SimError> {
+        let arm = self.arm;
+        self.sample_with(&arm)
+    }
+
+    /// Advances one output sample with the arm where a real arm says it is: `arm_mm` along the
+    /// line from the stroke's start (a pose the arm reported, projected on the line), reached
+    /// at a steady speed from the last one. A position beyond the stroke's ends by more than
+    /// the tabulated margin is held at its edge.
+    pub fn next_sample_following(&mut self, arm_mm: f64) -> Result<Sample, SimError> {
+        if !arm_mm.is_finite() {
+            return Err(SimError::setting("arm_mm", arm_mm, "finite (mm)"));
+        }
+        let dt = 1.0 / SAMPLE_RATE_HZ;
+        let edge = self.origin * 0.9;
+        let x1 = (self.origin + arm_mm * 1e-3).clamp(
+            self.origin - edge,
+            self.origin + self.arm.stroke.abs() + edge,
+        );
+        let x0 = self.followed.unwrap_or(x1);
+        self.followed = Some(x1);
+        let arm = Followed {
+            t0: self.t,
+            x0,
+            x1,
+            dt,
+        };
+        self.sample_with(&arm)
+    }
+
+    fn sample_with(&mut self, arm: &dyn ArmPath) -> Result<Sample, SimError> {
         let dt = 1.0 / SAMPLE_RATE_HZ;
         self.stepper
-            .advance(&self.model, &self.arm, self.t, dt, &mut self.state)?;
+            .advance(&self.model, arm, self.t, dt, &mut self.state)?;
         self.t += dt;
         if !self.state.iter().all(|v| v.is_finite()) {
             return Err(SimError::Integration {
@@ -450,12 +503,12 @@ impl SlideSim {
                 reason: "the state is not finite".into(),
             });
         }
-        let readout = self.model.readout(self.t, &self.state, &self.arm);
+        let readout = self.model.readout(self.t, &self.state, arm);
         let view = self.proximity_view();
         let d_mm = view.proximity_distance_mm;
         let analog = self.electronics.analog(&readout, &view, dt);
         let counts = self.electronics.quantise(&analog);
-        let (xb, vb) = self.arm.at(self.t);
+        let (xb, vb) = arm.at(self.t);
         Ok(Sample {
             t: self.t,
             arm_mm: (xb - self.origin) * 1e3,

@@ -6,6 +6,7 @@
 //! * [`SimArm`]: the world as an [`Arm`]; [`SimController`]: the world, its sensor and the link
 //!   side in this process (what `crackbot-controller --arm sim` and the no-argument mission run).
 
+pub mod follow;
 pub mod sensor;
 pub mod world;
 

@@ -129,6 +129,19 @@ pub struct SimSensor {
 impl SimSensor {
     /// Starts the firmware ticking at 400 Hz × `speedup` (wall clock), each tick one world step.
     pub fn spawn(shared: SharedWorld, speedup: f64) -> Result<SimSensor, EmulatorError> {
+        let source = WorldSource {
+            shared,
+            last_counts: [0.0; 4],
+        };
+        SimSensor::spawn_with(source, speedup)
+    }
+
+    /// Starts the firmware ticking at 400 Hz × `speedup` (wall clock), each tick one sample of
+    /// `source`.
+    pub fn spawn_with(
+        source: impl SignalSource + Send + 'static,
+        speedup: f64,
+    ) -> Result<SimSensor, EmulatorError> {
         if !(speedup.is_finite() && (0.1..=50.0).contains(&speedup)) {
             return Err(EmulatorError::Config(format!(
                 "speed-up {speedup} is not in [0.1, 50]"
@@ -164,10 +177,6 @@ impl SimSensor {
                     inner: master,
                     stalled_until_us: thread_control.stalled_until_us.clone(),
                     start: thread_control.start,
-                };
-                let source = WorldSource {
-                    shared,
-                    last_counts: [0.0; 4],
                 };
                 let report = run(&config, source, &mut line, &thread_stop);
                 std::thread::sleep(Duration::from_millis(200));

@@ -89,6 +89,28 @@ struct Resting {
     speed: f64,
 }
 
+/// A slide whose line the finger is pressed on while another arm drives it
+/// ([`World::step_following`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pressed {
+    /// Start of the slide, mm.
+    pub start: [f64; 2],
+    /// End of the slide, mm.
+    pub end: [f64; 2],
+    /// Its speed, mm/s.
+    pub speed_mm_s: f64,
+}
+
+/// The finger's simulation on the line another arm presses it along.
+#[derive(Debug)]
+struct Following {
+    /// The line's ends (a slide back along it keeps the simulation).
+    ends: [[f64; 2]; 2],
+    start: [f64; 2],
+    dir: [f64; 2],
+    sim: Box<SlideSim>,
+}
+
 /// The simulated arm, finger and sensor over one scene.
 #[derive(Debug)]
 pub struct World {
@@ -110,6 +132,7 @@ pub struct World {
     seed: u64,
     slides: u32,
     resting: Option<Resting>,
+    following: Option<Following>,
 }
 
 impl World {
@@ -152,6 +175,7 @@ impl World {
             seed,
             slides: 0,
             resting: None,
+            following: None,
         })
     }
 
@@ -285,13 +309,13 @@ impl World {
         let len = d[0].hypot(d[1]);
         let dir = [d[0] / len, d[1] / len];
         self.heading = dir;
-        self.slides += 1;
         // Straight back (or forth again) along the line just slid: the finger never left the
         // surface, so its simulation goes on (the wait between the commands is a pause at the
         // stroke's end).
         if let Some(r) = self.resting.take() {
             let close = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-3;
             if close(p.start, r.to) && close(p.end, r.from) && (p.speed - r.speed).abs() < 1e-9 {
+                self.slides += 1;
                 let ticks = (r.sim.slide_time() / 2.0 * SAMPLE_RATE_HZ).ceil() as u64;
                 self.activity = Activity::Sliding {
                     id: p.id,
@@ -307,26 +331,7 @@ impl World {
                 return Ok(());
             }
         }
-        let samples = crackbot_sim::plates::calibrated_samples();
-        let sim = SlideSim::new(
-            &self.surface,
-            self.reflectivity,
-            &SlideLine {
-                start: p.start,
-                direction: dir,
-                stroke_mm: len,
-                speed_mm_s: p.speed,
-            },
-            &self.sensor,
-            Integrator::default(),
-            self.seed.wrapping_add(u64::from(self.slides)),
-        )?
-        // The printed plates' roughness, as in the simulated recordings.
-        .with_roughness(
-            samples.roughness_rms_mm,
-            samples.roughness_correlation_mm,
-            self.seed ^ u64::from(self.slides).wrapping_mul(0x9e37_79b9),
-        )?;
+        let sim = self.contact_sim(p.start, p.end, p.speed)?;
         // One stroke, there only (`slide_time` is forth and back).
         let ticks = (sim.slide_time() / 2.0 * SAMPLE_RATE_HZ).ceil() as u64;
         self.activity = Activity::Sliding {
@@ -366,6 +371,90 @@ impl World {
         let n: f64 = rand::Rng::sample(&mut self.rng, rand_distr::StandardNormal);
         c[3] = o.saturate((p + p_noise * n).min(sat));
         c
+    }
+
+    /// A fresh contact simulation along `line` (the printed plates' roughness included).
+    fn contact_sim(&mut self, start: [f64; 2], end: [f64; 2], speed: f64) -> Result<SlideSim, SimError> {
+        let d = [end[0] - start[0], end[1] - start[1]];
+        let len = d[0].hypot(d[1]);
+        self.slides += 1;
+        let samples = crackbot_sim::plates::calibrated_samples();
+        SlideSim::new(
+            &self.surface,
+            self.reflectivity,
+            &SlideLine {
+                start,
+                direction: [d[0] / len, d[1] / len],
+                stroke_mm: len,
+                speed_mm_s: speed,
+            },
+            &self.sensor,
+            Integrator::default(),
+            self.seed.wrapping_add(u64::from(self.slides)),
+        )?
+        .with_roughness(
+            samples.roughness_rms_mm,
+            samples.roughness_correlation_mm,
+            self.seed ^ u64::from(self.slides).wrapping_mul(0x9e37_79b9),
+        )
+    }
+
+    /// Advances one sensor sample with the arm where another arm says it is (`pose`, mm in
+    /// the surface frame, z the tip's height): the finger pressed on `pressed`'s line when the
+    /// tip is at or below the plate, its contact simulated along the line from the pose's
+    /// position on it (a slide back along the same line goes on with the same simulation);
+    /// otherwise lifted, its proximity channel seeing the surface below.
+    pub fn step_following(
+        &mut self,
+        pose: [f64; 3],
+        pressed: Option<Pressed>,
+    ) -> Result<Tick, SimError> {
+        self.tick += 1;
+        let before = self.pose;
+        let counts = match pressed.filter(|_| pose[2] <= 0.05) {
+            Some(p) => {
+                let same = |f: &Following| {
+                    let close = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-3;
+                    (close(f.ends[0], p.start) && close(f.ends[1], p.end))
+                        || (close(f.ends[0], p.end) && close(f.ends[1], p.start))
+                };
+                if !self.following.as_ref().is_some_and(same) {
+                    let sim = self.contact_sim(p.start, p.end, p.speed_mm_s)?;
+                    let len = (p.end[0] - p.start[0]).hypot(p.end[1] - p.start[1]);
+                    self.following = Some(Following {
+                        ends: [p.start, p.end],
+                        start: p.start,
+                        dir: [(p.end[0] - p.start[0]) / len, (p.end[1] - p.start[1]) / len],
+                        sim: Box::new(sim),
+                    });
+                }
+                let f = self.following.as_mut().expect("set above");
+                let along = (pose[0] - f.start[0]) * f.dir[0] + (pose[1] - f.start[1]) * f.dir[1];
+                self.heading = f.dir;
+                self.pose = [pose[0], pose[1], 0.0];
+                f.sim.next_sample_following(along)?.counts
+            }
+            None => {
+                self.following = None;
+                let d = [pose[0] - before[0], pose[1] - before[1]];
+                let n = d[0].hypot(d[1]);
+                if n > 1e-6 {
+                    self.heading = [d[0] / n, d[1] / n];
+                }
+                self.pose = [pose[0], pose[1], pose[2].max(0.0)];
+                self.lifted_counts()
+            }
+        };
+        self.velocity = [0, 1, 2].map(|k| (self.pose[k] - before[k]) * SAMPLE_RATE_HZ);
+        Ok(Tick {
+            tick: self.tick,
+            counts,
+            pose: self.pose,
+            velocity: self.velocity,
+            mode: Mode::Idle,
+            progress: 0.0,
+            finished: None,
+        })
     }
 
     /// Advances one sensor sample (1/400 s). A simulation failure stops the arm and is returned
