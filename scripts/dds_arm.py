@@ -128,6 +128,10 @@ def parse_args():
     p.add_argument("--rate", type=float, default=250.0, help="simulation and publishing rate, Hz")
     p.add_argument("--lag-ms", type=float, default=20.0, help="first-order lag of the arm, ms")
     p.add_argument("--start", help="x,y,z metres: publish from there at once (default: start at the first target)")
+    p.add_argument("--plate", metavar="PX,PY,PZ,NX,NY,NZ",
+                   help="a rigid plate: a point on it and its normal (towards the arm), metres, base frame; "
+                        "the tool stops on it, and the wrench's force grows 2 N per 0.1 mm the target "
+                        "lies beyond it")
     p.add_argument("--seconds", type=float, help="exit after this long (default: run until killed)")
     p.add_argument("--record", help="append `t_wall_s x y z frame_id` per received target to this file")
     for fault, what in [("nan", "publish NaN positions"), ("wrong-frame", "publish frame_id wrong_frame"),
@@ -205,6 +209,20 @@ class Arm:
             self.bad_logged_at = time.monotonic()
             print(f"dds_arm: skipped {why} ({self.bad} skipped so far)", file=sys.stderr, flush=True)
 
+    def on_plate(self, pose, target):
+        """The pose held on the plate's side, and the contact force of a target beyond it, N."""
+        if not self.args.plate:
+            return pose, 0.0
+        v = [float(x) for x in self.args.plate.split(",")]
+        point, normal = v[:3], v[3:]
+        n = math.sqrt(sum(c * c for c in normal))
+        normal = [c / n for c in normal]
+        depth = -sum((p - q) * c for p, q, c in zip(pose, point, normal))  # > 0: inside the plate
+        if depth > 0:
+            pose = [p + depth * c for p, c in zip(pose, normal)]
+        beyond = -sum((t - q) * c for t, q, c in zip(target, point, normal)) if target else 0.0
+        return pose, max(0.0, beyond) * 20000.0
+
     def publish(self, position, orientation, frame_id):
         header = Header(stamp=stamp_now(), frame_id=frame_id)
         if self.args.pose_source == "pose":
@@ -234,6 +252,10 @@ class Arm:
                     pose = list(target[0])  # no --start: begin at the first target
                 alpha = 1.0 - math.exp(-dt / (a.lag_ms / 1000.0)) if a.lag_ms > 0 else 1.0
                 pose = [p + alpha * (t - p) for p, t in zip(pose, target[0])]
+            force_n = a.force_n
+            if pose is not None:
+                pose, contact = self.on_plate(pose, target[0] if target else None)
+                force_n += contact
 
             # Faults, timed from the first target.
             since = now - first_at if first_at is not None else -1.0
@@ -251,7 +273,7 @@ class Arm:
             if publishing:
                 self.publish(position, orientation, frame_id)
             if self.wrench_writer:
-                force = Vector3(0.0, 0.0, a.force_n)
+                force = Vector3(0.0, 0.0, force_n if pose is not None else a.force_n)
                 self.wrench_writer.write(WrenchStamped(Header(stamp_now(), a.tool_frame),
                                                        Wrench(force, Vector3(0.0, 0.0, 0.0))))
 

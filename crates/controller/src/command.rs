@@ -16,6 +16,8 @@ use crate::limits::{Limits, MAX_MOVE_HEIGHT_MM, MIN_MOVE_HEIGHT_MM};
 pub const MIN_SPEED_MM_S: f64 = 0.1;
 /// Shortest slide, mm.
 pub const MIN_STROKE_MM: f64 = 0.5;
+/// Longest slide, mm (the wire format's §11; the simulator's `MAX_STROKE_MM` is the same).
+pub const MAX_STROKE_MM: f64 = 2000.0;
 /// Deepest position-controlled contact, mm below the surface.
 pub const MAX_DEPTH_MM: f64 = 3.0;
 /// Smallest and largest force-controlled contact, N (the fibre finger's rating).
@@ -245,12 +247,12 @@ fn check_slide(
         s.end.y_mm,
     )?;
     let length = (end[0] - start[0]).hypot(end[1] - start[1]);
-    if !(MIN_STROKE_MM..=crackbot_sim::run::MAX_STROKE_MM).contains(&length) {
+    if !(MIN_STROKE_MM..=MAX_STROKE_MM).contains(&length) {
         return Err(CommandError::OutOfRange {
             field: "Slide length (start to end)",
             value: length,
             min: MIN_STROKE_MM,
-            max: crackbot_sim::run::MAX_STROKE_MM,
+            max: MAX_STROKE_MM,
         });
     }
     let speed_mm_s = in_range(

@@ -15,8 +15,8 @@
 pub mod arm;
 pub mod command;
 pub mod limits;
-pub mod ros2;
 pub mod motion;
+pub mod ros2;
 pub mod server;
 #[cfg(feature = "sim")]
 pub mod sim;

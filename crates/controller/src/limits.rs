@@ -85,7 +85,8 @@ impl Limits {
         }
     }
 
-    pub(crate) fn check_point(&self, what: &'static str, p: [f64; 2]) -> Result<(), Refusal> {
+    /// Refuses a point outside the workspace (or not finite), naming it `what`.
+    pub fn check_point(&self, what: &'static str, p: [f64; 2]) -> Result<(), Refusal> {
         let inside = p.iter().all(|v| v.is_finite())
             && (self.min_mm[0]..=self.max_mm[0]).contains(&p[0])
             && (self.min_mm[1]..=self.max_mm[1]).contains(&p[1]);
@@ -104,7 +105,8 @@ impl Limits {
         }
     }
 
-    pub(crate) fn check_speed(what: &'static str, speed: f64, limit: f64) -> Result<(), Refusal> {
+    /// Refuses a speed that is not in `(0, limit]`, naming it `what`.
+    pub fn check_speed(what: &'static str, speed: f64, limit: f64) -> Result<(), Refusal> {
         if speed.is_finite() && speed > 0.0 && speed <= limit {
             Ok(())
         } else {

@@ -548,7 +548,9 @@ mod tests {
         }
         assert_eq!(finished, vec![3]);
         let stroke: Vec<_> = first.iter().filter(|(p, _, _)| p[2] == -1.0).collect();
-        assert!(stroke.iter().all(|(p, m, _)| *m == Mode::Sliding(3) || p[1] >= 56.0 - 1e-9));
+        assert!(stroke
+            .iter()
+            .all(|(p, m, _)| *m == Mode::Sliding(3) || p[1] >= 56.0 - 1e-9));
         // 16 mm at 4 mm/s (plus the 8 ms ramps): about 4 s pressed and moving.
         let moving = stroke.windows(2).filter(|w| w[1].0 != w[0].0).count() as f64 * DT;
         assert!((moving - 4.0).abs() < 0.1, "{moving} s on the stroke");
@@ -557,9 +559,13 @@ mod tests {
         // Held pressed at the end, idle; a slide straight back starts there, still pressed.
         let (end, mode, _) = *first.last().expect("targets");
         assert_eq!((end, mode), ([50.0, 56.0, -1.0], Mode::Idle));
-        a.apply(slide(4, [50.0, 56.0], [50.0, 40.0]), t).expect("back");
+        a.apply(slide(4, [50.0, 56.0], [50.0, 40.0]), t)
+            .expect("back");
         let back = run(&mut a, &mut t, 4.5);
-        assert!(back.iter().all(|(p, _, _)| p[2] == -1.0), "lifted on the way back");
+        assert!(
+            back.iter().all(|(p, _, _)| p[2] == -1.0),
+            "lifted on the way back"
+        );
         assert_eq!(a.take_finished(), vec![4]);
         let progress: Vec<f64> = back.iter().map(|b| b.2).collect();
         assert!(progress.windows(2).all(|w| w[1] >= w[0]) && progress.contains(&1.0));
@@ -608,7 +614,9 @@ mod tests {
         assert_eq!(a.fault().map(ArmFault::code), Some(11));
         assert_eq!(a.mode(), Mode::Stopped);
         // A command while the arm is still quiet is refused, naming the fault.
-        let e = a.apply(slide(2, [50.0, 40.0], [50.0, 56.0]), 0.5).unwrap_err();
+        let e = a
+            .apply(slide(2, [50.0, 40.0], [50.0, 56.0]), 0.5)
+            .unwrap_err();
         assert!(e.to_string().contains("no pose from the arm"), "{e}");
         // Drifting: the pose 12 mm off its target.
         let mut a = arm();

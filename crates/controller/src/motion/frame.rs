@@ -198,7 +198,10 @@ mod tests {
         let mut f = SurfaceFrame::default();
         f.rotation_xyzw = [0.0, 0.0, 0.0, 2.0];
         let e = f.checked().unwrap_err();
-        assert!(e.to_string().contains("rotation_xyzw has length 2.0000"), "{e}");
+        assert!(
+            e.to_string().contains("rotation_xyzw has length 2.0000"),
+            "{e}"
+        );
         f.rotation_xyzw = [f64::NAN, 0.0, 0.0, 1.0];
         assert!(matches!(f.checked(), Err(FrameError::NotFinite { .. })));
         f = SurfaceFrame::default();

@@ -39,7 +39,9 @@ pub enum ArmFault {
         limit: f64,
     },
     /// A target would have changed speed too fast (never published).
-    #[error("target acceleration {accel:.0} mm/s² is over the limit {limit:.0} mm/s²: not published")]
+    #[error(
+        "target acceleration {accel:.0} mm/s² is over the limit {limit:.0} mm/s²: not published"
+    )]
     OverAccel {
         /// mm/s².
         accel: f64,

@@ -10,3 +10,4 @@ pub mod cartesian;
 pub mod frame;
 pub mod guard;
 pub mod path;
+pub mod register;

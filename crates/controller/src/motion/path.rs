@@ -110,10 +110,7 @@ impl Path {
             timed.push(Timed::new(from, *leg, accel_mm_s2));
             from = leg.to;
         }
-        Path {
-            start,
-            legs: timed,
-        }
+        Path { start, legs: timed }
     }
 
     /// How long the whole path takes, s.
@@ -180,7 +177,11 @@ mod tests {
     fn a_long_leg_cruises_at_its_speed_and_takes_the_time_it_should() {
         let p = Path::new([0.0; 3], &[leg([100.0, 0.0, 0.0], 50.0)], 500.0);
         // 0.1 s up, 0.1 s down (2.5 mm each), 95 mm at 50 mm/s.
-        assert!((p.duration() - (0.2 + 1.9)).abs() < 1e-12, "{}", p.duration());
+        assert!(
+            (p.duration() - (0.2 + 1.9)).abs() < 1e-12,
+            "{}",
+            p.duration()
+        );
         let mid = p.at(1.0);
         assert!((mid.velocity[0] - 50.0).abs() < 1e-9 && (mid.point[0] - 47.5).abs() < 1e-9);
         let end = p.at(5.0);

@@ -238,7 +238,13 @@ pub enum ConfigError {
     },
 }
 
-fn within(key: &'static str, v: f64, lo: f64, hi: f64, allowed: &'static str) -> Result<(), ConfigError> {
+fn within(
+    key: &'static str,
+    v: f64,
+    lo: f64,
+    hi: f64,
+    allowed: &'static str,
+) -> Result<(), ConfigError> {
     if v.is_finite() && (lo..=hi).contains(&v) {
         Ok(())
     } else {
@@ -267,7 +273,13 @@ impl Ros2Config {
 
     /// Checks every value once.
     pub fn check(&self) -> Result<(), ConfigError> {
-        within("dds.domain_id", f64::from(self.dds.domain_id), 0.0, 232.0, "[0, 232]")?;
+        within(
+            "dds.domain_id",
+            f64::from(self.dds.domain_id),
+            0.0,
+            232.0,
+            "[0, 232]",
+        )?;
         for (key, v) in [
             ("dds.node", &self.dds.node),
             ("target.topic", &self.target.topic),
@@ -277,17 +289,65 @@ impl Ros2Config {
                 return Err(ConfigError::Empty { key });
             }
         }
-        within("target.rate_hz", self.target.rate_hz, 100.0, 1000.0, "[100, 1000] Hz")?;
+        within(
+            "target.rate_hz",
+            self.target.rate_hz,
+            100.0,
+            1000.0,
+            "[100, 1000] Hz",
+        )?;
         let m = &self.motion;
-        within("motion.travel_height_mm", m.travel_height_mm, 0.5, 50.0, "[0.5, 50] mm")?;
-        within("motion.travel_speed_mm_s", m.travel_speed_mm_s, 0.1, 500.0, "[0.1, 500] mm/s")?;
-        within("motion.approach_speed_mm_s", m.approach_speed_mm_s, 0.1, 50.0, "[0.1, 50] mm/s")?;
-        within("motion.max_accel_mm_s2", m.max_accel_mm_s2, 10.0, 10_000.0, "[10, 10000] mm/s²")?;
+        within(
+            "motion.travel_height_mm",
+            m.travel_height_mm,
+            0.5,
+            50.0,
+            "[0.5, 50] mm",
+        )?;
+        within(
+            "motion.travel_speed_mm_s",
+            m.travel_speed_mm_s,
+            0.1,
+            500.0,
+            "[0.1, 500] mm/s",
+        )?;
+        within(
+            "motion.approach_speed_mm_s",
+            m.approach_speed_mm_s,
+            0.1,
+            50.0,
+            "[0.1, 50] mm/s",
+        )?;
+        within(
+            "motion.max_accel_mm_s2",
+            m.max_accel_mm_s2,
+            10.0,
+            10_000.0,
+            "[10, 10000] mm/s²",
+        )?;
         within("motion.hold_s", m.hold_s, 0.0, 10.0, "[0, 10] s")?;
         let s = &self.safety;
-        within("safety.stale_after_ms", s.stale_after_ms, 20.0, 5000.0, "[20, 5000] ms")?;
-        within("safety.divergence_mm", s.divergence_mm, 0.5, 100.0, "[0.5, 100] mm")?;
-        within("wrench.max_force_n", self.wrench.max_force_n, 0.1, 200.0, "[0.1, 200] N")?;
+        within(
+            "safety.stale_after_ms",
+            s.stale_after_ms,
+            20.0,
+            5000.0,
+            "[20, 5000] ms",
+        )?;
+        within(
+            "safety.divergence_mm",
+            s.divergence_mm,
+            0.5,
+            100.0,
+            "[0.5, 100] mm",
+        )?;
+        within(
+            "wrench.max_force_n",
+            self.wrench.max_force_n,
+            0.1,
+            200.0,
+            "[0.1, 200] N",
+        )?;
         if s.max_reports_per_tick < 2 {
             return Err(ConfigError::Range {
                 key: "safety.max_reports_per_tick",

@@ -47,6 +47,15 @@ pub enum Ros2Error {
     /// The node thread could not start.
     #[error("the ROS 2 node's thread: {0}")]
     Thread(#[source] std::io::Error),
+    /// The arm faulted (a broken or silent pose stream).
+    #[error("the arm: {0}")]
+    Arm(#[source] ArmFault),
+    /// A guarded touch failed.
+    #[error("guarded touch: {0}")]
+    Touch(String),
+    /// A target could not be published.
+    #[error("DDS: publishing the target: {0}")]
+    Publish(String),
 }
 
 /// What the link side and the node share.
@@ -94,7 +103,7 @@ fn create<T, E: std::fmt::Debug>(what: &'static str, r: Result<T, E>) -> Result<
 }
 
 /// The node's DDS entities.
-struct Endpoints {
+pub(super) struct Endpoints {
     /// Keeps the node (and its participant) alive.
     _node: Node,
     target: Publisher<PoseStamped>,
@@ -103,7 +112,7 @@ struct Endpoints {
     wrench: Option<Subscription<WrenchStamped>>,
 }
 
-fn endpoints(config: &Ros2Config) -> Result<Endpoints, Ros2Error> {
+pub(super) fn endpoints(config: &Ros2Config) -> Result<Endpoints, Ros2Error> {
     let context = create(
         "DDS participant",
         Context::with_options(ContextOptions::new().domain_id(config.dds.domain_id)),
@@ -142,7 +151,10 @@ fn endpoints(config: &Ros2Config) -> Result<Endpoints, Ros2Error> {
                     &reader_qos,
                 ),
             )?;
-            pose = Some(create("pose subscription", node.create_subscription(&t, None))?);
+            pose = Some(create(
+                "pose subscription",
+                node.create_subscription(&t, None),
+            )?);
         }
         Source::Tf => {
             let t = create(
@@ -153,7 +165,10 @@ fn endpoints(config: &Ros2Config) -> Result<Endpoints, Ros2Error> {
                     &reader_qos,
                 ),
             )?;
-            tf = Some(create("tf subscription", node.create_subscription(&t, None))?);
+            tf = Some(create(
+                "tf subscription",
+                node.create_subscription(&t, None),
+            )?);
         }
     }
     let wrench = if config.wrench.topic.is_empty() {
@@ -167,7 +182,10 @@ fn endpoints(config: &Ros2Config) -> Result<Endpoints, Ros2Error> {
                 &reader_qos,
             ),
         )?;
-        Some(create("wrench subscription", node.create_subscription(&t, None))?)
+        Some(create(
+            "wrench subscription",
+            node.create_subscription(&t, None),
+        )?)
     };
     Ok(Endpoints {
         _node: node,
@@ -184,7 +202,7 @@ const MAX_TAKEN: usize = 10_000;
 
 /// Poses received since the last tick: how many, and the newest checked one (or the first
 /// fault found).
-fn take_poses(
+pub(super) fn take_poses(
     e: &Endpoints,
     config: &Ros2Config,
     frame: &SurfaceFrame,
@@ -221,7 +239,11 @@ fn take_poses(
                     // Every /tf message counts towards a flood; only our tool's transform is
                     // a pose.
                     count += 1;
-                    for t in m.transforms.iter().filter(|t| t.child_frame_id == config.pose.tool_frame) {
+                    for t in m
+                        .transforms
+                        .iter()
+                        .filter(|t| t.child_frame_id == config.pose.tool_frame)
+                    {
                         note(&t.header.frame_id, t.transform.translation);
                     }
                 }
@@ -237,7 +259,7 @@ fn take_poses(
 }
 
 /// The largest contact force among the wrenches received since the last tick, N.
-fn take_force(e: &Endpoints) -> Option<f64> {
+pub(super) fn take_force(e: &Endpoints) -> Option<f64> {
     let s = e.wrench.as_ref()?;
     let mut most: Option<f64> = None;
     for _ in 0..MAX_TAKEN {
@@ -253,6 +275,18 @@ fn take_force(e: &Endpoints) -> Option<f64> {
         }
     }
     most
+}
+
+/// Publishes one target (mm in the surface frame `frame`).
+pub(super) fn publish_target(
+    e: &Endpoints,
+    config: &Ros2Config,
+    frame: &SurfaceFrame,
+    p_mm: [f64; 3],
+) -> Result<(), Ros2Error> {
+    e.target
+        .publish(target_message(p_mm, config, frame))
+        .map_err(|err| Ros2Error::Publish(format!("{err:?}")))
 }
 
 fn target_message(p_mm: [f64; 3], config: &Ros2Config, frame: &SurfaceFrame) -> PoseStamped {
@@ -286,7 +320,10 @@ fn tick(e: &Endpoints, core: &Shared, config: &Ros2Config, frame: &SurfaceFrame,
     let publish = {
         let mut c = lock(core);
         match newest {
-            Some(Ok(p)) => c.arm.report(Ok(Report { t_s: now, pose_mm: p })),
+            Some(Ok(p)) => c.arm.report(Ok(Report {
+                t_s: now,
+                pose_mm: p,
+            })),
             Some(Err(f)) => c.arm.report(Err(f)),
             None => {}
         }
@@ -299,8 +336,8 @@ fn tick(e: &Endpoints, core: &Shared, config: &Ros2Config, frame: &SurfaceFrame,
         c.arm.tick(now, count)
     };
     if let Publish::Target(p) = publish {
-        if let Err(err) = e.target.publish(target_message(p, config, frame)) {
-            lock(core).arm.fail(ArmFault::Dds(format!("publishing the target: {err:?}")));
+        if let Err(err) = publish_target(e, config, frame, p) {
+            lock(core).arm.fail(ArmFault::Dds(err.to_string()));
         }
     }
 }

@@ -6,13 +6,18 @@
 //! * [`site`]: the arm's limits and the registered surface, from the site file.
 //! * [`msgs`]: the ROS 2 messages as serde structs.
 //! * `dds` and [`Ros2Arm`] (feature `ros2`): the DDS node (ros2-client on RustDDS, no ROS
-//!   installation) driving [`crate::motion::cartesian::CartesianArm`] as an [`crate::Arm`].
+//!   installation) driving [`crate::motion::cartesian::CartesianArm`] as an [`crate::Arm`];
+//!   `touch`: guarded touches for registering the plate.
 
 pub mod config;
 #[cfg(feature = "ros2")]
 mod dds;
 pub mod msgs;
 pub mod site;
+#[cfg(feature = "ros2")]
+mod touch;
 
 #[cfg(feature = "ros2")]
 pub use dds::{Ros2Arm, Ros2Error};
+#[cfg(feature = "ros2")]
+pub use touch::guarded_touches;

@@ -125,7 +125,11 @@ fn limits_of(arm: &ArmTable, path: &str) -> Result<Limits, SiteError> {
     for k in 0..2 {
         let (lo, hi) = (arm.workspace_min_mm[k], arm.workspace_max_mm[k]);
         if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-            return Err(bad("workspace_max_mm", hi, "finite and above workspace_min_mm"));
+            return Err(bad(
+                "workspace_max_mm",
+                hi,
+                "finite and above workspace_min_mm",
+            ));
         }
     }
     for (key, v) in [
@@ -221,7 +225,10 @@ mod tests {
         };
         write_surface(&path, &frame).expect("write surface");
         let text = std::fs::read_to_string(&path).expect("read");
-        assert!(text.contains("# measured") && text.contains("dark_counts = 215.0"), "{text}");
+        assert!(
+            text.contains("# measured") && text.contains("dark_counts = 215.0"),
+            "{text}"
+        );
         let site = load(&path).expect("load");
         assert_eq!(site.surface.origin_m, frame.origin_m);
         assert_eq!(site.limits.max_mm, [300.0, 150.0]);
@@ -235,8 +242,11 @@ mod tests {
         let text = std::fs::read_to_string(&path).expect("read");
         assert_eq!(text.matches("[surface]").count(), 1, "{text}");
         assert_eq!(load(&path).expect("load").surface.origin_m, [0.6, 0.0, 0.0]);
-        std::fs::write(&path, "[surface]\norigin_m = [0.0, 0.0, 0.0]\nrotation_xyzw = [0.0, 0.0, 0.0, 3.0]\n")
-            .expect("write");
+        std::fs::write(
+            &path,
+            "[surface]\norigin_m = [0.0, 0.0, 0.0]\nrotation_xyzw = [0.0, 0.0, 0.0, 3.0]\n",
+        )
+        .expect("write");
         let e = load(&path).unwrap_err().to_string();
         assert!(e.contains("rotation_xyzw has length 3.0000"), "{e}");
     }

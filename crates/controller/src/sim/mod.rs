@@ -36,7 +36,11 @@ pub struct SimArm {
 
 impl SimArm {
     /// The arm over a world shared with its sensor; `control` injects sensor stalls.
-    pub fn new(shared: SharedWorld, clock: ControllerClock, control: Option<SensorControl>) -> Self {
+    pub fn new(
+        shared: SharedWorld,
+        clock: ControllerClock,
+        control: Option<SensorControl>,
+    ) -> Self {
         SimArm {
             shared,
             clock,
@@ -209,5 +213,16 @@ impl SimController {
             s.stop()?;
         }
         report
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_links_longest_slide_is_the_simulators() {
+        assert_eq!(
+            crate::command::MAX_STROKE_MM,
+            crackbot_sim::run::MAX_STROKE_MM
+        );
     }
 }

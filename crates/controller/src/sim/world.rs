@@ -374,7 +374,12 @@ impl World {
     }
 
     /// A fresh contact simulation along `line` (the printed plates' roughness included).
-    fn contact_sim(&mut self, start: [f64; 2], end: [f64; 2], speed: f64) -> Result<SlideSim, SimError> {
+    fn contact_sim(
+        &mut self,
+        start: [f64; 2],
+        end: [f64; 2],
+        speed: f64,
+    ) -> Result<SlideSim, SimError> {
         let d = [end[0] - start[0], end[1] - start[1]];
         let len = d[0].hypot(d[1]);
         self.slides += 1;
