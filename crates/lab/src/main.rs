@@ -6,6 +6,7 @@
 //! * `crackbot-lab detector-tradeoff` — mAP@0.5 against input size against ms per frame.
 //! * `crackbot-lab sim dataset|calibrate|work-precision|compare|render|detector-set|scene` — the
 //!   simulator.
+//! * `crackbot-lab controller-check` — the link's conformance suite against a running controller.
 //!
 //! The work is done by the libraries (`crackbot-tactile`, `crackbot-vision`, `crackbot-sim`),
 //! figures by `crackbot-plots`; this binary parses arguments, draws progress bars and prints.
@@ -20,6 +21,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod args;
+mod controller_check;
 mod mission;
 mod sim;
 mod tactile;
@@ -51,6 +53,9 @@ enum Command {
     /// exploration time.
     #[command(subcommand)]
     Mission(mission::MissionCommand),
+    /// The link's conformance suite against a running manipulator controller (any maker's):
+    /// moves, slides, refusals by field, deadlines, stops, the watchdog, the state stream.
+    ControllerCheck(controller_check::ControllerCheckArgs),
 }
 
 fn main() -> Result<()> {
@@ -66,5 +71,6 @@ fn main() -> Result<()> {
         Command::DetectorTradeoff(args) => vision::detector_tradeoff(args),
         Command::Sim(cmd) => sim::run(cmd),
         Command::Mission(cmd) => mission::run(cmd),
+        Command::ControllerCheck(args) => controller_check::run_check(args),
     }
 }

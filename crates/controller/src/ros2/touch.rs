@@ -18,7 +18,7 @@ const CONTACT_LAG_MM: f64 = 1.0;
 /// A contact force over this is a contact, N.
 const CONTACT_FORCE_N: f64 = 1.0;
 /// No contact within this far of the start is an error, mm.
-const MAX_TRAVEL_MM: f64 = 60.0;
+const MAX_TRAVEL_MM: f64 = 100.0;
 /// How long to wait for the arm's first pose.
 const FIRST_POSE: Duration = Duration::from_secs(10);
 

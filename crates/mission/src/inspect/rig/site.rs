@@ -38,6 +38,10 @@ pub struct Site {
     /// The finger's proximity fibre.
     #[serde(default)]
     pub fibre: ProximityFibre,
+    /// Where the plate lies in the arm's base frame: the controller's (`crackbot-controller
+    /// register` writes it, `crackbot-controller --arm ros2` reads it); the robot keeps it as is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface: Option<toml::Table>,
 }
 
 /// The arm's reachable box on the surface and its speeds.
@@ -76,6 +80,7 @@ impl Default for Site {
             name: "default site".into(),
             arm: ArmLimits::default(),
             fibre: ProximityFibre::default(),
+            surface: None,
         }
     }
 }
@@ -140,6 +145,7 @@ impl Site {
                 stroke_mm: m.stroke_mm,
             },
             fibre: scene.sensor.optics.fibre(),
+            surface: None,
         }
     }
 }
