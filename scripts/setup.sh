@@ -74,6 +74,8 @@ bash "$crackbot_root/scripts/forest_to_onnx.sh" --setup
 # The independent MCAP reader and Foxglove live-view client the tests use (scripts/mcap_check.sh),
 # pinned in scripts/mcap_check.requirements.txt, in $crackbot_cache/mcap-venv.
 bash "$crackbot_root/scripts/mcap_check.sh" --setup
+# The ROS 2 tests' arm: Eclipse Cyclone DDS's Python binding, an independent DDS (scripts/dds_arm.sh).
+bash "$crackbot_root/scripts/dds_arm.sh" --setup
 
 # cargo-nextest, the test runner of scripts/test.sh (each test in its own process, the tests of every
 # binary side by side, the slowest first: .config/nextest.toml): the prebuilt binary of Astral's

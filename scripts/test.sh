@@ -5,9 +5,10 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 python3 crates/protocol/golden/generate.py --check
 python3 crates/link/golden/generate.py --check
-# The robot's fleet telemetry and Foxglove live-view features are on for the whole run: the end-to-end tests build the
-# binaries with it (tests/support), and one feature set means everything compiles once.
-features=crackbot-cli/telemetry,crackbot-cli/foxglove
+# The robot's fleet telemetry and Foxglove live-view features and the controller's ROS 2 arm are on for the whole
+# run: the end-to-end tests build the binaries with them (tests/support, FEATURES), and one feature set means
+# everything compiles once.
+features=crackbot-cli/telemetry,crackbot-cli/foxglove,crackbot-controller/ros2
 # cargo-nextest runs the tests of every binary side by side (settings: .config/nextest.toml);
 # arguments go to it, e.g. `bash scripts/test.sh -E 'package(crackbot-link)'` or `-E 'test(stop)'`.
 # The examples are not built here (25 CPU-seconds cold, no tests in them): CI's clippy stage

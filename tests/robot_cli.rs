@@ -389,13 +389,20 @@ fn a_controller_and_sensor_that_vanish_mid_mission_end_it_with_a_clear_error() {
 /// rendered once, encoded into a lossless video by ffmpeg, calibrated with `crackbot homography
 /// fit`, and the robot reads its frame through `--camera video.mkv` (the same ffmpeg path as a
 /// V4L2 device), detects, and slides across every candidate on the controller process.
-#[test]
-fn a_fused_mission_reads_its_camera_through_ffmpeg() {
-    let dir = tempfile::tempdir().expect("tempdir");
+/// The default scene's camera on hardware: its rendered frame as a lossless video the robot
+/// reads through ffmpeg, and the exact plate → image homography fitted from point pairs.
+struct Camera {
+    scene: std::path::PathBuf,
+    frame: std::path::PathBuf,
+    video: std::path::PathBuf,
+    homography: std::path::PathBuf,
+}
+
+fn default_scene_camera(dir: &std::path::Path) -> Camera {
     let scene =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/sim/scenes/default.toml");
     // The frame and its exact plate → image homography.
-    let render = dir.path().join("render");
+    let render = dir.join("render");
     let o = Command::new(binary("crackbot-lab"))
         .args(["sim", "render", "--frames", "1", "--scene"])
         .arg(&scene)
@@ -423,9 +430,9 @@ fn a_fused_mission_reads_its_camera_through_ffmpeg() {
         let v = (h[1][0] * x + h[1][1] * y + h[1][2]) / w;
         pairs.push_str(&format!("{u},{v},{x},{y}\n"));
     }
-    let pairs_csv = dir.path().join("pairs.csv");
+    let pairs_csv = dir.join("pairs.csv");
     std::fs::write(&pairs_csv, pairs).expect("pairs");
-    let cal = dir.path().join("camera.toml");
+    let cal = dir.join("camera.toml");
     let o = Command::new(binary("crackbot"))
         .args(["homography", "fit"])
         .arg(&pairs_csv)
@@ -436,7 +443,7 @@ fn a_fused_mission_reads_its_camera_through_ffmpeg() {
     assert!(o.status.success(), "{}", text(&o.stderr));
     // The camera: a lossless video of that frame.
     let frame = render.join("images/frame_0000.png");
-    let video = dir.path().join("camera.mkv");
+    let video = dir.join("camera.mkv");
     let ffmpeg = crackbot_vision::camera::Ffmpeg::locate()
         .expect("ffmpeg: run `bash scripts/setup.sh` (installs imageio-ffmpeg)");
     let status = Command::new(&ffmpeg.0)
@@ -448,6 +455,23 @@ fn a_fused_mission_reads_its_camera_through_ffmpeg() {
         .expect("ffmpeg");
     assert!(status.success());
 
+    Camera {
+        scene,
+        frame,
+        video,
+        homography: cal,
+    }
+}
+
+#[test]
+fn a_fused_mission_reads_its_camera_through_ffmpeg() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let Camera {
+        scene,
+        frame,
+        video,
+        homography: cal,
+    } = default_scene_camera(dir.path());
     let key = dir.path().join("link.key");
     key_file(&key, "6d");
     let c = spawn_controller(dir.path(), &scene, &key, "8");
@@ -557,4 +581,132 @@ fn the_controller_takes_the_link_id_the_wire_format_names() {
     let same = states_heard_on_link(9);
     assert!(same > 10, "{same} states on link 9");
     assert_eq!(states_heard_on_link(1), 0);
+}
+
+/// The Cyclone DDS arm (`scripts/dds_arm.sh`) on DDS domain `domain`, running until killed.
+fn dds_arm(domain: u16, start: [f64; 3]) -> std::process::Child {
+    let mut arm = Command::new("bash")
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/dds_arm.sh"))
+        .args(["--domain", &domain.to_string()])
+        .args([
+            "--start",
+            &format!("{},{},{}", start[0], start[1], start[2]),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("scripts/dds_arm.sh");
+    let mut line = String::new();
+    BufReader::new(arm.stdout.take().expect("stdout"))
+        .read_line(&mut line)
+        .expect("READY");
+    assert_eq!(line.trim(), "READY");
+    arm
+}
+
+/// The confirmed cracks' positions in a robot's JSON report, sorted by x.
+fn confirmed(stdout: &[u8]) -> Vec<[f64; 2]> {
+    let report: serde_json::Value = serde_json::from_slice(stdout).expect("one JSON object");
+    let mut at: Vec<[f64; 2]> = report["cracks"]
+        .as_array()
+        .expect("cracks")
+        .iter()
+        .map(|c| serde_json::from_value(c["position_mm"].clone()).expect("position_mm"))
+        .collect();
+    at.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    at
+}
+
+#[test]
+fn a_fused_mission_through_a_cyclone_dds_arm_confirms_the_simulated_rigs_cracks() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let cam = default_scene_camera(dir.path());
+    // The plate 0.4 m out, 0.1 m aside, 50 mm up, turned 30° about the base's z axis.
+    let h = 15f64.to_radians();
+    let (s, c) = (h.sin(), h.cos());
+    let site = dir.path().join("site.toml");
+    std::fs::write(
+        &site,
+        format!("name = \"DDS bench\"\n[surface]\norigin_m = [0.4, -0.1, 0.05]\nrotation_xyzw = [0.0, 0.0, {s}, {c}]\n"),
+    )
+    .expect("site");
+    let domain = 150 + (std::process::id() % 60) as u16;
+    let ros2 = dir.path().join("ros2.toml");
+    std::fs::write(&ros2, format!("[dds]\ndomain_id = {domain}\n")).expect("ros2 config");
+    // The arm starts 5 mm above the plate's origin, in its base frame.
+    let mut arm = dds_arm(domain, [0.4, -0.1, 0.055]);
+    let key = dir.path().join("link.key");
+    key_file(&key, "3c");
+    binary("crackbot-robot");
+    let (cport, hport) = (free_port(), free_port());
+    let mut controller = Command::new(binary("crackbot-controller"))
+        .args(["--arm", "ros2", "--sim-finger", "--scene"])
+        .arg(&cam.scene)
+        .arg("--site")
+        .arg(&site)
+        .arg("--ros2-config")
+        .arg(&ros2)
+        .args(["--bind", &format!("127.0.0.1:{cport}")])
+        .args(["--peer", &format!("127.0.0.1:{hport}")])
+        .arg("--key")
+        .arg(&key)
+        .arg("--state-dir")
+        .arg(dir.path().join("ctrl"))
+        .args(["--seconds", "300"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("crackbot-controller --arm ros2");
+    let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
+    let mut line = String::new();
+    out.read_line(&mut line).expect("the PTY line");
+    let pty = line
+        .trim()
+        .strip_prefix("PTY ")
+        .expect("PTY /dev/pts/N")
+        .to_string();
+    let o = Command::new(binary("crackbot-robot"))
+        .args(["--mode", "fused", "--speedup", "1", "--json"])
+        .arg("--site")
+        .arg(&site)
+        .args(["--serial", &pty])
+        .args(["--controller", &format!("127.0.0.1:{cport}")])
+        .args(["--bind", &format!("127.0.0.1:{hport}")])
+        .arg("--key")
+        .arg(&key)
+        .arg("--camera")
+        .arg(&cam.video)
+        .arg("--homography")
+        .arg(&cam.homography)
+        .arg("--out")
+        .arg(dir.path().join("dds"))
+        .output()
+        .expect("crackbot-robot");
+    controller.kill().ok();
+    controller.wait().ok();
+    arm.kill().ok();
+    arm.wait().ok();
+    drop(out);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let through_dds = confirmed(&o.stdout);
+    // The simulated rig on the same scene and frame.
+    let sim = Command::new(binary("crackbot-robot"))
+        .args(["--mode", "fused", "--speedup", "8", "--json", "--out"])
+        .arg(dir.path().join("sim"))
+        .output()
+        .expect("crackbot-robot on the simulated rig");
+    assert!(sim.status.success(), "{}", text(&sim.stderr));
+    let simulated = confirmed(&sim.stdout);
+    eprintln!("through DDS: {through_dds:?}\nsimulated rig: {simulated:?}");
+    assert_eq!(simulated.len(), 4, "the simulated rig: {simulated:?}");
+    assert_eq!(
+        through_dds.len(),
+        simulated.len(),
+        "{through_dds:?} vs {simulated:?}"
+    );
+    for (a, b) in through_dds.iter().zip(&simulated) {
+        let off = (a[0] - b[0]).hypot(a[1] - b[1]);
+        assert!(off < 3.0, "{a:?} vs {b:?}: {off:.1} mm apart");
+        eprintln!("{a:?} vs {b:?}: {off:.2} mm apart");
+    }
 }

@@ -6,6 +6,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::{Mutex, OnceLock};
 
+/// The features every test build has (`scripts/test.sh`'s): the robot's fleet telemetry and
+/// Foxglove live view, and the controller's ROS 2 arm.
+pub const FEATURES: &str = "crackbot-cli/telemetry,crackbot-cli/foxglove,crackbot-controller/ros2";
+
 /// Path of a workspace binary, built (once per test process) with the profile of the running
 /// test, so `cargo test` alone is enough. Every test gets the binaries built with the robot's
 /// fleet telemetry and Foxglove live view (`crackbot-cli/telemetry,foxglove`: they only add
@@ -43,7 +47,7 @@ pub fn binary(name: &str) -> PathBuf {
             "--bin",
             name,
         ]);
-        cmd.args(["--features", "crackbot-cli/telemetry,crackbot-cli/foxglove"]);
+        cmd.args(["--features", FEATURES]);
         if name == "crackbot" {
             cmd.args(["--bin", "crackbot-lab"]);
         }

@@ -109,6 +109,8 @@ enum Task {
 
 #[derive(Debug, Clone)]
 enum Activity {
+    /// No command yet: idle, streaming nothing.
+    Waiting,
     /// Holding the last target (streaming it), since this time.
     Holding { since: f64, pressed: bool },
     /// Following a path started at `started`.
@@ -139,6 +141,10 @@ pub struct CartesianArm {
     progress: f64,
     /// The one target a stop publishes: where the arm is.
     hold_once: Option<[f64; 3]>,
+    /// Whether a slide is on its stroke: before that it is lifting out of the last slide's
+    /// hold, travelling and pressing in, reported as Moving, so that the link's "Sliding and
+    /// down" means this slide's stroke only, the finger already pressed in.
+    engaged: bool,
 }
 
 /// What a tick asks the DDS side to do.
@@ -156,7 +162,7 @@ impl CartesianArm {
         CartesianArm {
             guard: TargetGuard::new(settings.envelope()),
             settings,
-            activity: Activity::Stopped,
+            activity: Activity::Waiting,
             target: None,
             measured: None,
             previous: None,
@@ -165,6 +171,7 @@ impl CartesianArm {
             on_plate: None,
             progress: 0.0,
             hold_once: None,
+            engaged: false,
         }
     }
 
@@ -176,7 +183,9 @@ impl CartesianArm {
     /// Where a new path starts: the target the arm holds, or where it is.
     fn here(&self) -> Option<[f64; 3]> {
         match self.activity {
-            Activity::Stopped => self.measured.map(|m| m.pose_mm).or(self.target),
+            Activity::Stopped | Activity::Waiting => {
+                self.measured.map(|m| m.pose_mm).or(self.target)
+            }
             _ => self.target.or(self.measured.map(|m| m.pose_mm)),
         }
     }
@@ -276,11 +285,12 @@ impl CartesianArm {
             Task::Slide(s) => Some(s.id),
             _ => None,
         };
-        if matches!(self.activity, Activity::Stopped) {
+        if matches!(self.activity, Activity::Stopped | Activity::Waiting) {
             // A new stream starts from rest where the arm is.
             self.guard.reset();
         }
         self.progress = 0.0;
+        self.engaged = false;
         self.activity = Activity::Running {
             path: Path::new(here, &legs, st.max_accel_mm_s2),
             started: now,
@@ -335,7 +345,7 @@ impl CartesianArm {
                 limit: self.settings.max_reports_per_tick,
             });
         }
-        let streaming = !matches!(self.activity, Activity::Stopped);
+        let streaming = !matches!(self.activity, Activity::Stopped | Activity::Waiting);
         if streaming {
             let since = self.measured.map_or(f64::INFINITY, |m| now - m.t_s);
             if let Some(f) = staleness(since, self.settings.stale_after_s) {
@@ -374,7 +384,7 @@ impl CartesianArm {
     /// The target for `now`, moving the state machine on; `None`: the stream is off.
     fn advance(&mut self, now: f64) -> Option<[f64; 3]> {
         match &mut self.activity {
-            Activity::Stopped => None,
+            Activity::Stopped | Activity::Waiting => None,
             Activity::Holding { since, pressed } => {
                 if *pressed && now - *since >= self.settings.hold_s {
                     let here = self.target?;
@@ -406,6 +416,7 @@ impl CartesianArm {
                             || (kind == Some(LegKind::Vertical) && s.leg > 0 && s.point[2] < 0.0);
                         self.on_plate = pressing.then_some(*slide);
                         self.progress = if on_stroke { s.fraction } else { 0.0 };
+                        self.engaged = on_stroke;
                     }
                     Task::Move | Task::Lift => self.on_plate = None,
                 }
@@ -428,10 +439,11 @@ impl CartesianArm {
     pub fn mode(&self) -> Mode {
         match &self.activity {
             Activity::Stopped => Mode::Stopped,
-            Activity::Holding { .. } => Mode::Idle,
+            Activity::Waiting | Activity::Holding { .. } => Mode::Idle,
             Activity::Running { task, .. } => match task {
                 Task::Move => Mode::Moving,
-                Task::Slide(s) => Mode::Sliding(s.id),
+                Task::Slide(s) if self.engaged => Mode::Sliding(s.id),
+                Task::Slide(_) => Mode::Moving,
                 Task::Lift => Mode::Idle,
             },
         }
@@ -536,6 +548,8 @@ mod tests {
     #[test]
     fn a_slide_travels_presses_strokes_at_its_speed_holds_and_a_slide_back_goes_on_pressed() {
         let mut a = arm();
+        // Before any command: idle, streaming nothing.
+        assert_eq!((a.mode(), a.tick(0.0, 1)), (Mode::Idle, Publish::Nothing));
         let mut t = 0.0;
         assert_eq!(
             a.apply(slide(3, [50.0, 40.0], [50.0, 56.0]), t),

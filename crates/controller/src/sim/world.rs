@@ -775,3 +775,51 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod following_tests {
+    use super::*;
+
+    /// A slide forth and back along one line, the pose given sample by sample as a real arm
+    /// would report it (moving 4 mm/s, pressed 1 mm), then lifted: finite counts, no error,
+    /// each sample quick.
+    #[test]
+    fn the_finger_follows_a_reported_pose_forth_and_back_along_a_slide() {
+        let mut w = World::new(&Scene::builtin_default(), 3).expect("default scene");
+        let (a, b) = ([38.0, 22.0], [38.0, 38.0]);
+        let pressed = Some(Pressed {
+            start: a,
+            end: b,
+            speed_mm_s: 4.0,
+        });
+        let mut slowest = 0.0f64;
+        let mut run = |w: &mut World, from: [f64; 2], to: [f64; 2], p: Option<Pressed>| {
+            let n = 1600;
+            for k in 0..=n {
+                let f = k as f64 / n as f64;
+                let pose = [
+                    from[0] + f * (to[0] - from[0]),
+                    from[1] + f * (to[1] - from[1]),
+                    if p.is_some() { -1.0 } else { 5.0 },
+                ];
+                let t = std::time::Instant::now();
+                let tick = w.step_following(pose, p).expect("step");
+                slowest = slowest.max(t.elapsed().as_secs_f64());
+                assert!(tick.counts.iter().all(|c| c.is_finite()), "{tick:?}");
+            }
+        };
+        run(&mut w, a, b, pressed);
+        run(
+            &mut w,
+            b,
+            a,
+            pressed.map(|p| Pressed {
+                start: b,
+                end: a,
+                ..p
+            }),
+        );
+        run(&mut w, a, [100.0, 50.0], None);
+        eprintln!("slowest sample {:.1} ms", slowest * 1e3);
+    }
+}

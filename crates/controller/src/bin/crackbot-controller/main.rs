@@ -132,7 +132,9 @@ fn main() -> Result<()> {
     tracing_subscriber::fmt()
         .with_writer(std::io::stderr)
         .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+                "info,rustdds=warn,ros2_client=warn,ros2_client::distributions=error".into()
+            }),
         )
         .init();
     let cli = Cli::parse();
