@@ -130,8 +130,8 @@ def parse_args():
     p.add_argument("--start", help="x,y,z metres: publish from there at once (default: start at the first target)")
     p.add_argument("--plate", metavar="PX,PY,PZ,NX,NY,NZ",
                    help="a rigid plate: a point on it and its normal (towards the arm), metres, base frame; "
-                        "the tool stops on it, and the wrench's force grows 2 N per 0.1 mm the target "
-                        "lies beyond it")
+                        "the tool stops on it, and the wrench's force grows 2 N per 0.1 mm the arm "
+                        "would have gone into it")
     p.add_argument("--seconds", type=float, help="exit after this long (default: run until killed)")
     p.add_argument("--record", help="append `t_wall_s x y z frame_id` per received target to this file")
     for fault, what in [("nan", "publish NaN positions"), ("wrong-frame", "publish frame_id wrong_frame"),
@@ -209,8 +209,9 @@ class Arm:
             self.bad_logged_at = time.monotonic()
             print(f"dds_arm: skipped {why} ({self.bad} skipped so far)", file=sys.stderr, flush=True)
 
-    def on_plate(self, pose, target):
-        """The pose held on the plate's side, and the contact force of a target beyond it, N."""
+    def on_plate(self, pose):
+        """The pose held on the plate's side, and the contact force, N: 2 N per 0.1 mm the arm
+        would have gone into the plate (the force arises only where the tool meets it)."""
         if not self.args.plate:
             return pose, 0.0
         v = [float(x) for x in self.args.plate.split(",")]
@@ -218,10 +219,9 @@ class Arm:
         n = math.sqrt(sum(c * c for c in normal))
         normal = [c / n for c in normal]
         depth = -sum((p - q) * c for p, q, c in zip(pose, point, normal))  # > 0: inside the plate
-        if depth > 0:
-            pose = [p + depth * c for p, c in zip(pose, normal)]
-        beyond = -sum((t - q) * c for t, q, c in zip(target, point, normal)) if target else 0.0
-        return pose, max(0.0, beyond) * 20000.0
+        if depth <= 0:
+            return pose, 0.0
+        return [p + depth * c for p, c in zip(pose, normal)], depth * 20000.0
 
     def publish(self, position, orientation, frame_id):
         header = Header(stamp=stamp_now(), frame_id=frame_id)
@@ -254,7 +254,7 @@ class Arm:
                 pose = [p + alpha * (t - p) for p, t in zip(pose, target[0])]
             force_n = a.force_n
             if pose is not None:
-                pose, contact = self.on_plate(pose, target[0] if target else None)
+                pose, contact = self.on_plate(pose)
                 force_n += contact
 
             # Faults, timed from the first target.

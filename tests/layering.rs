@@ -50,8 +50,8 @@ const LAYERS: &[(&str, &[&str])] = &[
         &["crackbot-emulator", "crackbot-tactile"],
     ),
     (
-        "simulated hardware: the manipulator controller over the emulated sensor",
-        &["crackbot-controller"],
+        "hardware: the manipulator controller (the simulated arm over the emulated sensor, the ROS 2 arm) and the link's conformance suite",
+        &["crackbot-controller", "crackbot-conformance"],
     ),
     (
         "services: missions, figures",
@@ -139,6 +139,9 @@ const HEAVY: &[&str] = &[
     "zenoh",
     // The Foxglove live view's WebSocket server (feature `foxglove`).
     "tokio-tungstenite",
+    // The ROS 2 arm's DDS (the controller's feature `ros2`).
+    "ros2-client",
+    "rustdds",
 ];
 
 /// Direct dependencies allowed in one crate only: (dependency, the crate that may have it).
@@ -151,6 +154,7 @@ const ONLY_IN: &[(&str, &str)] = &[
     ("statrs", "crackbot-tactile"),
     ("zenoh", "crackbot-telemetry"),
     ("foxglove", "crackbot-mcap"),
+    ("ros2-client", "crackbot-controller"),
 ];
 
 /// Dependencies of binaries, not of library-only crates.

@@ -43,7 +43,7 @@ fn key_file(path: &std::path::Path, byte: &str) {
     }
 }
 
-/// A running `crackbot-sim-controller` over [`SCENE`].
+/// A running `crackbot-controller` over [`SCENE`].
 struct Controller {
     child: std::process::Child,
     /// Its standard output, kept open (it prints more, and a closed pipe would end it).
@@ -62,7 +62,7 @@ fn start_controller(dir: &std::path::Path, key: &std::path::Path, speedup: &str)
     spawn_controller(dir, &scene, key, speedup)
 }
 
-/// `crackbot-sim-controller` over `scene`, its state in `dir/ctrl`, once it has printed its PTY.
+/// `crackbot-controller` over `scene`, its state in `dir/ctrl`, once it has printed its PTY.
 fn spawn_controller(
     dir: &std::path::Path,
     scene: &std::path::Path,
@@ -73,7 +73,7 @@ fn spawn_controller(
     // simulated clock up in a burst once slides come, and a mission then ends in a blink.
     binary("crackbot-robot");
     let (cport, hport) = (free_port(), free_port());
-    let mut controller = Command::new(binary("crackbot-sim-controller"))
+    let mut controller = Command::new(binary("crackbot-controller"))
         .args(["--scene", scene.to_str().expect("utf-8")])
         .args(["--bind", &format!("127.0.0.1:{cport}")])
         .args(["--peer", &format!("127.0.0.1:{hport}")])
@@ -83,7 +83,7 @@ fn spawn_controller(
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
-        .expect("starting crackbot-sim-controller");
+        .expect("starting crackbot-controller");
     let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
     let mut line = String::new();
     out.read_line(&mut line).expect("the PTY line");
@@ -539,7 +539,7 @@ fn states_heard_on_link(link_id: u16) -> usize {
     let key_path = dir.path().join("link.key");
     key_file(&key_path, "5a");
     let (cport, hport) = (free_port(), free_port());
-    let mut controller = Command::new(binary("crackbot-sim-controller"))
+    let mut controller = Command::new(binary("crackbot-controller"))
         .args(["--bind", &format!("127.0.0.1:{cport}")])
         .args(["--peer", &format!("127.0.0.1:{hport}")])
         .args(["--key", key_path.to_str().expect("utf-8")])
@@ -551,7 +551,7 @@ fn states_heard_on_link(link_id: u16) -> usize {
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
-        .expect("starting crackbot-sim-controller");
+        .expect("starting crackbot-controller");
     let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
     let mut line = String::new();
     out.read_line(&mut line).expect("the PTY line");

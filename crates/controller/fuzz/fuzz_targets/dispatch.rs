@@ -1,4 +1,4 @@
-//! Fuzz target: the controller's whole receive path, as `crackbot-sim-controller` runs it —
+//! Fuzz target: the controller's whole receive path, as `crackbot-controller` runs it —
 //! datagrams into the link state machine, every delivered message through the command check
 //! (`crackbot_controller::check`) and, when accepted, into the simulated arm
 //! (`World::apply`). Checks that nothing panics, that whatever the check accepts is finite and

@@ -90,9 +90,7 @@ impl Link<'_> {
             if let Some(p) = self.pose {
                 let lag: f64 = (0..3).map(|k| (target[k] - p[k]) * dir[k]).sum();
                 if lag > CONTACT_LAG_MM || force.is_some_and(|f| f > CONTACT_FORCE_N) {
-                    // Hold where it stopped.
-                    publish_target(self.e, self.config, &self.base, p)?;
-                    return Ok(p);
+                    return self.settle(p);
                 }
             }
             if travelled > MAX_TRAVEL_MM {
@@ -104,6 +102,20 @@ impl Link<'_> {
             publish_target(self.e, self.config, &self.base, target)?;
             std::thread::sleep(self.period());
         }
+    }
+}
+
+impl Link<'_> {
+    /// Holds the arm where it met the plate for 100 ms and returns where it then is (the pose
+    /// that arrived at the contact may be a period old).
+    fn settle(&mut self, at: [f64; 3]) -> Result<[f64; 3], Ros2Error> {
+        let until = Instant::now() + Duration::from_millis(100);
+        while Instant::now() < until {
+            publish_target(self.e, self.config, &self.base, at)?;
+            std::thread::sleep(self.period());
+            self.listen()?;
+        }
+        Ok(self.pose.unwrap_or(at))
     }
 }
 
