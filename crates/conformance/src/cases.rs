@@ -11,6 +11,10 @@ use crate::Expect;
 /// A case's verdict: `Ok(what it saw)` or `Err(what went wrong)`.
 pub type Verdict = Result<String, String>;
 
+#[expect(
+    clippy::needless_pass_by_value,
+    reason = "`map_err` hands the error over by value"
+)]
 fn io(e: HostError) -> String {
     e.to_string()
 }

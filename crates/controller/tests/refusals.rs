@@ -96,7 +96,7 @@ fn bad_values_and_late_commands_are_refused_by_field_and_nothing_moves() {
         Security::Signed(key.clone()),
         dir.path().join("controller.epoch"),
     );
-    let ctrl = SimController::spawn(config, cs, host_addr).expect("controller");
+    let ctrl = SimController::spawn(&config, cs, host_addr).expect("controller");
     let link = LinkConfig::host(
         Security::Signed(key),
         EpochSource::File(dir.path().join("host.epoch")),

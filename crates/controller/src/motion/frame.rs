@@ -195,8 +195,10 @@ mod tests {
 
     #[test]
     fn a_broken_quaternion_is_named() {
-        let mut f = SurfaceFrame::default();
-        f.rotation_xyzw = [0.0, 0.0, 0.0, 2.0];
+        let mut f = SurfaceFrame {
+            rotation_xyzw: [0.0, 0.0, 0.0, 2.0],
+            ..SurfaceFrame::default()
+        };
         let e = f.checked().unwrap_err();
         assert!(
             e.to_string().contains("rotation_xyzw has length 2.0000"),

@@ -215,7 +215,7 @@ pub fn divergence(measured: [f64; 3], target: [f64; 3], limit_mm: f64) -> Option
 
 /// A fault when the last pose arrived more than `limit_s` ago.
 pub fn staleness(since_last_s: f64, limit_s: f64) -> Option<ArmFault> {
-    (since_last_s > limit_s).then(|| ArmFault::Stale {
+    (since_last_s > limit_s).then_some(ArmFault::Stale {
         ms: since_last_s * 1e3,
         limit_ms: limit_s * 1e3,
     })

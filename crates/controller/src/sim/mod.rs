@@ -170,7 +170,7 @@ impl SimController {
     /// Starts the controller on `socket` (already bound: its address is the one the host talks
     /// to), talking to the host at `host`.
     pub fn spawn(
-        config: ServerConfig,
+        config: &ServerConfig,
         socket: UdpSocket,
         host: SocketAddr,
     ) -> Result<SimController, ControllerError> {

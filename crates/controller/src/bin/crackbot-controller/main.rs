@@ -246,7 +246,7 @@ fn serve_sim(cli: &Serve, link: LinkSettings, socket: UdpSocket) -> Result<()> {
         offset_us: cli.clock_offset_us,
         drift_ppm: cli.clock_drift_ppm,
     };
-    let controller = SimController::spawn(config, socket, cli.peer)?;
+    let controller = SimController::spawn(&config, socket, cli.peer)?;
     announce(Some(controller.sensor_path()), controller.addr());
     wait(cli)?;
     print_report(&controller.shutdown()?);

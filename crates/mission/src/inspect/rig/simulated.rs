@@ -49,7 +49,7 @@ impl RigBackend for SimulatedRig {
             ..config.clock
         };
         server.faults = config.faults.clone();
-        let sim = SimController::spawn(server, ctrl_socket, host_addr)?;
+        let sim = SimController::spawn(&server, ctrl_socket, host_addr)?;
         let sensor_port = sim.sensor_path().to_string();
         self.controller = Some(sim);
         Ok(Connection {
