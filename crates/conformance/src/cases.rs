@@ -91,10 +91,10 @@ pub fn park(h: &mut Host, e: &Expect, p: [f64; 3]) -> Verdict {
 /// The state stream: at least 100 states a second, a clock that never goes back and keeps time.
 pub fn state_stream(h: &mut Host, _: &Expect) -> Verdict {
     h.take_states();
-    h.pump(Duration::from_secs(3)).map_err(io)?;
+    h.pump(Duration::from_secs(2)).map_err(io)?;
     let s = h.take_states();
     if s.len() < 2 {
-        return Err(format!("{} states in 3 s", s.len()));
+        return Err(format!("{} states in 2 s", s.len()));
     }
     let span = s[s.len() - 1].at.duration_since(s[0].at).as_secs_f64();
     let rate = (s.len() - 1) as f64 / span;

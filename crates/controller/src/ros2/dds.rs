@@ -313,32 +313,83 @@ fn target_message(p_mm: [f64; 3], config: &Ros2Config, frame: &SurfaceFrame) -> 
     }
 }
 
-/// One period of the node: poses in, the state machine on, the target out.
-fn tick(e: &Endpoints, core: &Shared, config: &Ros2Config, frame: &SurfaceFrame, now: f64) {
+/// How often the node takes the arm's poses, s: between targets too, so that a pose is timed
+/// within a millisecond of its arrival (the link's states and the simulated finger use it).
+const LISTEN_S: f64 = 0.001;
+
+/// Takes what arrived: the newest pose (or a fault in one) and the contact force to the arm.
+/// How many poses came.
+fn listen(
+    e: &Endpoints,
+    core: &Shared,
+    config: &Ros2Config,
+    frame: &SurfaceFrame,
+    now: f64,
+) -> usize {
     let (count, newest) = take_poses(e, config, frame);
     let force = take_force(e);
-    let publish = {
-        let mut c = lock(core);
-        match newest {
-            Some(Ok(p)) => c.arm.report(Ok(Report {
-                t_s: now,
-                pose_mm: p,
-            })),
-            Some(Err(f)) => c.arm.report(Err(f)),
-            None => {}
-        }
-        if let Some(n) = force.filter(|n| *n > config.wrench.max_force_n) {
-            c.arm.fail(ArmFault::OverForce {
-                n,
-                limit_n: config.wrench.max_force_n,
-            });
-        }
-        c.arm.tick(now, count)
-    };
+    let mut c = lock(core);
+    match newest {
+        Some(Ok(p)) => c.arm.report(Ok(Report {
+            t_s: now,
+            pose_mm: p,
+        })),
+        Some(Err(f)) => c.arm.report(Err(f)),
+        None => {}
+    }
+    if let Some(n) = force.filter(|n| *n > config.wrench.max_force_n) {
+        c.arm.fail(ArmFault::OverForce {
+            n,
+            limit_n: config.wrench.max_force_n,
+        });
+    }
+    count
+}
+
+/// One period of the node: the state machine on (`reports` poses came since the last), the
+/// target out.
+fn tick(
+    e: &Endpoints,
+    core: &Shared,
+    config: &Ros2Config,
+    frame: &SurfaceFrame,
+    now: f64,
+    reports: usize,
+) {
+    let publish = lock(core).arm.tick(now, reports);
     if let Publish::Target(p) = publish {
         if let Err(err) = publish_target(e, config, frame, p) {
             lock(core).arm.fail(ArmFault::Dds(err.to_string()));
         }
+    }
+}
+
+/// The node's loop: poses taken every millisecond, a target every period.
+fn run_node(
+    e: &Endpoints,
+    core: &Shared,
+    config: &Ros2Config,
+    frame: &SurfaceFrame,
+    started: Instant,
+    stop: &AtomicBool,
+) {
+    let period = 1.0 / config.target.rate_hz;
+    let mut next = 0.0;
+    let mut reports = 0;
+    while !stop.load(Ordering::Relaxed) {
+        let now = started.elapsed().as_secs_f64();
+        reports += listen(e, core, config, frame, now);
+        if now >= next {
+            tick(e, core, config, frame, now, reports);
+            reports = 0;
+            // A few periods late (a busy host), the stream catches up; further, it starts afresh.
+            next += period;
+            if next + 3.0 * period < now {
+                next = now + period;
+            }
+        }
+        let wait = (next - started.elapsed().as_secs_f64()).clamp(0.0, LISTEN_S);
+        std::thread::sleep(Duration::from_secs_f64(wait));
     }
 }
 
@@ -360,21 +411,7 @@ impl Ros2Arm {
             let (core, stop) = (core.clone(), stop.clone());
             std::thread::Builder::new()
                 .name("ros2 arm".into())
-                .spawn(move || {
-                    let period = Duration::from_secs_f64(1.0 / config.target.rate_hz);
-                    let mut next = Instant::now();
-                    while !stop.load(Ordering::Relaxed) {
-                        let now = started.elapsed().as_secs_f64();
-                        tick(&endpoints, &core, &config, &surface, now);
-                        next += period;
-                        let n = Instant::now();
-                        if next > n {
-                            std::thread::sleep(next - n);
-                        } else {
-                            next = n;
-                        }
-                    }
-                })
+                .spawn(move || run_node(&endpoints, &core, &config, &surface, started, &stop))
                 .map_err(Ros2Error::Thread)?
         };
         Ok(Ros2Arm {
