@@ -1,6 +1,7 @@
-//! The conformance suite against crackbot's simulated controller, in this process over real UDP
-//! on loopback: every case passes; a controller with a planted fault fails the matching cases
-//! and passes the others.
+//! The conformance suite against crackbot's simulated controller with a planted fault, in this
+//! process over real UDP on loopback: it fails the matching cases and passes the others. (The
+//! controller without a fault passes every case: `tests/robot_cli.rs`,
+//! `the_conformance_suite_passes_on_the_controller_process`.)
 
 use std::net::UdpSocket;
 
@@ -110,14 +111,6 @@ fn case(name: &str) -> Case {
         .iter()
         .find(|c| c.0 == name)
         .expect("a case of that name")
-}
-
-#[test]
-fn the_simulated_controller_passes_every_case() {
-    let results = check(|a| a, CASES);
-    assert_eq!(results.len(), CASES.len());
-    let failed: Vec<_> = results.iter().filter(|r| !r.passed).collect();
-    assert!(failed.is_empty(), "{}", table(&results));
 }
 
 #[test]
