@@ -6,6 +6,7 @@ use std::io::{BufRead, BufReader};
 use std::net::UdpSocket;
 use std::process::{Command, Stdio};
 
+use crackbot_testkit::DdsArm;
 use crackbot_tests::{binary, text};
 
 /// A small plate with one 10 mm crack, so that the tactile-only scan is a few short rows.
@@ -69,17 +70,28 @@ fn spawn_controller(
     key: &std::path::Path,
     speedup: &str,
 ) -> Controller {
+    let scene = scene.to_str().expect("utf-8");
+    spawn_controller_with(dir, key, &["--scene", scene, "--speedup", speedup])
+}
+
+/// `crackbot-controller` with `args` (its arm), talking on two free ports with `key`, its state
+/// in `dir/ctrl`, once it has printed its PTY.
+fn spawn_controller_with(
+    dir: &std::path::Path,
+    key: &std::path::Path,
+    args: &[&str],
+) -> Controller {
     // The robot is built first: a controller left idle while cargo builds the robot catches its
     // simulated clock up in a burst once slides come, and a mission then ends in a blink.
     binary("crackbot-robot");
     let (cport, hport) = (free_port(), free_port());
     let mut controller = Command::new(binary("crackbot-controller"))
-        .args(["--scene", scene.to_str().expect("utf-8")])
+        .args(args)
         .args(["--bind", &format!("127.0.0.1:{cport}")])
         .args(["--peer", &format!("127.0.0.1:{hport}")])
         .args(["--key", key.to_str().expect("utf-8")])
         .args(["--state-dir", dir.join("ctrl").to_str().expect("utf-8")])
-        .args(["--speedup", speedup, "--seconds", "120"])
+        .args(["--seconds", "300"])
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
@@ -566,7 +578,8 @@ fn states_heard_on_link(link_id: u16) -> usize {
     while std::time::Instant::now() < end {
         ep.send_unreliable(&Message::Heartbeat)
             .expect("a heartbeat");
-        while let Ok(Some(r)) = ep.recv(std::time::Duration::from_millis(20)) {
+        // (One message a turn: a steady 100 Hz stream never leaves `recv` waiting 20 ms.)
+        if let Ok(Some(r)) = ep.recv(std::time::Duration::from_millis(20)) {
             states += usize::from(matches!(r.message, Message::State(_)));
         }
     }
@@ -629,27 +642,6 @@ fn the_conformance_suite_passes_on_the_controller_process() {
     assert_eq!(passed, 7, "{results}");
 }
 
-/// The Cyclone DDS arm (`scripts/dds_arm.sh`) on DDS domain `domain`, running until killed.
-fn dds_arm(domain: u16, start: [f64; 3]) -> std::process::Child {
-    let mut arm = Command::new("bash")
-        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/dds_arm.sh"))
-        .args(["--domain", &domain.to_string()])
-        .args([
-            "--start",
-            &format!("{},{},{}", start[0], start[1], start[2]),
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("scripts/dds_arm.sh");
-    let mut line = String::new();
-    BufReader::new(arm.stdout.take().expect("stdout"))
-        .read_line(&mut line)
-        .expect("READY");
-    assert_eq!(line.trim(), "READY");
-    arm
-}
-
 /// The confirmed cracks' positions in a robot's JSON report, sorted by x.
 fn confirmed(stdout: &[u8]) -> Vec<[f64; 2]> {
     let report: serde_json::Value = serde_json::from_slice(stdout).expect("one JSON object");
@@ -680,37 +672,32 @@ fn a_fused_mission_through_a_cyclone_dds_arm_confirms_the_default_scenes_four_cr
     let ros2 = dir.path().join("ros2.toml");
     std::fs::write(&ros2, format!("[dds]\ndomain_id = {domain}\n")).expect("ros2 config");
     // The arm starts 5 mm above the plate's origin, in its base frame.
-    let mut arm = dds_arm(domain, [0.4, -0.1, 0.055]);
+    let arm = DdsArm::start(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")),
+        domain,
+        &["--start", "0.4,-0.1,0.055"],
+    );
     let key = dir.path().join("link.key");
     key_file(&key, "3c");
-    binary("crackbot-robot");
-    let (cport, hport) = (free_port(), free_port());
-    let mut controller = Command::new(binary("crackbot-controller"))
-        .args(["--arm", "ros2", "--sim-finger", "--scene"])
-        .arg(&cam.scene)
-        .arg("--site")
-        .arg(&site)
-        .arg("--ros2-config")
-        .arg(&ros2)
-        .args(["--bind", &format!("127.0.0.1:{cport}")])
-        .args(["--peer", &format!("127.0.0.1:{hport}")])
-        .arg("--key")
-        .arg(&key)
-        .arg("--state-dir")
-        .arg(dir.path().join("ctrl"))
-        .args(["--seconds", "300"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("crackbot-controller --arm ros2");
-    let mut out = BufReader::new(controller.stdout.take().expect("stdout"));
-    let mut line = String::new();
-    out.read_line(&mut line).expect("the PTY line");
-    let pty = line
-        .trim()
-        .strip_prefix("PTY ")
-        .expect("PTY /dev/pts/N")
-        .to_string();
+    let utf8 = |p: &std::path::Path| p.to_str().expect("utf-8").to_string();
+    let (scene, site_arg, ros2_arg) = (utf8(&cam.scene), utf8(&site), utf8(&ros2));
+    let c = spawn_controller_with(
+        dir.path(),
+        &key,
+        &[
+            "--arm",
+            "ros2",
+            "--sim-finger",
+            "--scene",
+            &scene,
+            "--site",
+            &site_arg,
+            "--ros2-config",
+            &ros2_arg,
+        ],
+    );
+    let (mut controller, pty, cport, hport) = (c.child, c.pty, c.port, c.host_port);
+    let _stdout = c._stdout;
     let o = Command::new(binary("crackbot-robot"))
         .args(["--mode", "fused", "--speedup", "1", "--json"])
         .arg("--site")
@@ -730,9 +717,7 @@ fn a_fused_mission_through_a_cyclone_dds_arm_confirms_the_default_scenes_four_cr
         .expect("crackbot-robot");
     controller.kill().ok();
     controller.wait().ok();
-    arm.kill().ok();
-    arm.wait().ok();
-    drop(out);
+    drop(arm);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let through_dds = confirmed(&o.stdout);
     // The scene's four cracks, each confirmed once: the simulated rig's result on this scene

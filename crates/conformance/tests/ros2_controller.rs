@@ -5,10 +5,8 @@
 //! (NaN, another frame, silence, a flood, an arm that drifts off) is a fault that stops it; and
 //! guarded touches find a plate tilted and offset by drawn amounts.
 
-use std::io::{BufRead, BufReader};
 use std::net::UdpSocket;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crackbot_conformance::{run, table, Expect, Host};
@@ -18,6 +16,7 @@ use crackbot_controller::ros2::config::Ros2Config;
 use crackbot_controller::ros2::{guarded_touches, Ros2Arm};
 use crackbot_controller::{Limits, LinkServer, LinkSettings};
 use crackbot_link::{Key, Message, Mode, Security};
+use crackbot_testkit::DdsArm;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -28,35 +27,9 @@ fn domain(salt: u16) -> u16 {
     (std::process::id() % 100) as u16 * 2 + salt + 10
 }
 
-/// The Cyclone DDS arm, running until dropped.
-struct DdsArm(Child);
-
-impl DdsArm {
-    fn start(domain: u16, args: &[&str]) -> DdsArm {
-        let mut child = Command::new("bash")
-            .arg(repo().join("scripts/dds_arm.sh"))
-            .args(["--domain", &domain.to_string()])
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("starting scripts/dds_arm.sh (Python 3 with venv: bash scripts/setup.sh)");
-        let mut line = String::new();
-        BufReader::new(child.stdout.take().expect("stdout"))
-            .read_line(&mut line)
-            .expect("READY");
-        assert_eq!(line.trim(), "READY", "the DDS arm did not start");
-        DdsArm(child)
-    }
-}
-
-impl Drop for DdsArm {
-    fn drop(&mut self) {
-        let _ = Command::new("kill")
-            .args(["-TERM", &self.0.id().to_string()])
-            .status();
-        let _ = self.0.wait();
-    }
+/// The Cyclone DDS arm on `domain`, running until dropped.
+fn dds_arm(domain: u16, args: &[&str]) -> DdsArm {
+    DdsArm::start(&repo(), domain, args)
 }
 
 /// The surface frame of these tests: the plate 0.4 m out, 0.1 m to the side, 50 mm up,
@@ -122,7 +95,7 @@ fn rig(domain: u16) -> Rig {
 #[test]
 fn the_conformance_suite_passes_through_the_ros2_arm() {
     let d = domain(0);
-    let _arm = DdsArm::start(d, &["--start", &start_arg()]);
+    let _arm = dds_arm(d, &["--start", &start_arg()]);
     let mut r = rig(d);
     let results = run(&mut r.host, &Expect::default(), |c| {
         eprintln!("{}: {} ({})", c.name, c.passed, c.detail);
@@ -161,7 +134,7 @@ fn targets_stream_at_the_rate_and_end_within_a_period_of_a_stop() {
     let d = domain(1);
     let dir = tempfile::tempdir().expect("tempdir");
     let record = dir.path().join("targets.txt");
-    let _arm = DdsArm::start(
+    let _arm = dds_arm(
         d,
         &[
             "--start",
@@ -223,7 +196,7 @@ fn a_broken_pose_stream_is_a_fault_that_ends_the_target_stream() {
         let d = domain(40 + 2 * k as u16) % 230;
         let dir = tempfile::tempdir().expect("tempdir");
         let record = dir.path().join("targets.txt");
-        let arm = DdsArm::start(
+        let arm = dds_arm(
             d,
             &[
                 "--start",
@@ -277,7 +250,7 @@ fn guarded_touches_find_a_tilted_offset_plate_within_a_fifth_of_a_millimetre_and
         point[0], point[1], point[2], normal.x, normal.y, normal.z
     );
     let d = domain(90) % 230;
-    let _arm = DdsArm::start(
+    let _arm = dds_arm(
         d,
         &[
             "--start",

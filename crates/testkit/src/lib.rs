@@ -115,3 +115,43 @@ mod tests {
         assert!(std::panic::catch_unwind(|| assert_bits_equal(&a, &b, "signed zero")).is_err());
     }
 }
+
+/// A ROS 2 arm played by Eclipse Cyclone DDS's Python binding (`scripts/dds_arm.sh`, an
+/// independent DDS), running until dropped.
+#[derive(Debug)]
+pub struct DdsArm(std::process::Child);
+
+impl DdsArm {
+    /// Starts `scripts/dds_arm.sh` of the workspace at `root` on DDS domain `domain` with `args`,
+    /// once it has said `READY`.
+    ///
+    /// # Panics
+    /// When the script cannot start or does not say `READY` (run `bash scripts/setup.sh`).
+    pub fn start(root: &std::path::Path, domain: u16, args: &[&str]) -> DdsArm {
+        use std::io::BufRead;
+        let mut child = std::process::Command::new("bash")
+            .arg(root.join("scripts/dds_arm.sh"))
+            .args(["--domain", &domain.to_string()])
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::inherit())
+            .spawn()
+            .expect("starting scripts/dds_arm.sh (Python 3 with venv: bash scripts/setup.sh)");
+        let mut line = String::new();
+        std::io::BufReader::new(child.stdout.take().expect("stdout"))
+            .read_line(&mut line)
+            .expect("READY");
+        assert_eq!(line.trim(), "READY", "the DDS arm did not start");
+        DdsArm(child)
+    }
+}
+
+impl Drop for DdsArm {
+    fn drop(&mut self) {
+        // SIGTERM: the arm prints its summary (targets received, rate, p99 gap) and exits.
+        let _ = std::process::Command::new("kill")
+            .args(["-TERM", &self.0.id().to_string()])
+            .status();
+        let _ = self.0.wait();
+    }
+}
