@@ -4,6 +4,8 @@
 //! expected frame); a stream gone quiet, a pose drifting from its target, a flood of reports or
 //! a contact force over the limit are faults ([`ArmFault`]) that stop the arm.
 
+use crate::motion::path::distance;
+
 /// The box and limits no published target may leave.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Envelope {
@@ -167,7 +169,7 @@ impl TargetGuard {
             let dt = t - t0;
             dt_kept = dt;
             if dt > 0.0 {
-                let step = (0..3).map(|k| (p[k] - p0[k]).powi(2)).sum::<f64>().sqrt();
+                let step = distance(p, p0);
                 v = step / dt;
                 let limit = e.max_speed_mm_s * SPEED_SLACK;
                 if v > limit {
@@ -216,10 +218,7 @@ pub fn check_report(frame: &str, want_frame: &str, p_mm: [f64; 3]) -> Result<(),
 
 /// A fault when the arm's pose is further than `limit_mm` from its target.
 pub fn divergence(measured: [f64; 3], target: [f64; 3], limit_mm: f64) -> Option<ArmFault> {
-    let mm = (0..3)
-        .map(|k| (measured[k] - target[k]).powi(2))
-        .sum::<f64>()
-        .sqrt();
+    let mm = distance(measured, target);
     (mm > limit_mm).then_some(ArmFault::Diverged { mm, limit_mm })
 }
 

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use super::config::Ros2Config;
 use super::dds::{endpoints, publish_target, take_force, take_poses, Endpoints, Ros2Error};
 use crate::motion::frame::SurfaceFrame;
-use crate::motion::path::{Leg, LegKind, Path};
+use crate::motion::path::{distance, Leg, LegKind, Path};
 
 /// The arm held back this far behind its target along the approach is a contact, mm.
 const CONTACT_LAG_MM: f64 = 1.0;
@@ -117,10 +117,6 @@ impl Link<'_> {
         }
         Ok(self.pose.unwrap_or(at))
     }
-}
-
-fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
 }
 
 fn travel(config: &Ros2Config, from: [f64; 3], to: [f64; 3]) -> Path {
