@@ -53,6 +53,8 @@
 //! ```
 #![no_std]
 
+pub mod command;
+
 use crackbot_protocol::{Channel, Flags, Frame, WIRE_LEN};
 use embedded_hal::spi::SpiDevice;
 use heapless::Deque;
@@ -207,6 +209,22 @@ impl<A: SampleAdc, U: embedded_hal_nb::serial::Write<u8>, const TX: usize> Sampl
         }
         self.overrun_pending = false;
         self.stats.frames_queued = self.stats.frames_queued.wrapping_add(1);
+    }
+
+    /// Queues a frame built elsewhere (the board's encode command, [`command`]) whole, or not at
+    /// all when the ring buffer has no room for its [`WIRE_LEN`] bytes: returns whether it was
+    /// queued. Touches neither the sequence numbers, the counters nor the overrun flag of the
+    /// sampled frames. Then calls [`pump`](Self::pump).
+    pub fn send_frame(&mut self, frame: &Frame) -> bool {
+        let room = self.tx.capacity().saturating_sub(self.tx.len()) >= WIRE_LEN;
+        if room {
+            for byte in frame.to_wire() {
+                // Cannot fail: room for all WIRE_LEN bytes was checked above.
+                let _ = self.tx.push_back(byte);
+            }
+        }
+        self.pump();
+        room
     }
 
     /// Moves queued bytes to the UART until it answers `WouldBlock` or the queue is empty. On any

@@ -165,9 +165,10 @@ impl Decoder {
             return Err(DecodeError::Truncated { len: chunk.len() });
         }
         let mut payload = [0u8; PAYLOAD_LEN];
+        // `chunk` holds no delimiter and is exactly COBS_LEN long (checked above), so the whole
+        // chunk is parsed; it must decode to exactly one payload.
         match cobs::decode(chunk, &mut payload) {
-            Ok(report)
-                if report.frame_size() == PAYLOAD_LEN && report.parsed_size() == COBS_LEN => {}
+            Ok(PAYLOAD_LEN) => {}
             _ => return Err(DecodeError::Cobs),
         }
         Frame::from_payload(&payload)

@@ -59,9 +59,14 @@ pub const SAMPLE_RATE_HZ: u32 = 400;
 /// Period between frames in microseconds at [`SAMPLE_RATE_HZ`].
 pub const SAMPLE_PERIOD_US: u32 = 1_000_000 / SAMPLE_RATE_HZ;
 
-/// CRC-32C (iSCSI / Castagnoli), slice-by-16 tables.
+/// CRC-32C (iSCSI / Castagnoli), slice-by-16 tables (16 KiB).
+#[cfg(not(target_pointer_width = "16"))]
 const CRC32C: crc::Crc<u32, crc::Table<16>> =
     crc::Crc::<u32, crc::Table<16>>::new(&crc::CRC_32_ISCSI);
+/// CRC-32C with one 1 KiB table on 16-bit microcontrollers (the ATmega2560 has 8 KiB of RAM, and
+/// AVR keeps constant tables in RAM).
+#[cfg(target_pointer_width = "16")]
+const CRC32C: crc::Crc<u32, crc::Table<1>> = crc::Crc::<u32, crc::Table<1>>::new(&crc::CRC_32_ISCSI);
 
 /// CRC-32C of `bytes` (check value of `b"123456789"` is `0xE306_9283`).
 pub fn crc32c(bytes: &[u8]) -> u32 {
