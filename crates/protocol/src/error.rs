@@ -71,4 +71,7 @@ impl fmt::Display for DecodeError {
     }
 }
 
+// `core::error::Error` is stable since Rust 1.81; the AVR board image is compiled by rustc 1.63
+// (firmware/mega2560), where it does not exist yet.
+#[cfg(not(target_arch = "avr"))]
 impl core::error::Error for DecodeError {}
