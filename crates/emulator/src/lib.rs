@@ -26,7 +26,7 @@ use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use crackbot_firmware::{SampleAdc, Sampler, ADC_MAX};
+use crackbot_firmware::{SampleAdc, Sampler};
 use crackbot_protocol::{Decoder, WIRE_LEN};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -35,9 +35,10 @@ use serde::Serialize;
 mod pty;
 mod signal;
 mod sim_source;
+pub mod trace;
 
 pub use pty::{Pty, PtyEmulator};
-pub use signal::{RecordingSource, SignalSource, SyntheticSlide};
+pub use signal::{to_counts, RecordingSource, SignalSource, SyntheticSlide};
 pub use sim_source::{SimSource, CRACK_LEAD_IN_MM, PAPER_SPEED_MM_S, PAPER_STROKE_MM};
 
 /// Bytes of the firmware's UART ring buffer in the emulator (as on the board: 8 frames).
@@ -309,14 +310,7 @@ impl<S: SignalSource> SampleAdc for SourceAdc<S> {
     fn read_all(&mut self) -> Result<[u16; 4], Self::Error> {
         let t = self.tick as f64 / self.rate_hz;
         self.tick += 1;
-        let v = self.source.sample(t);
-        Ok(v.map(|x| {
-            if x.is_finite() {
-                x.round().clamp(0.0, f64::from(ADC_MAX)) as u16
-            } else {
-                0
-            }
-        }))
+        Ok(signal::to_counts(self.source.sample(t)))
     }
 }
 

@@ -30,6 +30,7 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, ValueEnum};
 use crackbot_emulator::{
+    trace, PAPER_SPEED_MM_S, PAPER_STROKE_MM,
     run, Corruption, EmulatorConfig, Pty, RecordingSource, SimSource, SyntheticSlide,
 };
 use crackbot_protocol::SAMPLE_RATE_HZ;
@@ -69,8 +70,13 @@ struct Args {
     #[arg(long, conflicts_with = "port")]
     pty: bool,
     /// Write to this existing serial device instead (e.g. a USB-serial adapter or a socat PTY).
-    #[arg(long, required_unless_present = "pty")]
+    #[arg(long, required_unless_present_any = ["pty", "write_trace"])]
     port: Option<String>,
+    /// Instead of streaming: write the ADC counts the source gives to this CSV file, one 1/400 s
+    /// sample a line, and exit: a trace for the board emulator (`firmware/emulate.sh --trace`).
+    /// Length: --frames or --duration; by default, with the sim source, one slide stroke.
+    #[arg(long, value_name = "FILE.csv", conflicts_with_all = ["pty", "port"])]
+    write_trace: Option<PathBuf>,
     /// UART baud rate (8N1). Frames need 92000 baud at 400 Hz; lower rates make the firmware drop
     /// frames and set the overrun flag, exactly as on the board.
     #[arg(long, default_value_t = 115_200)]
@@ -161,6 +167,9 @@ fn main() -> Result<()> {
         }
         _ => None,
     };
+    if let Some(path) = &args.write_trace {
+        return write_trace_file(&args, source, sim, ticks, path);
+    }
     let config = EmulatorConfig {
         rate_hz: args.rate,
         baud: args.baud,
@@ -279,15 +288,67 @@ fn source_kind(args: &Args) -> Result<Source> {
     Ok(source)
 }
 
+/// `--write-trace`: the source's counts, `ticks` samples (one stroke of the sim slide by
+/// default), to `path`.
+fn write_trace_file(
+    args: &Args,
+    source: Source,
+    sim: Option<SimSource>,
+    ticks: Option<u64>,
+    path: &std::path::Path,
+) -> Result<()> {
+    let samples = match (ticks, source) {
+        (Some(n), _) => n,
+        (None, Source::Sim) => match &args.scene {
+            Some(scene) => trace::stroke_samples(&load_scene(scene)?),
+            None => (PAPER_STROKE_MM / PAPER_SPEED_MM_S * f64::from(SAMPLE_RATE_HZ)).ceil() as u64,
+        },
+        (None, _) => bail!("--write-trace needs --frames or --duration with this source"),
+    };
+    let file = std::fs::File::create(path)
+        .with_context(|| format!("creating the trace {}", path.display()))?;
+    let out = std::io::BufWriter::new(file);
+    let written = match source {
+        Source::Sim => {
+            let mut sim = sim.context("the sim source was not set up")?;
+            let written = trace::write_trace(&mut sim, samples, out);
+            if let Some(e) = sim.error() {
+                bail!("the simulation failed after {} samples: {e}", sim.samples());
+            }
+            written
+        }
+        Source::Recording => {
+            let replay = args.replay.as_deref().context("--source recording needs --replay")?;
+            let rec = crackbot_recording::read_csv(replay)?;
+            let source = RecordingSource::new(rec)
+                .with_context(|| format!("recording {} has no rows", replay.display()))?;
+            trace::write_trace(source, samples, out)
+        }
+        Source::Synthetic => {
+            let mut source = SyntheticSlide::new(args.seed);
+            source.crack_width_mm = args.crack_width_mm;
+            trace::write_trace(source, samples, out)
+        }
+    };
+    written.with_context(|| format!("writing the trace {}", path.display()))?;
+    eprintln!("wrote {samples} samples to {}", path.display());
+    Ok(())
+}
+
+/// A scene file, or the built-in default scene for `builtin`.
+fn load_scene(path: &std::path::Path) -> Result<Scene> {
+    if path.as_os_str() == "builtin" && !path.exists() {
+        Ok(Scene::builtin_default())
+    } else {
+        Ok(Scene::load(path)?)
+    }
+}
+
 /// Sets up the simulator for `--source sim`.
 fn sim_source(args: &Args) -> Result<SimSource> {
     match &args.scene {
         Some(path) => {
-            let scene = if path.as_os_str() == "builtin" && !path.exists() {
-                Scene::builtin_default()
-            } else {
-                Scene::load(path)?
-            };
+            let scene = load_scene(path)?;
             SimSource::across_first_crack(&scene, args.seed).with_context(|| {
                 format!(
                     "setting up the simulator across the first crack of {}",

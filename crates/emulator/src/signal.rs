@@ -6,6 +6,18 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
+/// What the 10-bit ADC makes of four channel values: rounded, clamped to 0..=1023 (values beyond
+/// the rails are what the saturation flags report); a value that is not finite reads 0.
+pub fn to_counts(values: [f64; 4]) -> [u16; 4] {
+    values.map(|x| {
+        if x.is_finite() {
+            x.round().clamp(0.0, f64::from(crackbot_firmware::ADC_MAX)) as u16
+        } else {
+            0
+        }
+    })
+}
+
 /// Something that gives the four channel voltages, in ADC counts (D1, D2, D3, P), at time `t`
 /// seconds after the start. Values outside 0..=1023 are clamped by the ADC (and flagged).
 pub trait SignalSource {
