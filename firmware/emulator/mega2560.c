@@ -20,7 +20,8 @@
  * one JSON object to standard error (and to FILE).
  *
  * usage: crackbot-mega2560-emulator [--no-flow-control] [--stats FILE] TRACE.csv FIRMWARE.elf
- * The pseudo-terminal's path is the first line on standard output.
+ * The pseudo-terminal's path is the first line on standard output; the board powers up when the
+ * terminal is first opened.
  */
 #define _GNU_SOURCE
 #include <errno.h>
@@ -391,6 +392,14 @@ int main(int argc, char **argv) {
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
     signal(SIGPIPE, SIG_IGN);
+
+    /* The board powers up when the port is first opened, so that no frames pile up in the
+     * terminal before a reader is there (its first frames would arrive in a burst). */
+    for (;;) {
+        struct pollfd pfd = {.fd = master_fd, .events = POLLIN};
+        if (want_stop) return 0;
+        if (poll(&pfd, 1, 5) >= 0 && !(pfd.revents & POLLHUP)) break;
+    }
 
     const uint64_t start = now_ns();
     const uint64_t cycle0 = avr->cycle;
