@@ -94,6 +94,7 @@ pub fn samples_of(recording: &Recording) -> Vec<Sample> {
                 raw: row.channels().map(to_count),
                 flags,
                 missing_before: 0,
+                restarted: false,
             }
         })
         .collect()

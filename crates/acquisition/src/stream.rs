@@ -26,8 +26,11 @@ pub struct Sample {
     pub raw: [u16; 4],
     /// Status flags (saturation per channel, overrun).
     pub flags: Flags,
-    /// Frames missing immediately before this one (sequence jump), 0 when contiguous.
+    /// Frames missing immediately before this one (sequence jump), 0 when contiguous and after
+    /// a restart (how many went unsent while the device rebooted is unknown).
     pub missing_before: u32,
+    /// The device restarted just before this frame ([`SequenceTracker::observe`]).
+    pub restarted: bool,
 }
 
 /// Counters of a link: the decoder's counters plus what the host learns from sequence numbers.
@@ -47,6 +50,8 @@ pub struct LinkStats {
     pub overrun_flags: u64,
     /// Frames with at least one saturated channel.
     pub saturated_frames: u64,
+    /// Restarts of the device (reset, watchdog, power): its clock went back.
+    pub restarts: u64,
 }
 
 impl LinkStats {
@@ -79,9 +84,20 @@ impl SequenceTracker {
     /// A gap is the number of sequence numbers skipped. Sequence numbers wrap every 65 536
     /// frames (164 s at 400 Hz); when the device clock says more time passed than the sequence
     /// jump explains, the clock wins, so an outage longer than a wrap is still counted right.
+    ///
+    /// A device clock that goes back (by the wrapping difference read as signed: back by less
+    /// than 2³¹ µs, 36 min) is a restart of the device, which starts again at sequence 0 and
+    /// time 0: the sample is marked [`Sample::restarted`], no frames are counted missing, and
+    /// the unwrapped device time goes on from where it was, one period later.
     pub fn observe(&mut self, frame: &Frame, host_time: Duration) -> Sample {
+        let mut restarted = false;
         let missing_before = match self.last {
             None => 0,
+            Some((_, ts)) if (frame.timestamp_us.wrapping_sub(ts) as i32) < 0 => {
+                restarted = true;
+                self.device_time_us += u64::from(SAMPLE_PERIOD_US) + u64::from(frame.timestamp_us);
+                0
+            }
             Some((seq, ts)) => {
                 let dt = u64::from(frame.timestamp_us.wrapping_sub(ts));
                 self.device_time_us += dt;
@@ -101,6 +117,7 @@ impl SequenceTracker {
             raw: frame.channels,
             flags: frame.flags,
             missing_before,
+            restarted,
         }
     }
 }
@@ -305,6 +322,7 @@ impl Reader {
                 link.gaps += u64::from(s.missing_before > 0);
                 link.missing_frames += u64::from(s.missing_before);
                 link.overrun_flags += u64::from(s.flags.overrun());
+                link.restarts += u64::from(s.restarted);
                 link.saturated_frames += u64::from(s.flags.any_saturated());
             }
             self.publish(&mut link, decoder.stats());
@@ -353,6 +371,28 @@ mod tests {
             s.iter().map(|s| s.device_time_us).collect::<Vec<_>>(),
             vec![0, 2500, 5000, 7500, 10000]
         );
+    }
+
+    #[test]
+    fn a_clock_that_goes_back_is_a_restart_not_a_gap() {
+        let mut t = SequenceTracker::new();
+        t.observe(&frame(799, 799 * 2500), Duration::ZERO);
+        let s = t.observe(&frame(0, 0), Duration::ZERO);
+        assert!(s.restarted);
+        assert_eq!(s.missing_before, 0);
+        assert_eq!(s.device_time_us, 2500, "one period after the last frame");
+        // The first frame after the reset lost too: still a restart, still monotonic.
+        let mut t = SequenceTracker::new();
+        t.observe(&frame(799, 799 * 2500), Duration::ZERO);
+        let s = t.observe(&frame(1, 2500), Duration::ZERO);
+        assert!(s.restarted && s.missing_before == 0);
+        assert_eq!(s.device_time_us, 2500 + 2500);
+        let s = t.observe(&frame(2, 5000), Duration::ZERO);
+        assert!(!s.restarted && s.missing_before == 0);
+        // A wrap of the device clock is not a restart.
+        let mut t = SequenceTracker::new();
+        t.observe(&frame(10, u32::MAX - 1000), Duration::ZERO);
+        assert!(!t.observe(&frame(11, 1500), Duration::ZERO).restarted);
     }
 
     #[test]

@@ -154,6 +154,7 @@ mod tests {
             raw,
             flags: Flags::empty(),
             missing_before: 0,
+            restarted: false,
         }
     }
 

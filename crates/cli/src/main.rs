@@ -249,9 +249,9 @@ fn print_summary_text(title: &str, r: &StreamReport) {
     }
     let l = &r.link;
     println!(
-        "  link: {} bytes, {} frames, {} CRC errors, {} resyncs, {} gaps ({} frames missing), {} overrun flags, delivery {:.4}",
+        "  link: {} bytes, {} frames, {} CRC errors, {} resyncs, {} gaps ({} frames missing), {} overrun flags, {} device restarts, delivery {:.4}",
         l.decoder.bytes, l.decoder.frames, l.decoder.crc_errors, l.resyncs, l.gaps, l.missing_frames, l.overrun_flags,
-        r.delivery_ratio
+        l.restarts, r.delivery_ratio
     );
 }
 
