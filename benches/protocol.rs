@@ -37,20 +37,26 @@ fn stream() -> Vec<u8> {
 fn baseline_decode(bytes: &[u8]) -> usize {
     let mut frames = 0;
     let mut dest = [0u8; 64];
-    let mut decoder = cobs::CobsDecoder::new(&mut dest);
     let mut payload = [0u8; PAYLOAD_LEN];
-    let mut got = None;
-    for &b in bytes {
-        match decoder.feed(b) {
-            Ok(Some(n)) => got = Some(n),
-            Ok(None) => continue,
-            Err(_) => {}
-        }
-        if let Some(n) = got.take() {
-            if n == PAYLOAD_LEN {
-                payload.copy_from_slice(&decoder.dest()[..PAYLOAD_LEN]);
-                frames += usize::from(Frame::from_payload(&payload).is_ok());
+    let mut rest = bytes;
+    while !rest.is_empty() {
+        // cobs 0.2's decoder borrows its buffer: one decoder per frame, read after it ends.
+        let mut decoder = cobs::CobsDecoder::new(&mut dest);
+        let mut got = None;
+        while let Some((&b, tail)) = rest.split_first() {
+            rest = tail;
+            match decoder.feed(b) {
+                Ok(Some(n)) => {
+                    got = Some(n);
+                    break;
+                }
+                Ok(None) => {}
+                Err(_) => break,
             }
+        }
+        if got == Some(PAYLOAD_LEN) {
+            payload.copy_from_slice(&dest[..PAYLOAD_LEN]);
+            frames += usize::from(Frame::from_payload(&payload).is_ok());
         }
     }
     frames

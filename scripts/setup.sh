@@ -24,6 +24,10 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq "${missing[@]}"
 fi
 
+# The board image's cross toolchain (Debian's rustc 1.63 for AVR, avr-gcc) and the emulator of its
+# chip (simavr): firmware/toolchain.sh, which firmware/image.sh and firmware/emulate.sh also use.
+source "$crackbot_root/firmware/toolchain.sh"
+
 if ! need_cmd cargo; then
   echo "crackbot setup: Rust is not installed. Install it with rustup (https://rustup.rs), stable toolchain." >&2
   exit 1

@@ -5,6 +5,9 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 python3 crates/protocol/golden/generate.py --check
 python3 crates/link/golden/generate.py --check
+# The board image for the Arduino Mega 2560 (Debian's rustc 1.63, crate by crate); the tests run it
+# on the emulated chip (tests/board_emulator.rs). Its path goes to the log.
+bash firmware/image.sh
 # The robot's fleet telemetry and Foxglove live-view features and the controller's ROS 2 arm are on for the whole
 # run: the end-to-end tests build the binaries with them (tests/support, FEATURES), and one feature set means
 # everything compiles once.

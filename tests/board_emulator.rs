@@ -36,7 +36,10 @@ fn image() -> PathBuf {
         assert!(out.status.success(), "firmware/image.sh failed");
         let text = String::from_utf8(out.stdout).expect("UTF-8 path");
         let elf = PathBuf::from(text.lines().last().expect("a last line").trim());
-        assert!(elf.is_file(), "image.sh printed {elf:?}, which is not a file");
+        assert!(
+            elf.is_file(),
+            "image.sh printed {elf:?}, which is not a file"
+        );
         elf
     })
     .clone()
@@ -48,7 +51,10 @@ fn read_trace(path: &Path) -> Vec<[u16; 4]> {
     text.lines()
         .skip(1)
         .map(|line| {
-            let v: Vec<u16> = line.split(',').map(|x| x.parse().expect("a count")).collect();
+            let v: Vec<u16> = line
+                .split(',')
+                .map(|x| x.parse().expect("a count"))
+                .collect();
             [v[0], v[1], v[2], v[3]]
         })
         .collect()
@@ -199,9 +205,7 @@ fn collect(stream: &mut SensorStream, seconds: f64) -> Vec<Sample> {
 }
 
 fn u(v: &serde_json::Value, key: &str) -> u64 {
-    v[key]
-        .as_u64()
-        .unwrap_or_else(|| panic!("no {key} in {v}"))
+    v[key].as_u64().unwrap_or_else(|| panic!("no {key} in {v}"))
 }
 
 #[test]
@@ -227,7 +231,15 @@ fn the_board_image_streams_a_minute_at_400_hz_every_sample_as_fed() {
     let board = Board::start(&trace_path);
     let out = dir.path().join("minute.csv");
     let record = Command::new(binary("crackbot"))
-        .args(["record", "--port", &board.pty, "--seconds", "61", "--json", "--out"])
+        .args([
+            "record",
+            "--port",
+            &board.pty,
+            "--seconds",
+            "61",
+            "--json",
+            "--out",
+        ])
         .arg(&out)
         .output()
         .expect("running crackbot record");
@@ -245,11 +257,21 @@ fn the_board_image_streams_a_minute_at_400_hz_every_sample_as_fed() {
     let host_rate = summary["host_rate_hz"].as_f64().expect("host rate");
     let device_rate = summary["device_rate_hz"].as_f64().expect("device rate");
     assert!((host_rate - 400.0).abs() <= 0.4, "host sees {host_rate} Hz");
-    assert!((device_rate - 400.0).abs() <= 0.4, "device stamps {device_rate} Hz");
+    assert!(
+        (device_rate - 400.0).abs() <= 0.4,
+        "device stamps {device_rate} Hz"
+    );
     let samples = u(&summary, "samples");
     assert!(samples >= 24_000, "only {samples} samples in 61 s");
     let link = &summary["link"];
-    for key in ["crc_errors", "cobs_errors", "truncated", "overlong", "version_errors", "gaps"] {
+    for key in [
+        "crc_errors",
+        "cobs_errors",
+        "truncated",
+        "overlong",
+        "version_errors",
+        "gaps",
+    ] {
         assert_eq!(u(link, key), 0, "{key} in {link}");
     }
     assert_eq!(u(link, "restarts"), 0);
@@ -307,7 +329,8 @@ fn the_board_image_encodes_the_golden_frames_bit_for_bit() {
             ch[2],
             ch[3]
         );
-        port.write_all(line.as_bytes()).expect("sending the encode command");
+        port.write_all(line.as_bytes())
+            .expect("sending the encode command");
         // One command at a time: the answer shares the line with the 400 Hz stream.
         read_for(&mut port, 0.03, &mut bytes);
     }
@@ -350,10 +373,22 @@ fn a_host_that_stops_reading_gets_whole_frames_and_the_overrun_flag() {
         .windows(2)
         .filter(|w| w[1].seq != w[0].seq.wrapping_add(1))
         .collect();
-    assert!(!gaps.is_empty(), "no frame was dropped in 6 s without reading");
+    assert!(
+        !gaps.is_empty(),
+        "no frame was dropped in 6 s without reading"
+    );
     for w in &gaps {
-        assert!(w[1].seq > w[0].seq, "sequence went back: {} → {}", w[0].seq, w[1].seq);
-        assert!(w[1].flags.overrun(), "frame {} after a gap lacks the overrun flag", w[1].seq);
+        assert!(
+            w[1].seq > w[0].seq,
+            "sequence went back: {} → {}",
+            w[0].seq,
+            w[1].seq
+        );
+        assert!(
+            w[1].flags.overrun(),
+            "frame {} after a gap lacks the overrun flag",
+            w[1].seq
+        );
     }
     let flagged = frames.iter().filter(|f| f.flags.overrun()).count();
     assert_eq!(flagged, gaps.len(), "overrun flags only right after gaps");
@@ -378,11 +413,24 @@ fn a_port_closed_and_reopened_resumes_the_stream() {
     let stats = board.stop();
     eprintln!("after reopening: {link:?}\nemulator: {stats}");
     let last = before.last().expect("samples before closing").seq;
-    assert!(after.len() > 600, "only {} samples after reopening", after.len());
-    assert!(after.iter().all(|s| s.seq > last), "sequence went back after reopening");
-    assert!(rejected(&link.decoder) <= 1, "more than a cut frame: {link:?}");
+    assert!(
+        after.len() > 600,
+        "only {} samples after reopening",
+        after.len()
+    );
+    assert!(
+        after.iter().all(|s| s.seq > last),
+        "sequence went back after reopening"
+    );
+    assert!(
+        rejected(&link.decoder) <= 1,
+        "more than a cut frame: {link:?}"
+    );
     assert_eq!(link.restarts, 0);
-    assert!(link.overrun_flags >= 1, "the frames lost while closed are not flagged");
+    assert!(
+        link.overrun_flags >= 1,
+        "the frames lost while closed are not flagged"
+    );
     assert_as_fed(before.iter().chain(&after).map(|s| (s.seq, s.raw)), &trace);
 }
 
@@ -402,12 +450,29 @@ fn a_reset_mid_stream_restarts_the_sequence_and_the_host_sees_it() {
     assert_eq!(u(&stats, "resets"), 1);
     assert_eq!(link.restarts, 1, "{link:?}");
     assert_eq!(link.gaps, 0, "a restart counted as a gap: {link:?}");
-    assert!(rejected(&link.decoder) <= 1, "more than the frame cut by the reset: {link:?}");
-    let at = samples.iter().position(|s| s.restarted).expect("a restarted sample");
-    assert!(samples[at].seq <= 1, "the first frame after the reset is {}", samples[at].seq);
-    assert!(at > 300 && samples.len() - at > 400, "{at} of {}", samples.len());
+    assert!(
+        rejected(&link.decoder) <= 1,
+        "more than the frame cut by the reset: {link:?}"
+    );
+    let at = samples
+        .iter()
+        .position(|s| s.restarted)
+        .expect("a restarted sample");
+    assert!(
+        samples[at].seq <= 1,
+        "the first frame after the reset is {}",
+        samples[at].seq
+    );
+    assert!(
+        at > 300 && samples.len() - at > 400,
+        "{at} of {}",
+        samples.len()
+    );
     let times: Vec<u64> = samples.iter().map(|s| s.device_time_us).collect();
-    assert!(times.windows(2).all(|w| w[1] > w[0]), "device time not monotonic");
+    assert!(
+        times.windows(2).all(|w| w[1] > w[0]),
+        "device time not monotonic"
+    );
     assert_as_fed(samples.iter().map(|s| (s.seq, s.raw)), &trace);
 }
 

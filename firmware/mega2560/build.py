@@ -142,8 +142,8 @@ def compile_package(pkg, features, deps, out, root, built):
         args += ["--cfg", cfg]
     for feat in UNSTABLE_FEATURES.get(name, []):
         args += [f"-Zcrate-attr=feature({feat})"]
-    # Others' crates: their lints are theirs. Ours: warnings shown (rustc 1.63's lint set).
-    args += ["--cap-lints", "allow" if pkg["source"] else "warn"]
+    # Others' crates: their lints are theirs. Ours: no warnings (rustc 1.63's lint set).
+    args += ["--cap-lints", "allow"] if pkg["source"] else ["-D", "warnings"]
     for extern, dep_id in deps:
         args += ["--extern", f"{extern}={built[dep_id]}"]
     if is_bin:
@@ -173,8 +173,9 @@ def main():
     for pkg, features, deps in build_order(meta):
         elf = compile_package(pkg, features, deps, out, root, built)
     hex_file = elf.with_suffix(".hex")
-    run(["avr-objcopy", "-O", "ihex", "-R", ".eeprom", str(elf), str(hex_file)])
-    sys.stderr.write(run(["avr-size", "--format=avr", "--mcu=atmega2560", str(elf)]))
+    if not hex_file.exists() or hex_file.stat().st_mtime < elf.stat().st_mtime:
+        run(["avr-objcopy", "-O", "ihex", "-R", ".eeprom", str(elf), str(hex_file)])
+        sys.stderr.write(run(["avr-size", "--format=avr", "--mcu=atmega2560", str(elf)]))
     print(elf)
 
 

@@ -30,8 +30,8 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, ValueEnum};
 use crackbot_emulator::{
-    trace, PAPER_SPEED_MM_S, PAPER_STROKE_MM,
-    run, Corruption, EmulatorConfig, Pty, RecordingSource, SimSource, SyntheticSlide,
+    run, trace, Corruption, EmulatorConfig, Pty, RecordingSource, SimSource, SyntheticSlide,
+    PAPER_SPEED_MM_S, PAPER_STROKE_MM,
 };
 use crackbot_protocol::SAMPLE_RATE_HZ;
 use crackbot_sim::Scene;
@@ -318,7 +318,10 @@ fn write_trace_file(
             written
         }
         Source::Recording => {
-            let replay = args.replay.as_deref().context("--source recording needs --replay")?;
+            let replay = args
+                .replay
+                .as_deref()
+                .context("--source recording needs --replay")?;
             let rec = crackbot_recording::read_csv(replay)?;
             let source = RecordingSource::new(rec)
                 .with_context(|| format!("recording {} has no rows", replay.display()))?;

@@ -66,7 +66,8 @@ const CRC32C: crc::Crc<u32, crc::Table<16>> =
 /// CRC-32C with one 1 KiB table on 16-bit microcontrollers (the ATmega2560 has 8 KiB of RAM, and
 /// AVR keeps constant tables in RAM).
 #[cfg(target_pointer_width = "16")]
-const CRC32C: crc::Crc<u32, crc::Table<1>> = crc::Crc::<u32, crc::Table<1>>::new(&crc::CRC_32_ISCSI);
+const CRC32C: crc::Crc<u32, crc::Table<1>> =
+    crc::Crc::<u32, crc::Table<1>>::new(&crc::CRC_32_ISCSI);
 
 /// CRC-32C of `bytes` (check value of `b"123456789"` is `0xE306_9283`).
 pub fn crc32c(bytes: &[u8]) -> u32 {
