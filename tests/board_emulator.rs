@@ -390,6 +390,16 @@ fn a_host_that_stops_reading_gets_whole_frames_and_the_overrun_flag() {
             w[1].seq
         );
     }
+    let missing: u32 = gaps
+        .iter()
+        .map(|w| u32::from(w[1].seq.wrapping_sub(w[0].seq)) - 1)
+        .sum();
+    eprintln!(
+        "not reading for 6 s: {} frames decoded, {} gaps, {missing} frames dropped whole, \
+         {decoder:?}\nemulator: {stats}",
+        frames.len(),
+        gaps.len()
+    );
     let flagged = frames.iter().filter(|f| f.flags.overrun()).count();
     assert_eq!(flagged, gaps.len(), "overrun flags only right after gaps");
     assert_as_fed(frames.iter().map(|f| (f.seq, f.channels)), &trace);
@@ -447,6 +457,7 @@ fn a_reset_mid_stream_restarts_the_sequence_and_the_host_sees_it() {
     let link = stream.stats();
     drop(stream);
     let stats = board.stop();
+    eprintln!("reset mid-stream: {link:?}\nemulator: {stats}");
     assert_eq!(u(&stats, "resets"), 1);
     assert_eq!(link.restarts, 1, "{link:?}");
     assert_eq!(link.gaps, 0, "a restart counted as a gap: {link:?}");
@@ -488,6 +499,7 @@ fn a_corrupted_byte_costs_one_frame_and_the_decoder_resynchronises() {
     let link = stream.stats();
     drop(stream);
     let stats = board.stop();
+    eprintln!("one corrupted byte: {link:?}\nemulator: {stats}");
     assert_eq!(u(&stats, "corrupted"), 1);
     assert_eq!(rejected(&link.decoder), 1, "{link:?}");
     assert_eq!((link.gaps, link.missing_frames), (1, 1), "{link:?}");
