@@ -506,3 +506,32 @@ fn a_corrupted_byte_costs_one_frame_and_the_decoder_resynchronises() {
     assert_eq!(link.overrun_flags, 0);
     assert_as_fed(samples.iter().map(|s| (s.seq, s.raw)), &trace);
 }
+
+/// A trace the ADC cannot have produced is refused before the board starts, naming the line.
+#[test]
+fn a_bad_trace_is_refused_with_its_line() {
+    let elf = image();
+    let dir = tempfile::tempdir().expect("temp dir");
+    for (text, expected) in [
+        (
+            "d1,d2,d3,p\n1,2,3,4\n1,2,3,1024\n",
+            "line 3: count 1024 of channel 4 is above",
+        ),
+        ("d1,d2,d3,p\n1,2,3\n", "line 2: expected four raw counts"),
+        ("d1,d2,d3,p\n", "holds no samples"),
+    ] {
+        let path = dir.path().join("bad.csv");
+        std::fs::write(&path, text).expect("writing the trace");
+        let out = Command::new("bash")
+            .arg(Path::new(ROOT).join("firmware/emulate.sh"))
+            .arg("--trace")
+            .arg(&path)
+            .arg(&elf)
+            .output()
+            .expect("running emulate.sh");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{text:?}: {stderr}");
+        assert!(out.stdout.is_empty(), "a port was offered for {text:?}");
+        assert!(stderr.contains(expected), "{text:?}: {stderr}");
+    }
+}

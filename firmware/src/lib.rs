@@ -9,10 +9,12 @@
 //! carries the overrun flag.
 //!
 //! # Hardware
-//! embedded-hal 1.0 has no ADC trait, so the board reads the transducers through an external
-//! MCP3008 10-bit SPI ADC driven by [`Mcp3008`] over any embedded-hal 1.0
-//! [`SpiDevice`](embedded_hal::spi::SpiDevice). Any other converter can be used by implementing
-//! [`SampleAdc`]. The UART is any `embedded_hal_nb::serial::Write<u8>`.
+//! The converter is anything that implements [`SampleAdc`]: the board image for the Arduino Mega
+//! 2560 (`firmware/mega2560`) uses the ATmega2560's own 10-bit ADC, interrupt-driven; boards
+//! without a good ADC can use an external MCP3008 over SPI ([`Mcp3008`], any embedded-hal 1.0
+//! [`SpiDevice`](embedded_hal::spi::SpiDevice); embedded-hal 1.0 has no ADC trait). The UART is
+//! any `embedded_hal_nb::serial::Write<u8>`. The host's commands on the UART's receive line are
+//! read by [`command::CommandReader`].
 //!
 //! # Guarantees
 //! `no_std`, no allocation, no `unsafe`, no panics on any input (counters wrap).

@@ -214,19 +214,10 @@ fn main() -> Result<()> {
 
     let result = match source {
         Source::Recording => {
-            let path = args
-                .replay
-                .as_deref()
-                .context("--source recording needs --replay")?;
-            let rec = crackbot_recording::read_csv(path)?;
-            let source = RecordingSource::new(rec)
-                .with_context(|| format!("recording {} has no rows", path.display()))?;
-            run(&config, source, &mut port, &stop).map(|r| (r, None))
+            run(&config, recording_source(&args)?, &mut port, &stop).map(|r| (r, None))
         }
         Source::Synthetic => {
-            let mut source = SyntheticSlide::new(args.seed);
-            source.crack_width_mm = args.crack_width_mm;
-            run(&config, source, &mut port, &stop).map(|r| (r, None))
+            run(&config, synthetic_source(&args), &mut port, &stop).map(|r| (r, None))
         }
         Source::Sim => {
             let mut source = sim.take().context("the sim source was not set up")?;
@@ -317,25 +308,29 @@ fn write_trace_file(
             }
             written
         }
-        Source::Recording => {
-            let replay = args
-                .replay
-                .as_deref()
-                .context("--source recording needs --replay")?;
-            let rec = crackbot_recording::read_csv(replay)?;
-            let source = RecordingSource::new(rec)
-                .with_context(|| format!("recording {} has no rows", replay.display()))?;
-            trace::write_trace(source, samples, out)
-        }
-        Source::Synthetic => {
-            let mut source = SyntheticSlide::new(args.seed);
-            source.crack_width_mm = args.crack_width_mm;
-            trace::write_trace(source, samples, out)
-        }
+        Source::Recording => trace::write_trace(recording_source(args)?, samples, out),
+        Source::Synthetic => trace::write_trace(synthetic_source(args), samples, out),
     };
     written.with_context(|| format!("writing the trace {}", path.display()))?;
     eprintln!("wrote {samples} samples to {}", path.display());
     Ok(())
+}
+
+/// `--source recording`: the channels of `--replay`.
+fn recording_source(args: &Args) -> Result<RecordingSource> {
+    let path = args
+        .replay
+        .as_deref()
+        .context("--source recording needs --replay")?;
+    let rec = crackbot_recording::read_csv(path)?;
+    RecordingSource::new(rec).with_context(|| format!("recording {} has no rows", path.display()))
+}
+
+/// `--source synthetic`: the smooth stand-in over a crack of `--crack-width-mm`.
+fn synthetic_source(args: &Args) -> SyntheticSlide {
+    let mut source = SyntheticSlide::new(args.seed);
+    source.crack_width_mm = args.crack_width_mm;
+    source
 }
 
 /// A scene file, or the built-in default scene for `builtin`.
