@@ -1087,18 +1087,21 @@ fn a_thin_print_darkens_the_fibre_alike_at_every_height_and_sampling() {
     }
 }
 
-/// How high the tip may fly in a slide whose largest lateral deflection was `lateral_mm`, mm:
-/// 3 mm (a few millimetres above the plate), or, where the lateral spring and its end stop held
-/// more energy than lifting the tip that far against the normal spring takes, as high as that
-/// energy could lift it (a tip held back by a crack's wall while the arm goes on snaps out when
-/// it comes free). A blow-up makes energy from nothing and passes either.
-fn flight_bound_mm(finger: &FingerParams, lateral_mm: f64) -> f64 {
+/// How high the tip may fly in a slide whose largest lateral deflection was `lateral_mm` and
+/// whose tip went down to `deepest_mm` (negative in a crack), mm: 3 mm (a few millimetres above
+/// the plate), or as high as the energy the springs held could lift it against the normal
+/// spring: the lateral spring and its end stop (a tip held back by a crack's wall while the arm
+/// goes on snaps out when it comes free) and the normal spring stretched by a tip held down in
+/// the crack (released from `d` below its rest height, an undamped spring rises `d` above it), so
+/// `½ kz h² = ½ kz d² + E_lateral`. A blow-up makes energy from nothing and passes neither.
+fn flight_bound_mm(finger: &FingerParams, lateral_mm: f64, deepest_mm: f64) -> f64 {
     let profile = flat().profile([80.0, 50.0], [120.0, 50.0], 0.01);
     let model = FingerModel::new(finger, Envelope::new(&profile, finger.tip_radius_mm));
     let stored = model.lateral_energy(lateral_mm * 1e-3);
     let kz = finger.normal_stiffness_n_mm * 1e3;
     let lift_mm = (2.0 * stored / kz).sqrt() * 1e3;
-    lift_mm.max(3.0)
+    let held_down_mm = (-deepest_mm).max(0.0);
+    lift_mm.hypot(held_down_mm).max(3.0)
 }
 
 /// A 3 mm tip held back by the vertical wall of a 5.9 mm crack, 3.3 mm deep, at 23 mm/s with a
@@ -1133,7 +1136,8 @@ fn a_tip_held_back_by_a_crack_wall_snaps_out_on_the_energy_it_stored() {
                     (k, h)
                 }
             });
-    let bound = flight_bound_mm(&sensor.finger, lateral);
+    let deepest = min_of(samples.iter().map(|s| s.tip_z_mm));
+    let bound = flight_bound_mm(&sensor.finger, lateral, deepest);
     assert!(
         highest > 3.0 && highest < bound,
         "{highest} mm, bound {bound} mm"
@@ -1149,6 +1153,10 @@ proptest! {
         ..ProptestConfig::default()
     })]
 
+    /// (A case found in CI, 2026-12-07: a 0.84 mm tip held 3.48 mm down in a 2.6 mm crack and
+    /// 7.8 mm back by its wall, no end stop, rose to 5.19 mm when it came free: under the 5.48 mm
+    /// its two springs' energy allows, over the 4.23 mm of the lateral spring alone that the bound
+    /// counted before. `a_tip_held_down_and_back_in_a_crack_rises_on_both_springs_energy` keeps it.)
     #[test]
     fn random_cracks_tips_speeds_and_frictions_stay_finite(
         width in 0.0f64..12.0,
@@ -1180,7 +1188,7 @@ proptest! {
         let highest = max_of(samples.iter().map(|s| s.tip_z_mm));
         prop_assert!(deepest > -(depth + 3.0), "tip at {} mm in a {} mm crack", deepest, depth);
         let lateral = max_abs(samples.iter().map(|s| s.lateral_mm));
-        let bound = flight_bound_mm(&sensor.finger, lateral);
+        let bound = flight_bound_mm(&sensor.finger, lateral, deepest);
         prop_assert!(highest < bound, "tip flew to {} mm (bound {} mm)", highest, bound);
         prop_assert!(lateral < 2.0 * STROKE, "lateral deflection {} mm", lateral);
     }
@@ -1216,5 +1224,48 @@ fn a_bad_slide_speed_reads_field_value_and_range() {
     assert_eq!(
         err.to_string(),
         "invalid setting slide.speed_mm_s = 0: it must be > 0 mm/s"
+    );
+}
+
+/// The case the random slides found in CI: a 0.84 mm tip, nearly frictionless, held 3.5 mm down
+/// in a 2.6 mm crack and 7.8 mm back by its wall (no end stop) while the arm goes on at 1 mm/s.
+/// When it comes free it flies above the plate, higher than the lateral spring's energy alone
+/// could lift it, and under what both springs held; it is back on the plate within 5 ms.
+#[test]
+fn a_tip_held_down_and_back_in_a_crack_rises_on_both_springs_energy() {
+    // The inputs exactly as found: the moment the tip comes free depends on them to the last digit.
+    let mut sensor = sensor_with_tip(0.838_599_976_926_363_2);
+    sensor.finger.friction = 0.010_421_278_540_798_653;
+    sensor.finger.lateral_travel_mm = None;
+    sensor.optics.proximity_cone_deg = 0.0;
+    let samples = run(
+        &crack(2.634_577_584_246_777_3, 3.465_813_013_035_242, 90.0),
+        &line(FEATURE_X - STROKE / 2.0, STROKE, 1.0),
+        &sensor,
+        Integrator::default(),
+        0,
+        1.0,
+    );
+    let lateral = max_abs(samples.iter().map(|s| s.lateral_mm));
+    let deepest = min_of(samples.iter().map(|s| s.tip_z_mm));
+    let highest = max_of(samples.iter().map(|s| s.tip_z_mm));
+    assert!(
+        lateral > 7.0 && deepest < -3.4,
+        "lateral {lateral} mm, deepest {deepest} mm"
+    );
+    let lateral_only = flight_bound_mm(&sensor.finger, lateral, 0.0);
+    let bound = flight_bound_mm(&sensor.finger, lateral, deepest);
+    assert!(
+        highest > lateral_only && highest < bound,
+        "{highest} mm: lateral spring alone {lateral_only} mm, both {bound} mm"
+    );
+    let top = samples
+        .iter()
+        .position(|s| s.tip_z_mm == highest)
+        .expect("the highest sample");
+    assert!(
+        samples[top + 2].tip_z_mm.abs() < 0.5,
+        "{:?}",
+        samples[top + 2]
     );
 }
