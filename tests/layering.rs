@@ -24,11 +24,12 @@ const LAYERS: &[(&str, &[&str])] = &[
         &["crackbot-protocol", "crackbot-datasets", "crackbot-link"],
     ),
     (
-        "data: firmware, recordings, image geometry and annotations, the finger's fibre",
+        "data: firmware, recordings, image geometry and annotations, the camera's calibration, the finger's fibre",
         &[
             "crackbot-firmware",
             "crackbot-recording",
             "crackbot-imaging",
+            "crackbot-calib",
             "crackbot-fibre",
         ],
     ),
