@@ -80,6 +80,9 @@ bash "$crackbot_root/scripts/forest_to_onnx.sh" --setup
 bash "$crackbot_root/scripts/mcap_check.sh" --setup
 # The ROS 2 tests' arm: Eclipse Cyclone DDS's Python binding, an independent DDS (scripts/dds_arm.sh).
 bash "$crackbot_root/scripts/dds_arm.sh" --setup
+# OpenCV's Python binding, the independent check of the camera calibration (scripts/opencv_check.sh),
+# pinned in scripts/opencv_check.requirements.txt, in $crackbot_cache/opencv-venv.
+bash "$crackbot_root/scripts/opencv_check.sh" --setup
 
 # cargo-nextest, the test runner of scripts/test.sh (each test in its own process, the tests of every
 # binary side by side, the slowest first: .config/nextest.toml): the prebuilt binary of Astral's

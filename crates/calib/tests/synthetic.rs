@@ -3,95 +3,15 @@
 //! within an arm's reach, pixel noise. The fit must find the lens, the poses and the plate.
 
 use crackbot_calib::calibrate::{pixel_to_plane, solve_pose};
-use crackbot_calib::{calibrate, CalibError, Distortion, Intrinsics, Lens, Options, Pose, View};
+use crackbot_calib::{calibrate, CalibError, Lens, Options, Pose, View};
 use nalgebra::{Rotation3, Vector3};
 use proptest::prelude::*;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-const SIZE: [u32; 2] = [1280, 720];
+mod common;
 
-fn target() -> Vec<[f64; 2]> {
-    (0..6)
-        .flat_map(|r| (0..9).map(move |c| [f64::from(c) * 25.0, f64::from(r) * 25.0]))
-        .collect()
-}
-
-fn lens(k1: f64, k2: f64, p1: f64, p2: f64) -> Lens {
-    Lens {
-        intrinsics: Intrinsics {
-            fx: 920.0,
-            fy: 915.0,
-            cx: 652.0,
-            cy: 351.0,
-        },
-        distortion: Distortion {
-            k1,
-            k2,
-            p1,
-            p2,
-            k3: 0.0,
-        },
-    }
-}
-
-/// A pose of the target as a user following the guide takes them: its centre 250–550 mm in
-/// front, anywhere across the image (corners too, partly out of view), tilted 8° to
-/// `max_tilt` about a random axis in its plane and turned about its normal at random.
-fn random_pose(rng: &mut ChaCha8Rng, max_tilt: f64) -> Pose {
-    let tilt = rng.random_range(8.0..max_tilt).to_radians();
-    let axis_angle: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-    let spin: f64 = rng.random_range(-0.5..0.5);
-    let r = Rotation3::from_axis_angle(
-        &nalgebra::Unit::new_normalize(Vector3::new(axis_angle.cos(), axis_angle.sin(), 0.0)),
-        tilt,
-    ) * Rotation3::from_axis_angle(&Vector3::z_axis(), spin);
-    let centre = r * Vector3::new(100.0, 62.5, 0.0);
-    let distance = rng.random_range(250.0..550.0);
-    // Where the target's centre is seen, as a fraction of the image (pinhole of the truth).
-    let (fu, fv) = (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
-    let ray = Vector3::new(
-        (fu * f64::from(SIZE[0]) - 652.0) / 920.0,
-        (fv * f64::from(SIZE[1]) - 351.0) / 915.0,
-        1.0,
-    );
-    Pose::new(&r, ray * distance - centre)
-}
-
-/// The target's points seen through `lens` at `pose`, with Gaussian-ish noise of `sigma` px; the
-/// points outside the image are left out.
-fn view(lens: &Lens, pose: &Pose, sigma: f64, rng: &mut ChaCha8Rng) -> View {
-    let mut v = View::default();
-    for t in target() {
-        let Some([u, w]) = lens.project(pose.apply(Vector3::new(t[0], t[1], 0.0))) else {
-            continue;
-        };
-        if !(0.0..f64::from(SIZE[0])).contains(&u) || !(0.0..f64::from(SIZE[1])).contains(&w) {
-            continue;
-        }
-        let noise = |rng: &mut ChaCha8Rng| {
-            (0..4).map(|_| rng.random_range(-1.0..1.0)).sum::<f64>() * sigma / (4.0f64 / 3.0).sqrt()
-        };
-        v.target.push(t);
-        v.image.push([u + noise(rng), w + noise(rng)]);
-    }
-    v
-}
-
-fn views(lens: &Lens, n: usize, sigma: f64, seed: u64) -> (Vec<View>, Vec<Pose>) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut views = Vec::new();
-    let mut poses = Vec::new();
-    while views.len() < n {
-        let pose = random_pose(&mut rng, 45.0);
-        let v = view(lens, &pose, sigma, &mut rng);
-        if v.target.len() >= 20 {
-            views.push(v);
-            poses.push(pose);
-        }
-    }
-    (views, poses)
-}
+use common::{lens, view, views, SIZE};
 
 /// Worst and mean distance (mm) between points of the plate and where the calibration puts the
 /// pixels they are seen at, over a 250 × 150 mm plate around the target laid on it (10 mm grid;
