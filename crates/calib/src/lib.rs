@@ -9,8 +9,12 @@
 //! * [`refine`]: Levenberg–Marquardt over the intrinsics, the distortion and every view's pose,
 //!   minimising the reprojection error in pixels.
 //! * [`calibrate`]: the whole fit, with its checks: enough views and points, finite numbers, no
-//!   view edge-on, views tilted enough to constrain the focal lengths. Then
-//!   [`Calibration::pixel_to_plane`] maps a pixel to a point on a plane seen through the lens.
+//!   view edge-on, views tilted enough to constrain the focal lengths; [`calibrate::solve_pose`]
+//!   finds a plane's pose (the target laid on the plate) through the lens, and
+//!   [`calibrate::pixel_to_plane`] maps a pixel to a point on that plane.
+//! * [`file`]: the calibration file (TOML, `docs/calibration-file.md`): image size, lens in
+//!   OpenCV's terms, the plate's pose, the errors, the date; checked field by field on loading,
+//!   and against every frame's size.
 //!
 //! Pixels are whatever convention the caller's points use (crackbot's: the top-left corner of
 //! the top-left pixel is `(0, 0)`; OpenCV's: its centre is, so OpenCV's `cx` is crackbot's
@@ -20,6 +24,7 @@
 
 pub mod calibrate;
 mod error;
+pub mod file;
 pub mod homography;
 pub mod lens;
 pub mod pose;
@@ -28,5 +33,6 @@ pub mod zhang;
 
 pub use calibrate::{calibrate, Calibration, Options, View};
 pub use error::CalibError;
+pub use file::{CameraFile, FileError};
 pub use lens::{Distortion, Intrinsics, Lens};
 pub use pose::Pose;
