@@ -343,7 +343,8 @@ mod tests {
     fn bad_files_name_what_is_wrong() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("camera.toml");
-        let cases: [(&dyn Fn(&mut CameraFile), &str); 5] = [
+        type Spoil<'a> = &'a dyn Fn(&mut CameraFile);
+        let cases: [(Spoil, &str); 5] = [
             (&|f| f.lens.model = "fisheye".into(), "lens.model"),
             (&|f| f.format = "v0".into(), "format"),
             (&|f| f.image.width = 0, "image"),
