@@ -24,19 +24,19 @@ const LAYERS: &[(&str, &[&str])] = &[
         &["crackbot-protocol", "crackbot-datasets", "crackbot-link"],
     ),
     (
-        "data: firmware, recordings, image geometry and annotations, the camera's calibration, the finger's fibre",
+        "data: firmware, recordings, image geometry and annotations, the finger's fibre",
         &[
             "crackbot-firmware",
             "crackbot-recording",
             "crackbot-imaging",
-            "crackbot-calib",
             "crackbot-fibre",
         ],
     ),
     (
-        "components: sensor link, signals, classifiers, camera, simulator, planner",
+        "components: sensor link, signals, classifiers, camera and its calibration, simulator, planner",
         &[
             "crackbot-acquisition",
+            "crackbot-calib",
             "crackbot-dsp",
             "crackbot-forest",
             "crackbot-vision",

@@ -1,35 +1,8 @@
 //! The homography from a target's plane (mm) to the image (pixels) of one view: the normalised
 //! DLT (Hartley), solved by SVD.
 
+use crackbot_imaging::homography::normalisation;
 use nalgebra::{DMatrix, Matrix3};
-
-/// Translates points to their centroid and scales them to a mean distance of √2; `None` when
-/// they all coincide.
-fn normalisation(points: &[[f64; 2]]) -> Option<Matrix3<f64>> {
-    let n = points.len() as f64;
-    let cx = points.iter().map(|p| p[0]).sum::<f64>() / n;
-    let cy = points.iter().map(|p| p[1]).sum::<f64>() / n;
-    let mean = points
-        .iter()
-        .map(|p| (p[0] - cx).hypot(p[1] - cy))
-        .sum::<f64>()
-        / n;
-    if !(mean > 0.0 && mean.is_finite()) {
-        return None;
-    }
-    let s = std::f64::consts::SQRT_2 / mean;
-    Some(Matrix3::new(
-        s,
-        0.0,
-        -s * cx,
-        0.0,
-        s,
-        -s * cy,
-        0.0,
-        0.0,
-        1.0,
-    ))
-}
 
 fn apply(m: &Matrix3<f64>, p: [f64; 2]) -> [f64; 2] {
     let v = m * nalgebra::Vector3::new(p[0], p[1], 1.0);

@@ -58,6 +58,35 @@ pub fn apply_finite(h: &Matrix3<f64>, p: [f64; 2]) -> Option<[f64; 2]> {
     (out[0].is_finite() && out[1].is_finite()).then_some(out)
 }
 
+/// Hartley normalisation of a point set: `T` that moves the centroid to the origin and scales the
+/// mean distance from it to √2 (the conditioning step of a normalised DLT). `None` when all
+/// points coincide or a coordinate is not finite.
+pub fn normalisation(points: &[[f64; 2]]) -> Option<Matrix3<f64>> {
+    let n = points.len() as f64;
+    let cx = points.iter().map(|p| p[0]).sum::<f64>() / n;
+    let cy = points.iter().map(|p| p[1]).sum::<f64>() / n;
+    let mean = points
+        .iter()
+        .map(|p| (p[0] - cx).hypot(p[1] - cy))
+        .sum::<f64>()
+        / n;
+    if !(mean > 0.0 && mean.is_finite()) {
+        return None;
+    }
+    let s = std::f64::consts::SQRT_2 / mean;
+    Some(Matrix3::new(
+        s,
+        0.0,
+        -s * cx,
+        0.0,
+        s,
+        -s * cy,
+        0.0,
+        0.0,
+        1.0,
+    ))
+}
+
 /// A 3 × 3 matrix as row-major arrays.
 pub fn matrix_rows(m: &Matrix3<f64>) -> [[f64; 3]; 3] {
     [

@@ -20,7 +20,7 @@
 
 use std::path::Path;
 
-use crackbot_imaging::homography::{apply_finite, INFINITY_EPS};
+use crackbot_imaging::homography::{apply_finite, normalisation, INFINITY_EPS};
 pub use crackbot_imaging::homography::{Homography, PointPair, ReprojectionStats};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -39,35 +39,6 @@ fn invalid(message: impl Into<String>) -> VisionError {
     VisionError::Homography {
         reason: message.into(),
     }
-}
-
-/// Hartley normalisation: `T` with centroid → origin and mean distance → √2. `None` when all
-/// points coincide.
-fn normalisation(points: &[[f64; 2]]) -> Option<Matrix3<f64>> {
-    let n = points.len() as f64;
-    let cx = points.iter().map(|p| p[0]).sum::<f64>() / n;
-    let cy = points.iter().map(|p| p[1]).sum::<f64>() / n;
-    let mean = points
-        .iter()
-        .map(|p| (p[0] - cx).hypot(p[1] - cy))
-        .sum::<f64>()
-        / n;
-    let usable = mean > 0.0 && mean.is_finite();
-    if !usable {
-        return None;
-    }
-    let s = std::f64::consts::SQRT_2 / mean;
-    Some(Matrix3::new(
-        s,
-        0.0,
-        -s * cx,
-        0.0,
-        s,
-        -s * cy,
-        0.0,
-        0.0,
-        1.0,
-    ))
 }
 
 /// Spread of a point set (RMS distance from its centroid) and its two principal standard
