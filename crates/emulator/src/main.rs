@@ -144,27 +144,11 @@ fn main() -> Result<()> {
     if !(args.rate.is_finite() && args.rate > 0.0) {
         bail!("--rate must be a positive number of Hz, got {}", args.rate);
     }
-    let ticks = match (args.duration, args.frames) {
-        (Some(d), _) if !(d.is_finite() && d >= 0.0) => {
-            bail!("--duration must be a non-negative number of seconds, got {d}")
-        }
-        (Some(d), _) => Some((d * args.rate).round() as u64),
-        (None, n) => n,
-    };
+    let ticks = ticks_of(&args)?;
     let source = source_kind(&args)?;
     // Set up the simulator before the port opens, so a bad scene fails before anything streams.
     let mut sim = match source {
-        Source::Sim => {
-            let native = f64::from(SAMPLE_RATE_HZ);
-            if args.rate != native {
-                tracing::warn!(
-                    "the simulator advances 1/{native} s per tick: at {} Hz the simulated slide runs {:.2}× real time",
-                    args.rate,
-                    args.rate / native
-                );
-            }
-            Some(sim_source(&args)?)
-        }
+        Source::Sim => Some(checked_sim_source(&args)?),
         _ => None,
     };
     if let Some(path) = &args.write_trace {
@@ -186,23 +170,7 @@ fn main() -> Result<()> {
     }
 
     // Keep the slave side of a PTY open for the whole run so its raw settings stay in force.
-    let (mut port, _slave): (Box<dyn SerialPort>, Option<Box<dyn SerialPort>>) = if args.pty {
-        let pty = Pty::open()?;
-        println!("PTY {}", pty.path());
-        std::io::stdout().flush()?;
-        let (master, slave) = pty.into_parts();
-        (Box::new(master), Some(Box::new(slave)))
-    } else {
-        let path = args.port.clone().unwrap_or_default();
-        if !std::path::Path::new(&path).exists() {
-            bail!("serial device {path} does not exist");
-        }
-        let port = serialport::new(&path, args.baud)
-            .timeout(Duration::from_secs(1))
-            .open()
-            .with_context(|| format!("opening serial device {path} at {} baud", args.baud))?;
-        (port, None)
-    };
+    let (mut port, _slave) = open_port(&args)?;
 
     if args.wait_for_start {
         let mut line = String::new();
@@ -250,6 +218,53 @@ fn main() -> Result<()> {
         bail!(failure);
     }
     Ok(())
+}
+
+/// The run's length in ticks, from `--duration` or `--frames` (None: until stopped).
+fn ticks_of(args: &Args) -> Result<Option<u64>> {
+    Ok(match (args.duration, args.frames) {
+        (Some(d), _) if !(d.is_finite() && d >= 0.0) => {
+            bail!("--duration must be a non-negative number of seconds, got {d}")
+        }
+        (Some(d), _) => Some((d * args.rate).round() as u64),
+        (None, n) => n,
+    })
+}
+
+/// The simulator for `--source sim`, warning when `--rate` makes it run off real time.
+fn checked_sim_source(args: &Args) -> Result<SimSource> {
+    let native = f64::from(SAMPLE_RATE_HZ);
+    if args.rate != native {
+        tracing::warn!(
+            "the simulator advances 1/{native} s per tick: at {} Hz the simulated slide runs {:.2}× real time",
+            args.rate,
+            args.rate / native
+        );
+    }
+    sim_source(args)
+}
+
+/// A port and, for `--pty`, the slave side to keep open.
+type OpenPort = (Box<dyn SerialPort>, Option<Box<dyn SerialPort>>);
+
+/// `--pty` (a new pseudo-terminal, its path printed) or `--port PATH`.
+fn open_port(args: &Args) -> Result<OpenPort> {
+    if args.pty {
+        let pty = Pty::open()?;
+        println!("PTY {}", pty.path());
+        std::io::stdout().flush()?;
+        let (master, slave) = pty.into_parts();
+        return Ok((Box::new(master), Some(Box::new(slave))));
+    }
+    let path = args.port.clone().unwrap_or_default();
+    if !std::path::Path::new(&path).exists() {
+        bail!("serial device {path} does not exist");
+    }
+    let port = serialport::new(&path, args.baud)
+        .timeout(Duration::from_secs(1))
+        .open()
+        .with_context(|| format!("opening serial device {path} at {} baud", args.baud))?;
+    Ok((port, None))
 }
 
 /// The source the arguments ask for, with the implied defaults, rejecting settings that belong
