@@ -199,18 +199,27 @@ impl<A: SampleAdc, U: embedded_hal_nb::serial::Write<u8>, const TX: usize> Sampl
     }
 
     fn queue(&mut self, mut frame: Frame) {
-        if self.tx.capacity().saturating_sub(self.tx.len()) < WIRE_LEN {
+        frame.flags.set_overrun(self.overrun_pending);
+        if self.push_whole(&frame) {
+            self.overrun_pending = false;
+            self.stats.frames_queued = self.stats.frames_queued.wrapping_add(1);
+        } else {
             self.stats.frames_dropped = self.stats.frames_dropped.wrapping_add(1);
             self.overrun_pending = true;
-            return;
         }
-        frame.flags.set_overrun(self.overrun_pending);
+    }
+
+    /// Puts all [`WIRE_LEN`] wire bytes of `frame` in the ring buffer, or none when they do not
+    /// all fit; returns whether they went in.
+    fn push_whole(&mut self, frame: &Frame) -> bool {
+        if self.tx.capacity().saturating_sub(self.tx.len()) < WIRE_LEN {
+            return false;
+        }
         for byte in frame.to_wire() {
             // Cannot fail: room for all WIRE_LEN bytes was checked above.
             let _ = self.tx.push_back(byte);
         }
-        self.overrun_pending = false;
-        self.stats.frames_queued = self.stats.frames_queued.wrapping_add(1);
+        true
     }
 
     /// Queues a frame built elsewhere (the board's encode command, [`command`]) whole, or not at
@@ -218,15 +227,9 @@ impl<A: SampleAdc, U: embedded_hal_nb::serial::Write<u8>, const TX: usize> Sampl
     /// queued. Touches neither the sequence numbers, the counters nor the overrun flag of the
     /// sampled frames. Then calls [`pump`](Self::pump).
     pub fn send_frame(&mut self, frame: &Frame) -> bool {
-        let room = self.tx.capacity().saturating_sub(self.tx.len()) >= WIRE_LEN;
-        if room {
-            for byte in frame.to_wire() {
-                // Cannot fail: room for all WIRE_LEN bytes was checked above.
-                let _ = self.tx.push_back(byte);
-            }
-        }
+        let queued = self.push_whole(frame);
         self.pump();
-        room
+        queued
     }
 
     /// Moves queued bytes to the UART until it answers `WouldBlock` or the queue is empty. On any
