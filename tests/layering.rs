@@ -37,6 +37,7 @@ const LAYERS: &[(&str, &[&str])] = &[
         &[
             "crackbot-acquisition",
             "crackbot-calib",
+            "crackbot-target",
             "crackbot-dsp",
             "crackbot-forest",
             "crackbot-vision",
