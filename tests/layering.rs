@@ -37,7 +37,7 @@ const LAYERS: &[(&str, &[&str])] = &[
         &[
             "crackbot-acquisition",
             "crackbot-calib",
-            "crackbot-target",
+            "crackbot-calib-target",
             "crackbot-dsp",
             "crackbot-forest",
             "crackbot-vision",
