@@ -34,6 +34,9 @@ pub struct Found {
     pub tags: Vec<FoundTag>,
     /// Ids of tag36h11 tags seen that are not on this target (another target, a stray tag).
     pub strangers: Vec<u32>,
+    /// Ids of the target's tags left out because their white ring is cut by the frame's edge
+    /// (their corners are then found off by pixels).
+    pub clipped: Vec<u32>,
 }
 
 impl Found {
@@ -88,6 +91,10 @@ impl TagFinder {
                 found.strangers.push(id);
                 continue;
             };
+            if clipped(&d.corners(), w as f64, h as f64) {
+                found.clipped.push(id);
+                continue;
+            }
             found.tags.push(FoundTag {
                 id,
                 corners_px: d.corners(),
@@ -97,8 +104,25 @@ impl TagFinder {
         }
         found.tags.sort_by_key(|t| t.id);
         found.strangers.sort_unstable();
+        found.clipped.sort_unstable();
         Ok(found)
     }
+}
+
+/// Whether a tag with these corners comes closer to the frame's edge than its white ring's
+/// width and a half (a cell is an eighth of its side) plus two pixels.
+fn clipped(corners: &[[f64; 2]; 4], w: f64, h: f64) -> bool {
+    let side = (0..4)
+        .map(|k| {
+            let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            (a[0] - b[0]).hypot(a[1] - b[1])
+        })
+        .sum::<f64>()
+        / 4.0;
+    let keep_out = 1.5 * side / 8.0 + 2.0;
+    corners
+        .iter()
+        .any(|c| c[0] < keep_out || c[1] < keep_out || c[0] > w - keep_out || c[1] > h - keep_out)
 }
 
 #[cfg(test)]
@@ -113,18 +137,38 @@ mod tests {
         let img = draw(&spec, ppm);
         let found = TagFinder::new().unwrap().find(&img, &spec).unwrap();
         assert_eq!(found.tags.len(), 32, "{found:?}");
-        assert!(found.strangers.is_empty());
+        assert!(found.strangers.is_empty() && found.clipped.is_empty());
         let (lo, hi) = spec.sheet_mm();
         let mut worst: f64 = 0.0;
         for t in &found.tags {
             for (px, mm) in t.corners_px.iter().zip(&t.corners_mm) {
                 // The sheet is drawn black or white by each pixel's centre: an edge lands on
                 // the nearest pixel boundary.
-                let truth = [((mm[0] - lo[0]) * ppm).round(), ((hi[1] - mm[1]) * ppm).round()];
+                let truth = [
+                    ((mm[0] - lo[0]) * ppm).round(),
+                    ((hi[1] - mm[1]) * ppm).round(),
+                ];
                 worst = worst.max((px[0] - truth[0]).hypot(px[1] - truth[1]));
             }
         }
-        assert!(worst < 0.3, "corners {worst:.3} px from where they are printed");
+        assert!(
+            worst < 0.3,
+            "corners {worst:.3} px from where they are printed"
+        );
         assert_eq!(found.view().target.len(), 128);
+    }
+
+    #[test]
+    fn tags_cut_by_the_frame_are_left_out() {
+        let spec = TargetSpec::default();
+        let img = draw(&spec, 4.0);
+        // Crop into the left column's tags' white rings.
+        let (lo, _) = spec.sheet_mm();
+        let x0 = ((0.5 * spec.cell_mm() - lo[0]) * 4.0) as u32;
+        let cropped =
+            image::imageops::crop_imm(&img, x0, 0, img.width() - x0, img.height()).to_image();
+        let found = TagFinder::new().unwrap().find(&cropped, &spec).unwrap();
+        assert_eq!(found.tags.len(), 28, "{found:?}");
+        assert!(found.tags.iter().all(|t| t.id % 8 != 0), "{found:?}");
     }
 }

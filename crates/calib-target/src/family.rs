@@ -69,7 +69,8 @@ pub fn pattern(id: usize) -> Option<[[bool; TOTAL_CELLS]; TOTAL_CELLS]> {
     let border_start = (TOTAL_CELLS - BORDER_CELLS) / 2;
     for i in 0..nbits {
         if code & (1u64 << (nbits - i - 1)) != 0 {
-            cells[fam.bit_y[i] as usize + border_start][fam.bit_x[i] as usize + border_start] = true;
+            cells[fam.bit_y[i] as usize + border_start][fam.bit_x[i] as usize + border_start] =
+                true;
         }
     }
     Some(cells)
@@ -92,10 +93,16 @@ mod tests {
         for id in 0..tag_count() {
             let p = pattern(id).unwrap();
             for k in 0..TOTAL_CELLS {
-                assert!(p[0][k] && p[9][k] && p[k][0] && p[k][9], "white ring of {id}");
+                assert!(
+                    p[0][k] && p[9][k] && p[k][0] && p[k][9],
+                    "white ring of {id}"
+                );
             }
             for k in 1..TOTAL_CELLS - 1 {
-                assert!(!p[1][k] && !p[8][k] && !p[k][1] && !p[k][8], "black ring of {id}");
+                assert!(
+                    !p[1][k] && !p[8][k] && !p[k][1] && !p[k][8],
+                    "black ring of {id}"
+                );
             }
             assert!(seen.insert(p), "tag {id} repeats another's pattern");
         }

@@ -10,9 +10,9 @@
 //!
 //! The format is specified in `docs/target.md`.
 
+pub mod detect;
 mod error;
 mod family;
-pub mod detect;
 pub mod print;
 pub mod spec;
 

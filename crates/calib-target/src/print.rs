@@ -73,14 +73,17 @@ mod tests {
         let img = write_png(&spec, 10.0, &path).unwrap();
         let (lo, hi) = spec.sheet_mm();
         assert_eq!(img.width(), ((hi[0] - lo[0]) * 10.0).round() as u32);
-        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+        let decoder =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
         let reader = decoder.read_info().unwrap();
         let dims = reader.info().pixel_dims.unwrap();
         assert_eq!((dims.xppu, dims.unit), (10_000, png::Unit::Meter));
         // The bottom-left tag's black square starts margin_mm in from the left edge: count the
         // white pixels before the first black one along its middle row.
         let row = img.height() - 1 - ((spec.margin_mm + spec.cell_mm() * 0.5) * 10.0) as u32;
-        let first_black = (0..img.width()).find(|&c| img.get_pixel(c, row)[0] == 0).unwrap();
+        let first_black = (0..img.width())
+            .find(|&c| img.get_pixel(c, row)[0] == 0)
+            .unwrap();
         assert_eq!(f64::from(first_black), spec.margin_mm * 10.0);
         assert!(write_png(&spec, 0.0, &path).is_err());
     }

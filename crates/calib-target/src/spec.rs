@@ -46,7 +46,7 @@ impl Default for TargetSpec {
             tag_mm: 18.0,
             gap_mm: 5.4,
             first_id: 0,
-            margin_mm: 9.0,
+            margin_mm: 5.0,
         }
     }
 }
@@ -154,7 +154,8 @@ impl TargetSpec {
 
     /// The grid's extent (black squares only), mm `[width, height]`.
     pub fn grid_mm(&self) -> [f64; 2] {
-        let side = |n: u32| f64::from(n) * self.tag_mm + f64::from(n.saturating_sub(1)) * self.gap_mm;
+        let side =
+            |n: u32| f64::from(n) * self.tag_mm + f64::from(n.saturating_sub(1)) * self.gap_mm;
         [side(self.cols), side(self.rows)]
     }
 
@@ -244,7 +245,7 @@ mod tests {
         let s = TargetSpec::default();
         s.check().unwrap();
         let (lo, hi) = s.sheet_mm();
-        assert!(hi[0] - lo[0] <= 200.0 && hi[1] - lo[1] <= 100.0 + 7.0);
+        assert!(hi[0] - lo[0] <= 200.0 && hi[1] - lo[1] <= 100.0);
         assert_eq!(s.tags().count(), 32);
     }
 
@@ -254,7 +255,9 @@ mod tests {
         for t in s.tags() {
             assert_eq!(s.tag(t.id), Some(t));
             let bl = s.tag_point(&t, [-1.0, 1.0]);
-            assert!((bl[0] - t.origin_mm[0]).abs() < 1e-12 && (bl[1] - t.origin_mm[1]).abs() < 1e-12);
+            assert!(
+                (bl[0] - t.origin_mm[0]).abs() < 1e-12 && (bl[1] - t.origin_mm[1]).abs() < 1e-12
+            );
             let tr = s.tag_point(&t, [1.0, -1.0]);
             assert!((tr[0] - t.origin_mm[0] - s.tag_mm).abs() < 1e-12);
         }
@@ -272,7 +275,10 @@ mod tests {
         // The white ring, the gap and the margin.
         assert_eq!(s.is_white([-0.5 * c, 5.0]), Some(true));
         assert_eq!(s.is_white([s.tag_mm + 0.5 * s.gap_mm, 5.0]), Some(true));
-        assert_eq!(s.is_white([-s.margin_mm + 0.1, -s.margin_mm + 0.1]), Some(true));
+        assert_eq!(
+            s.is_white([-s.margin_mm + 0.1, -s.margin_mm + 0.1]),
+            Some(true)
+        );
         assert_eq!(s.is_white([-s.margin_mm - 0.1, 0.0]), None);
     }
 

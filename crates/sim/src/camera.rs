@@ -1,6 +1,8 @@
 //! The pinhole camera of a scene: intrinsics `K` from the focal lengths and principal point, the
 //! pose from the optical centre, the point looked at on the plate and a roll, and the exact
-//! homography between the plate's top face (z = 0, mm) and the image (pixels).
+//! homography between the plate's top face (z = 0, mm) and the image (pixels), and optionally
+//! lens distortion (OpenCV's model, `crackbot_calib::lens`): the image is then what the pinhole
+//! would see, distorted, and the homography is the pinhole's (exact only without distortion).
 //!
 //! Conventions:
 //! * Continuous pixel coordinates: the top-left corner of the image is `(0, 0)`, so pixel
@@ -12,6 +14,7 @@
 //!   `f × x`, plate −y straight down. A positive roll turns the camera's x and y axes by that
 //!   angle about the optical axis (from x towards y), so the scene appears turned the other way.
 
+use crackbot_calib::{Distortion, Intrinsics, Lens};
 pub use crackbot_imaging::homography::apply_in_front as apply_homography;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -48,6 +51,9 @@ pub struct CameraSpec {
     /// Relative spread of the lighting between frames (0: identical lighting).
     #[serde(default = "default_lighting_variation")]
     pub lighting_variation: f64,
+    /// Lens distortion in OpenCV's order `[k1, k2, p1, p2, k3]` (default: none, a pinhole).
+    #[serde(default)]
+    pub distortion: [f64; 5],
 }
 
 fn default_image_noise() -> f64 {
@@ -55,6 +61,53 @@ fn default_image_noise() -> f64 {
 }
 fn default_lighting_variation() -> f64 {
     0.15
+}
+
+/// The distorting lens of `spec`, or `None` for a pinhole; fails on non-finite coefficients or
+/// a distortion that folds the image over itself (not one-to-one over the frame).
+fn lens_of(spec: &CameraSpec, f: [f64; 2], c: [f64; 2]) -> Result<Option<Lens>, SimError> {
+    let d = spec.distortion;
+    if !d.iter().all(|v| v.is_finite()) {
+        return Err(SimError::setting("camera.distortion", list(&d), "finite"));
+    }
+    if d.iter().all(|&v| v == 0.0) {
+        return Ok(None);
+    }
+    let lens = Lens {
+        intrinsics: Intrinsics {
+            fx: f[0],
+            fy: f[1],
+            cx: c[0],
+            cy: c[1],
+        },
+        distortion: Distortion::from_array(d),
+    };
+    // Every pixel of the frame must come from one ray: undo the distortion at the corners and
+    // edge midpoints and check it distorts back.
+    let [w, h] = spec.resolution.map(f64::from);
+    for uv in [
+        [0.0, 0.0],
+        [w, 0.0],
+        [0.0, h],
+        [w, h],
+        [w / 2.0, 0.0],
+        [0.0, h / 2.0],
+    ] {
+        // Undone, and still spreading outwards there (inside the fold).
+        let ok = lens.unproject(uv).is_some_and(|n| {
+            let out = lens.distortion.apply(n * 1.001).norm();
+            let here = lens.distortion.apply(n).norm();
+            n.norm() < 1e-12 || out > here
+        });
+        if !ok {
+            return Err(SimError::setting(
+                "camera.distortion",
+                list(&d),
+                "a distortion the frame's corners can be undistorted through (it folds over)",
+            ));
+        }
+    }
+    Ok(Some(lens))
 }
 
 /// A calibrated pinhole camera looking at the plate.
@@ -72,6 +125,8 @@ pub struct Camera {
     h: Matrix3<f64>,
     /// Pixels → plate (z = 0, mm).
     h_inv: Matrix3<f64>,
+    /// The lens, when it distorts (`None`: an exact pinhole).
+    lens: Option<Lens>,
 }
 
 impl Camera {
@@ -126,6 +181,7 @@ impl Camera {
                 "finite",
             ));
         }
+        let lens = lens_of(spec, [fx, fy], [cx, cy])?;
         let centre = Vector3::from(spec.position_mm);
         if centre.z.abs() < 1e-9 {
             return Err(SimError::setting(
@@ -168,7 +224,36 @@ impl Camera {
             centre,
             h,
             h_inv,
+            lens,
         })
+    }
+
+    /// The lens model of this camera (intrinsics and distortion, zero for a pinhole).
+    pub fn lens(&self) -> Lens {
+        self.lens.unwrap_or(Lens {
+            intrinsics: Intrinsics {
+                fx: self.k[(0, 0)],
+                fy: self.k[(1, 1)],
+                cx: self.k[(0, 2)],
+                cy: self.k[(1, 2)],
+            },
+            distortion: Distortion::default(),
+        })
+    }
+
+    /// Where the pinhole without distortion would see what this camera sees at `uv` (`uv`
+    /// itself for a pinhole; `None` where the distortion cannot be undone).
+    pub fn undistort(&self, uv: [f64; 2]) -> Option<[f64; 2]> {
+        match &self.lens {
+            None => Some(uv),
+            Some(lens) => lens.undistort_pixel(uv),
+        }
+    }
+
+    /// The plate point (z = 0, mm) seen at pixel `uv`, through the lens; `None` at or above the
+    /// horizon.
+    pub fn plate_point(&self, uv: [f64; 2]) -> Option<[f64; 2]> {
+        apply_homography(&self.h_inv, self.undistort(uv)?)
     }
 
     /// Image width, pixels.
@@ -208,13 +293,19 @@ impl Camera {
         if pc.z.is_nan() || pc.z <= 1e-9 {
             return None;
         }
-        let q = self.k * pc;
-        Some([q.x / q.z, q.y / q.z])
+        match &self.lens {
+            Some(lens) => lens.project(pc),
+            None => {
+                let q = self.k * pc;
+                Some([q.x / q.z, q.y / q.z])
+            }
+        }
     }
 
     /// The ray through the pixel coordinates `uv`: unit direction in the plate's frame (from
     /// the optical centre).
     pub fn ray(&self, uv: [f64; 2]) -> [f64; 3] {
+        let uv = self.undistort(uv).unwrap_or(uv);
         let fx = self.k[(0, 0)];
         let fy = self.k[(1, 1)];
         let dc = Vector3::new(
@@ -240,8 +331,9 @@ impl Camera {
         Some([self.centre.x + t * d[0], self.centre.y + t * d[1]])
     }
 
-    /// The exact homography from plate coordinates (mm, on the plate's top face z = 0) to
-    /// pixel coordinates: `[u, v, 1]ᵀ ∝ H [x, y, 1]ᵀ`.
+    /// The pinhole's homography from plate coordinates (mm, on the plate's top face z = 0) to
+    /// pixel coordinates: `[u, v, 1]ᵀ ∝ H [x, y, 1]ᵀ`; exact when the lens does not distort,
+    /// else the map to the undistorted image.
     pub fn plate_to_image(&self) -> Matrix3<f64> {
         self.h
     }
@@ -274,6 +366,7 @@ mod tests {
             roll_deg: roll,
             noise_sigma: 0.0,
             lighting_variation: 0.0,
+            distortion: [0.0; 5],
         }
     }
 
@@ -338,6 +431,39 @@ mod tests {
         let s = spec([100.0, 50.0, f64::NAN], [100.0, 50.0], 0.0);
         assert!(Camera::from_spec(&s).is_err());
         let s = spec([100.0, 50.0, 0.0], [100.0, 50.0], 0.0);
+        assert!(Camera::from_spec(&s).is_err());
+    }
+
+    #[test]
+    fn a_distorting_lens_projects_and_unprojects_through_the_same_model() {
+        let mut s = spec([100.0, 50.0, 250.0], [100.0, 50.0], 10.0);
+        s.distortion = [-0.3, 0.09, 0.001, -0.0008, 0.0];
+        let cam = Camera::from_spec(&s).unwrap();
+        let pinhole = Camera::from_spec(&CameraSpec {
+            distortion: [0.0; 5],
+            ..s.clone()
+        })
+        .unwrap();
+        for p in [[0.0, 0.0], [200.0, 100.0], [10.0, 90.0], [100.0, 50.0]] {
+            let uv = cam.project([p[0], p[1], 0.0]).unwrap();
+            let back = cam.plate_point(uv).unwrap();
+            assert!((back[0] - p[0]).abs() < 1e-6 && (back[1] - p[1]).abs() < 1e-6);
+            let via_ray = cam.pixel_to_plane(uv, 0.0).unwrap();
+            assert!((via_ray[0] - p[0]).abs() < 1e-6 && (via_ray[1] - p[1]).abs() < 1e-6);
+            // Barrel distortion pulls points towards the centre.
+            let ideal = pinhole.project([p[0], p[1], 0.0]).unwrap();
+            let r = |q: [f64; 2]| (q[0] - 320.0).hypot(q[1] - 240.0);
+            assert!(r(uv) <= r(ideal) + 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_distortion_that_folds_the_frame_over_is_refused() {
+        let mut s = spec([100.0, 50.0, 250.0], [100.0, 50.0], 0.0);
+        s.distortion = [-1.5, 0.0, 0.0, 0.0, 0.0];
+        let err = Camera::from_spec(&s).unwrap_err().to_string();
+        assert!(err.contains("camera.distortion"), "{err}");
+        s.distortion = [f64::NAN, 0.0, 0.0, 0.0, 0.0];
         assert!(Camera::from_spec(&s).is_err());
     }
 }

@@ -428,6 +428,7 @@ pub fn random_scene(params: &RandomSceneParams, seed: u64) -> Result<Scene, SimE
         roll_deg: uniform(&mut rng, [-p.roll_deg, p.roll_deg]),
         noise_sigma: uniform(&mut rng, p.noise_sigma),
         lighting_variation: uniform(&mut rng, p.lighting_variation),
+        distortion: [0.0; 5],
     };
 
     let manipulator = ManipulatorSpec {

@@ -2,14 +2,13 @@
 //! shading, screw cover, cracks and decoys, screws, then lighting and sensor noise).
 
 use image::{GrayImage, RgbImage};
-use nalgebra::Matrix3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
 use super::assets::{pick_strip, CrackAssets};
 use super::frame::{BoxAcc, BoxKind, Frame, GroundTruthBox};
-use super::geometry::{mm_per_px, pixel_region, plate_at, Path2, Region};
+use super::geometry::{mm_per_px, pixel_region, plate_points, Path2, Region};
 use super::texture::{lambert, material_texture, mix64, NoiseGen};
 use crate::camera::Camera;
 use crate::scene::Scene;
@@ -95,7 +94,8 @@ struct Ctx<'a> {
     scene: &'a Scene,
     cam: Camera,
     /// Image → plate homography (pixels → mm on z = 0).
-    hinv: Matrix3<f64>,
+    /// The plate point seen through each pixel's centre (row-major), through the lens.
+    plate: Vec<Option<Point>>,
     light: Light,
     /// Seed of the plate's appearance (texture, crack photos, screw slots).
     appearance: u64,
@@ -157,7 +157,7 @@ pub fn render(
     };
     let ctx = Ctx {
         scene,
-        hinv: cam.image_to_plate(),
+        plate: plate_points(&cam),
         cam,
         light,
         appearance,
@@ -197,7 +197,7 @@ fn paint_plate(ctx: &Ctx<'_>, background: [u8; 3]) -> Canvas {
     let mut plate_mask = vec![false; w * h];
     for r in 0..h {
         for c in 0..w {
-            if let Some(p) = plate_at(&ctx.hinv, c, r).filter(|&p| on_plate(p)) {
+            if let Some(p) = ctx.plate[r * ctx.cam.width() as usize + c].filter(|&p| on_plate(p)) {
                 let t = 1.0 + material_texture(p, tex_seed);
                 px[r * w + c] = [mat[0] * t, mat[1] * t, mat[2] * t];
                 plate_mask[r * w + c] = true;
@@ -229,7 +229,7 @@ fn shade_relief(ctx: &Ctx<'_>, canvas: &mut Canvas) {
                 if !canvas.plate_mask[r * w + c] {
                     continue;
                 }
-                let Some(p) = plate_at(&ctx.hinv, c, r) else {
+                let Some(p) = ctx.plate[r * ctx.cam.width() as usize + c] else {
                     continue;
                 };
                 if !(p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1]) {
@@ -403,7 +403,7 @@ fn draw_line(
             if !canvas.plate_mask[k] {
                 continue;
             }
-            let Some(p) = plate_at(&ctx.hinv, c, r) else {
+            let Some(p) = ctx.plate[r * ctx.cam.width() as usize + c] else {
                 continue;
             };
             let Some((s, d, seg)) = geo.locate(p) else {

@@ -1,19 +1,19 @@
 //! Geometry of the renderer: polylines queried by arc length and signed distance, the pixel
 //! rectangle a plate region covers, the plate point seen through a pixel, and the image scale.
 
-use nalgebra::Matrix3;
-
 use crate::camera::{apply_homography, Camera};
 use crate::surface::Point;
 
 /// A pixel rectangle `[c0, c1) × [r0, r1)` as `(c0, c1, r0, r1)`.
 pub(super) type Region = (usize, usize, usize, usize);
 
-/// The plate point seen through the centre of pixel `(c, r)`, through the camera's image →
-/// plate homography (`None` at or above the horizon).
-#[inline]
-pub(super) fn plate_at(image_to_plate: &Matrix3<f64>, c: usize, r: usize) -> Option<Point> {
-    apply_homography(image_to_plate, [c as f64 + 0.5, r as f64 + 0.5])
+/// The plate point seen through the centre of every pixel, row by row, through the camera's
+/// lens (`None` at or above the horizon).
+pub(super) fn plate_points(cam: &Camera) -> Vec<Option<Point>> {
+    let (w, h) = (cam.width() as usize, cam.height() as usize);
+    (0..w * h)
+        .map(|k| cam.plate_point([(k % w) as f64 + 0.5, (k / w) as f64 + 0.5]))
+        .collect()
 }
 
 /// A polyline prepared for (arc length, signed distance) queries.
@@ -98,12 +98,17 @@ pub(super) fn pixel_region(cam: &Camera, lo: Point, hi: Point, z: &[f64]) -> Opt
     let mut vmin = f64::INFINITY;
     let mut vmax = f64::NEG_INFINITY;
     for &zz in z {
-        for p in [
-            [lo[0], lo[1]],
-            [hi[0], lo[1]],
-            [lo[0], hi[1]],
-            [hi[0], hi[1]],
-        ] {
+        // Corners and points along the edges: through a distorting lens the edges bow.
+        let n = 4;
+        let along = |k: usize| -> Point {
+            let t = k as f64 / n as f64;
+            [lo[0] + t * (hi[0] - lo[0]), lo[1] + t * (hi[1] - lo[1])]
+        };
+        let border = (0..=n).flat_map(|k| {
+            let a = along(k);
+            [[a[0], lo[1]], [a[0], hi[1]], [lo[0], a[1]], [hi[0], a[1]]]
+        });
+        for p in border {
             match cam.project([p[0], p[1], zz]) {
                 Some(uv) => {
                     umin = umin.min(uv[0]);

@@ -34,7 +34,8 @@
 //! texture, noise, shading), `geometry`, `draw` (the renderer's steps), `frame` (frames and
 //! ground-truth boxes), `export` (PNG, JSON and COCO files), `dataset` (a run of frames
 //! written as a COCO dataset) and `detector_set` (frames of many random scenes with per-pixel
-//! crack masks, for training and evaluating a crack detector).
+//! crack masks, for training and evaluating a crack detector); `sheet`, a printed calibration
+//! target lying on the plate seen through the camera's lens, at the poses of a calibration.
 
 mod assets;
 mod dataset;
@@ -43,6 +44,7 @@ mod draw;
 mod export;
 mod frame;
 mod geometry;
+mod sheet;
 mod texture;
 
 pub use assets::{CrackAssets, CrackStrip, CRACKS_DIR_ENV, CRACK_DATASETS};
@@ -51,3 +53,4 @@ pub use detector_set::{detector_frame_seed, write_detector_set, DetectorSetSumma
 pub use draw::{render, RenderOptions, SCREW_GREY};
 pub use export::{coco_dataset, coco_file, frame_json, write_coco_dataset, write_frame};
 pub use frame::{BoxKind, Frame, GroundTruthBox};
+pub use sheet::{calibration_poses, render_sheet, SheetOptions};
