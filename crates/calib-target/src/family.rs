@@ -92,18 +92,14 @@ mod tests {
         let mut seen = std::collections::HashSet::new();
         for id in 0..tag_count() {
             let p = pattern(id).unwrap();
-            for k in 0..TOTAL_CELLS {
-                assert!(
-                    p[0][k] && p[9][k] && p[k][0] && p[k][9],
-                    "white ring of {id}"
-                );
-            }
-            for k in 1..TOTAL_CELLS - 1 {
-                assert!(
-                    !p[1][k] && !p[8][k] && !p[k][1] && !p[k][8],
-                    "black ring of {id}"
-                );
-            }
+            let edge = |i: usize, k: usize| [p[i][k], p[k][i], p[9 - i][k], p[k][9 - i]];
+            let ring = |i: usize| {
+                (i..TOTAL_CELLS - i)
+                    .flat_map(|k| edge(i, k))
+                    .collect::<Vec<_>>()
+            };
+            assert!(ring(0).iter().all(|&w| w), "white ring of {id}");
+            assert!(ring(1).iter().all(|&w| !w), "black ring of {id}");
             assert!(seen.insert(p), "tag {id} repeats another's pattern");
         }
     }

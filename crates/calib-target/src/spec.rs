@@ -284,7 +284,8 @@ mod tests {
 
     #[test]
     fn bad_fields_are_named() {
-        let cases: [(&str, fn(&mut TargetSpec)); 5] = [
+        type Spoil = fn(&mut TargetSpec);
+        let cases: [(&str, Spoil); 5] = [
             ("family", |s| s.family = "tag16h5".into()),
             ("cols × rows", |s| s.rows = 0),
             ("tag_mm", |s| s.tag_mm = f64::NAN),

@@ -16,11 +16,14 @@
 //!   OpenCV's terms, the plate's pose, the errors, the date; checked field by field on loading,
 //!   and against every frame's size.
 //!
+//! * [`undistort`]: the frame as the pinhole sees it (a map made once, a bilinear lookup per
+//!   frame) and the plate → undistorted-pixel homography, which is how missions use the lens.
+//!
 //! Pixels are whatever convention the caller's points use (crackbot's: the top-left corner of
 //! the top-left pixel is `(0, 0)`; OpenCV's: its centre is, so OpenCV's `cx` is crackbot's
 //! minus 0.5). Target points are millimetres on the target's plane (z = 0).
 //!
-//! Pure: no images, no files; nalgebra only.
+//! No I/O beyond the calibration file; images only in [`undistort`].
 
 pub mod calibrate;
 mod error;
@@ -29,6 +32,7 @@ pub mod homography;
 pub mod lens;
 pub mod pose;
 pub mod refine;
+pub mod undistort;
 pub mod zhang;
 
 pub use calibrate::{calibrate, Calibration, Options, View};
@@ -36,3 +40,4 @@ pub use error::CalibError;
 pub use file::{CameraFile, FileError};
 pub use lens::{Distortion, Intrinsics, Lens};
 pub use pose::Pose;
+pub use undistort::Undistorter;

@@ -12,7 +12,10 @@
 //! * `crackbot calibration check FILE` — validates a calibration file.
 //! * `crackbot detect IMAGE...` — candidate cracks in camera images (ONNX detector or the
 //!   classical baseline), with surface millimetres given a homography calibration.
-//! * `crackbot homography fit|check` — the camera's pixel ↔ millimetre calibration.
+//! * `crackbot homography fit|check` — the camera's pixel ↔ millimetre calibration from
+//!   measured point pairs.
+//! * `crackbot calibrate target|camera|surface|views|check` — the camera from a printed target:
+//!   lens distortion included, the plate's pose, checks drawn on the frames.
 //!
 //! The work is done by the libraries (`crackbot-mission`, `crackbot-acquisition`,
 //! `crackbot-vision`); this binary parses arguments, draws progress bars and prints reports.
@@ -38,6 +41,7 @@ use crackbot_mission::{run_demo, DemoConfig, DemoSurface};
 use crackbot_protocol::SAMPLE_RATE_HZ;
 use indicatif::{ProgressBar, ProgressStyle};
 
+mod calibrate;
 mod lab;
 mod run;
 mod vision;
@@ -71,6 +75,10 @@ enum Command {
     /// Pixel ↔ surface-millimetre calibration of the camera (homography).
     #[command(subcommand)]
     Homography(vision::HomographyCommand),
+    /// The camera from a printed target: the target to print, the lens (intrinsics and
+    /// distortion), the plate's pose.
+    #[command(subcommand)]
+    Calibrate(calibrate::CalibrateCommand),
     /// [research, runs crackbot-lab] Tactile recordings: convert, evaluate, the paper's tables.
     #[command(disable_help_flag = true)]
     Tactile(lab::Forwarded),
@@ -189,6 +197,7 @@ fn main() -> Result<()> {
         Command::Replay(args) => runtime.block_on(replay(args)),
         Command::Detect(args) => vision::detect(args),
         Command::Homography(cmd) => vision::homography(cmd),
+        Command::Calibrate(cmd) => calibrate::calibrate(cmd),
         Command::Tactile(args) => lab::run("tactile", args),
         Command::EvalDetector(args) => lab::run("eval-detector", args),
         Command::DetectorTradeoff(args) => lab::run("detector-tradeoff", args),

@@ -177,8 +177,13 @@ pub struct RunArgs {
     #[arg(long, requires = "serial")]
     pub camera: Option<PathBuf>,
     /// Hardware: the camera's pixel → surface calibration (`crackbot homography fit`).
-    #[arg(long, requires = "camera")]
+    #[arg(long, requires = "camera", conflicts_with = "camera_calibration")]
     pub homography: Option<PathBuf>,
+    /// The camera's lens and the plate's pose (`crackbot calibrate camera`, then `calibrate
+    /// surface`): each frame is undistorted and mapped to the plate through it (hardware, or a
+    /// simulated scene whose camera distorts).
+    #[arg(long)]
+    pub camera_calibration: Option<PathBuf>,
     #[command(flatten)]
     pub fleet: FleetArgs,
 }
@@ -277,6 +282,9 @@ fn settings_from_flags(args: &RunArgs, config: &mut InspectConfig) -> Result<()>
         config.mode = m;
     }
     set(&mut config.rig.speedup, args.speedup);
+    if let Some(c) = &args.camera_calibration {
+        config.rig.camera_calibration = Some(c.clone());
+    }
     if let Some(s) = args.seed {
         config.rig.seed = s;
     }

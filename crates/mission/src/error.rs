@@ -112,6 +112,9 @@ pub enum MissionError {
     /// The site's proximity fibre is out of range.
     #[error(transparent)]
     Fibre(#[from] crackbot_fibre::FibreError),
+    /// A camera calibration file is unusable or does not fit the frame.
+    #[error(transparent)]
+    CameraCalibration(#[from] crackbot_calib::FileError),
     /// A calibration file is unusable.
     #[error(transparent)]
     Calibration(#[from] crackbot_acquisition::calibration::CalibrationError),

@@ -9,6 +9,7 @@ pub(crate) const COMMENTS: &[(&str, &str)] = &[
     ("rig", "What the mission runs on. Without [rig.hardware], the simulated rig over --scene (the built-in scene by default)."),
     ("rig.speedup", "Simulation speed-up (1: real time, as hardware runs; the figures in EXPERIMENTS.md are at 1)."),
     ("rig.seed", "Seed of the simulated sensor and camera."),
+    ("rig.camera_calibration", "The camera's lens and the plate's pose (crackbot calibrate camera, then surface): frames are undistorted and mapped to the plate through it."),
     ("rig.hardware", "Real hardware: the sensor's serial port, the controller's UDP address, the link key, the camera."),
     ("rig.hardware.serial", "The sensor's serial device (or a pseudo-terminal)."),
     ("rig.hardware.controller", "The manipulator controller's UDP address, e.g. \"192.168.1.20:7700\"."),

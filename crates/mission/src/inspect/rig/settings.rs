@@ -58,6 +58,11 @@ pub struct RigConfig {
     pub speedup: f64,
     /// Seed of the simulated sensor and camera.
     pub seed: u64,
+    /// The camera's lens and the plate's pose (`crackbot calibrate camera` then `surface`): the
+    /// frame is undistorted and mapped to the plate through it, in place of the hardware's
+    /// homography or the simulated scene's exact one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_calibration: Option<PathBuf>,
     /// The simulated scene ([`RigConfig::set_scene`]); given by `--scene`, not by the file.
     #[cfg(feature = "sim")]
     #[serde(skip)]
@@ -84,6 +89,7 @@ impl RigConfig {
             site,
             speedup: 1.0,
             seed: 7,
+            camera_calibration: None,
             #[cfg(feature = "sim")]
             scene: None,
             #[cfg(feature = "sim")]

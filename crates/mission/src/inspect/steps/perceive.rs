@@ -7,6 +7,7 @@ use crackbot_imaging::Homography;
 use crackbot_planner::Candidate;
 use crackbot_vision::preprocess::PostprocessParams;
 use crackbot_vision::{Detection, DetectionSource};
+use image::RgbImage;
 use serde::{Deserialize, Serialize};
 
 use super::trace::CrackTrace;
@@ -124,6 +125,10 @@ pub(crate) fn perceive(
 
     std::fs::create_dir_all(out_dir).map_err(|e| io_err(out_dir, e))?;
     let (image, h) = rig.frame(rig_config, mode)?;
+    let (image, h) = match &rig_config.camera_calibration {
+        Some(path) => through_lens(path, &image)?,
+        None => (image, h),
+    };
     let frame_path = out_dir.join("frame.png");
     image
         .save(&frame_path)
@@ -163,6 +168,33 @@ pub(crate) fn perceive(
         trace,
         frame,
     })
+}
+
+/// The frame undistorted by the lens of the calibration file at `path`, and the pixel → plate
+/// homography of the undistorted frame (from the file's plate pose). Refuses a frame of another
+/// size than the calibration's and a file without the plate's pose.
+fn through_lens(path: &Path, image: &RgbImage) -> Result<(RgbImage, Homography), MissionError> {
+    use crackbot_calib::{undistort::plate_to_undistorted, CameraFile, FileError, Undistorter};
+    let file = CameraFile::load(path)?;
+    file.check_frame(path, image.width(), image.height())?;
+    let pose = file
+        .surface_pose()
+        .ok_or_else(|| FileError::NoSurface { path: path.into() })?;
+    let lens = file.lens();
+    let size = [file.image.width, file.image.height];
+    let undistorted =
+        Undistorter::new(&lens, size)
+            .apply(image)
+            .ok_or_else(|| FileError::ImageSize {
+                path: path.into(),
+                calibrated: size,
+                frame: [image.width(), image.height()],
+            })?;
+    let to_plate = plate_to_undistorted(&lens, &pose)
+        .try_inverse()
+        .ok_or(MissionError::SingularHomography)?;
+    let h = Homography::from_nalgebra(to_plate).map_err(|_| MissionError::SingularHomography)?;
+    Ok((undistorted, h))
 }
 
 /// The candidates of `detections` (image pixels) on the surface (`h`: surface mm → pixels) for
