@@ -4,6 +4,7 @@
 # made on first use from scripts/opencv_check.requirements.txt:
 #
 #   bash scripts/opencv_check.sh calibrate VIEWS.json WIDTH HEIGHT   # prints the fit as JSON
+#   bash scripts/opencv_check.sh images FOLDER TARGET.toml            # OpenCV's detection too
 #   bash scripts/opencv_check.sh --setup                             # only make the venv
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
