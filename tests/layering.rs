@@ -33,10 +33,13 @@ const LAYERS: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "components: sensor link, signals, classifiers, camera and its calibration, simulator, planner",
+        "camera model: the lens and its calibration from a flat target's points",
+        &["crackbot-calib"],
+    ),
+    (
+        "components: sensor link, signals, classifiers, camera, the printed target, simulator, planner",
         &[
             "crackbot-acquisition",
-            "crackbot-calib",
             "crackbot-calib-target",
             "crackbot-dsp",
             "crackbot-forest",
