@@ -335,3 +335,68 @@ fn bad_calibration_input_is_refused_with_what_is_wrong() {
     let e = refused(&["calibrate", "check", utf8(&good), "--image", utf8(&small)]);
     assert!(e.contains("320×240"), "{e}");
 }
+
+#[test]
+fn views_are_grabbed_from_the_camera_in_the_mode_asked() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    // A camera: a video of one rendered view, through ffmpeg as a device would be.
+    ok(&["calibrate", "views", "--out", utf8(d), "--count", "1"]);
+    let ffmpeg = crackbot_vision::camera::Ffmpeg::locate().expect("ffmpeg (scripts/setup.sh)");
+    let video = d.join("camera.mkv");
+    let status = std::process::Command::new(&ffmpeg.0)
+        .args([
+            "-nostdin",
+            "-hide_banner",
+            "-loglevel",
+            "error",
+            "-loop",
+            "1",
+            "-i",
+        ])
+        .arg(d.join("views/view-00.png"))
+        .args(["-frames:v", "8", "-c:v", "png"])
+        .arg(&video)
+        .status()
+        .expect("ffmpeg");
+    assert!(status.success());
+    let out = d.join("grabbed");
+    let said = ok(&[
+        "calibrate",
+        "grab",
+        "--camera",
+        utf8(&video),
+        "--count",
+        "2",
+        "--interval-s",
+        "0",
+        "--camera-size",
+        "640x480",
+        "--camera-discard",
+        "3",
+        "--out",
+        utf8(&out),
+    ]);
+    assert!(said.contains("2 frames of 640×480 px"), "{said}");
+    let grabbed = image::open(out.join("view-01.png"))
+        .expect("a frame")
+        .to_luma8();
+    let rendered = image::open(d.join("views/view-00.png"))
+        .expect("the view")
+        .to_luma8();
+    assert!(grabbed == rendered, "the frame came back changed");
+    // A mode the camera does not give: both sizes named.
+    let e = refused(&[
+        "calibrate",
+        "grab",
+        "--camera",
+        utf8(&video),
+        "--count",
+        "1",
+        "--camera-size",
+        "1280x720",
+        "--out",
+        utf8(&out),
+    ]);
+    assert!(e.contains("1280×720") && e.contains("640×480"), "{e}");
+}

@@ -179,6 +179,8 @@ pub struct RunArgs {
     /// Hardware: the camera's pixel → surface calibration (`crackbot homography fit`).
     #[arg(long, requires = "camera", conflicts_with = "camera_calibration")]
     pub homography: Option<PathBuf>,
+    #[command(flatten)]
+    pub capture: CaptureArgs,
     /// The camera's lens and the plate's pose (`crackbot calibrate camera`, then `calibrate
     /// surface`): each frame is undistorted and mapped to the plate through it (hardware, or a
     /// simulated scene whose camera distorts).
@@ -186,6 +188,56 @@ pub struct RunArgs {
     pub camera_calibration: Option<PathBuf>,
     #[command(flatten)]
     pub fleet: FleetArgs,
+}
+
+/// How frames are asked of the camera (hardware).
+#[derive(Debug, Clone, Default, Args)]
+pub struct CaptureArgs {
+    /// Hardware: the camera's frame size, WxH (refused, naming both sizes, if it gives another).
+    #[arg(long, value_parser = size)]
+    pub camera_size: Option<[u32; 2]>,
+    /// Hardware: the device's pixel format as ffmpeg names it (mjpeg, yuyv422, …).
+    #[arg(long)]
+    pub camera_format: Option<String>,
+    /// Hardware: the device's frame rate, fps.
+    #[arg(long)]
+    pub camera_fps: Option<f64>,
+    /// Hardware: the device's exposure (V4L2 exposure_time_absolute, its units; auto-exposure
+    /// off). Needs v4l2-ctl (Debian's v4l-utils).
+    #[arg(long)]
+    pub camera_exposure: Option<u32>,
+    /// Hardware: the device's gain (V4L2 gain, its units).
+    #[arg(long)]
+    pub camera_gain: Option<u32>,
+    /// Frames dropped before the one kept (default: 5 from a device, none from a file).
+    #[arg(long)]
+    pub camera_discard: Option<u32>,
+}
+
+impl CaptureArgs {
+    /// The options these flags ask for.
+    pub fn options(&self) -> crackbot_vision::camera::CaptureOptions {
+        crackbot_vision::camera::CaptureOptions {
+            size: self.camera_size,
+            pixel_format: self.camera_format.clone(),
+            framerate: self.camera_fps,
+            exposure: self.camera_exposure,
+            gain: self.camera_gain,
+            discard: self.camera_discard,
+        }
+    }
+}
+
+/// A frame size as `WxH`.
+pub fn size(s: &str) -> Result<[u32; 2], String> {
+    let bad = || format!("{s:?}: expected a size as WxH, e.g. 1280x720");
+    let (w, h) = s.split_once(['x', 'X', '×']).ok_or_else(bad)?;
+    let w: u32 = w.trim().parse().map_err(|_| bad())?;
+    let h: u32 = h.trim().parse().map_err(|_| bad())?;
+    if w == 0 || h == 0 {
+        return Err(bad());
+    }
+    Ok([w, h])
 }
 
 /// Fleet telemetry over Zenoh (builds with `--features telemetry`).
@@ -380,6 +432,7 @@ fn hardware(args: &RunArgs) -> Option<Hardware> {
         key_file: key.clone(),
         camera: args.camera.clone(),
         homography: args.homography.clone(),
+        capture: args.capture.options(),
     })
 }
 

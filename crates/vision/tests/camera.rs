@@ -162,3 +162,93 @@ fn a_camera_that_never_answers_times_out() {
     assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
     assert!(err.to_string().contains("silent.mkv"), "{err}");
 }
+
+/// A video of `frames` frames whose grey level is 10 × the frame's index.
+fn ramp_video(dir: &std::path::Path, frames: u32) -> std::path::PathBuf {
+    for n in 0..frames {
+        let v = (10 * n) as u8;
+        RgbImage::from_pixel(32, 24, image::Rgb([v, v, v]))
+            .save(dir.join(format!("f{n:03}.png")))
+            .expect("a frame");
+    }
+    let video = dir.join("ramp.mkv");
+    let status = Command::new(&ffmpeg().0)
+        .args([
+            "-nostdin",
+            "-hide_banner",
+            "-loglevel",
+            "error",
+            "-framerate",
+            "10",
+            "-i",
+        ])
+        .arg(dir.join("f%03d.png"))
+        .args(["-c:v", "png"])
+        .arg(&video)
+        .status()
+        .expect("ffmpeg");
+    assert!(status.success());
+    video
+}
+
+#[test]
+fn frames_are_dropped_while_the_camera_settles_and_a_mode_not_given_is_refused() {
+    use crackbot_vision::camera::{grab, CaptureOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let source = CameraSource::parse(ramp_video(dir.path(), 12).to_str().unwrap());
+    let first = grab(&source, None, &CaptureOptions::default(), DEFAULT_TIMEOUT).unwrap();
+    assert_eq!(first.get_pixel(0, 0)[0], 0);
+    let settled = CaptureOptions {
+        discard: Some(5),
+        size: Some([32, 24]),
+        ..CaptureOptions::default()
+    };
+    let got = grab(&source, None, &settled, DEFAULT_TIMEOUT).unwrap();
+    assert_eq!(got.get_pixel(0, 0)[0], 50, "the sixth frame");
+    let hd = CaptureOptions {
+        size: Some([1280, 720]),
+        ..CaptureOptions::default()
+    };
+    match grab(&source, None, &hd, DEFAULT_TIMEOUT) {
+        Err(e @ CameraError::Mode { .. }) => {
+            let m = e.to_string();
+            assert!(m.contains("1280×720") && m.contains("32×24"), "{m}");
+        }
+        other => panic!("expected a mode error, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_device_is_asked_for_its_mode_exposure_and_gain() {
+    use crackbot_vision::camera::CaptureOptions;
+    let o = CaptureOptions {
+        size: Some([1280, 720]),
+        pixel_format: Some("mjpeg".into()),
+        framerate: Some(30.0),
+        exposure: Some(150),
+        gain: Some(20),
+        discard: None,
+    };
+    let dev = CameraSource::parse("/dev/video0");
+    assert_eq!(
+        o.input_args(&dev).join(" "),
+        "-f v4l2 -video_size 1280x720 -input_format mjpeg -framerate 30 -i /dev/video0"
+    );
+    // A file or stream is not asked for a mode: its size is only checked.
+    assert_eq!(
+        o.input_args(&CameraSource::parse("run.mkv")).join(" "),
+        "-i run.mkv"
+    );
+    assert_eq!(
+        o.controls(),
+        ["auto_exposure=1", "exposure_time_absolute=150", "gain=20"]
+    );
+    // A device drops its first frames unless told otherwise; a file keeps its first.
+    assert!(o
+        .output_args(&dev)
+        .join(" ")
+        .starts_with("-vf select=gte(n\\,5) -frames:v 1"));
+    let file = CameraSource::parse("run.mkv");
+    assert!(o.output_args(&file).join(" ").starts_with("-frames:v 1"));
+    assert!(CaptureOptions::default().controls().is_empty());
+}

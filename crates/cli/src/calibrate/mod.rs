@@ -1,6 +1,7 @@
 //! `crackbot calibrate`: the camera on a bench, from a printed target.
 //!
 //! * `target`: the printable target (PNG at true scale) and its description (`target.toml`).
+//! * `grab`: the views taken from the camera in the missions' mode.
 //! * `camera`: the lens (intrinsics and distortion) from several views of the target.
 //! * `surface`: the plate's pose from one view of the target laid on it.
 //! * `views` (simulator): rendered views of the target through a scene's camera, to try the
@@ -10,6 +11,7 @@
 //! One file per step; `show.rs` draws what was found and what the fit predicts.
 
 mod camera;
+mod grab;
 mod images;
 mod show;
 mod surface;
@@ -29,6 +31,9 @@ pub enum CalibrateCommand {
     /// Write the printable target: a PNG at true scale (its pixel size in the file) and the
     /// target.toml that describes it. Print it at 100 % ("actual size") and measure one tag.
     Target(target::TargetArgs),
+    /// Take the views from the camera, in the mode the missions use (--camera-size, …), one
+    /// every --interval-s while you move the target.
+    Grab(grab::GrabArgs),
     /// The lens from views of the printed target: intrinsics and distortion (OpenCV's model),
     /// with the RMS reprojection error; writes the calibration file.
     Camera(camera::CameraArgs),
@@ -71,6 +76,7 @@ impl TargetChoice {
 pub fn calibrate(cmd: CalibrateCommand) -> Result<()> {
     match cmd {
         CalibrateCommand::Target(a) => target::run(&a),
+        CalibrateCommand::Grab(a) => grab::run(&a),
         CalibrateCommand::Camera(a) => camera::run(&a),
         CalibrateCommand::Surface(a) => surface::run(&a),
         #[cfg(feature = "sim")]

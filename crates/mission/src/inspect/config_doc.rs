@@ -16,7 +16,14 @@ pub(crate) const COMMENTS: &[(&str, &str)] = &[
     ("rig.hardware.bind", "This host's UDP address for the link (the controller sends to it)."),
     ("rig.hardware.key_file", "The link's pre-shared key file (64-128 hex digits, mode 0600)."),
     ("rig.hardware.camera", "A V4L2 device (/dev/video0), a video file or stream URL, or an image file."),
-    ("rig.hardware.homography", "The camera's pixel -> surface calibration (crackbot homography fit)."),
+    ("rig.hardware.homography", "The camera's pixel -> surface calibration (crackbot homography fit); or rig.camera_calibration in its place."),
+    ("rig.hardware.capture", "How frames are asked of the camera (crackbot_vision::camera::CaptureOptions); each key may be left out."),
+    ("rig.hardware.capture.size", "Frame size [width, height], px: asked of a device, checked on every source (another size is refused)."),
+    ("rig.hardware.capture.pixel_format", "A device's pixel format as ffmpeg names it (mjpeg, yuyv422, ...)."),
+    ("rig.hardware.capture.framerate", "A device's frame rate, fps."),
+    ("rig.hardware.capture.exposure", "A device's exposure (V4L2 exposure_time_absolute, its units); turns auto-exposure off (v4l2-ctl)."),
+    ("rig.hardware.capture.gain", "A device's gain (V4L2 gain, its units)."),
+    ("rig.hardware.capture.discard", "Frames dropped before the one kept (left out: DEVICE_DISCARD = 5 from a device, none from a file or stream)."),
     ("rig.site", "The place (a site file's contents; crackbot_mission::inspect::Site): on the simulator, the scene's."),
     ("rig.site.name", "The site's name, for the report."),
     ("rig.site.arm", "The arm's reachable box on the surface and its speeds."),
@@ -197,6 +204,7 @@ mod tests {
         let mut c = InspectConfig::new(crackbot_sim::Scene::builtin_default(), "out/mission");
         // The optional keys too.
         c.perceive.detector_model = Some("models/detector/crack-detector-320.onnx".into());
+        c.rig.camera_calibration = Some("out/camera.toml".into());
         let table = toml::Table::try_from(&c).unwrap();
         let mut all = Vec::new();
         keys(&table, "", &mut all);

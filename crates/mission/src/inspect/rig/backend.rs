@@ -52,6 +52,10 @@ pub trait RigBackend {
         mode: InspectMode,
     ) -> Result<(RgbImage, Homography), MissionError>;
 
+    /// One camera frame alone, for a mission that maps it through a camera calibration file
+    /// (`rig.camera_calibration`) instead of the rig's homography.
+    fn image(&mut self, config: &RigConfig, mode: InspectMode) -> Result<RgbImage, MissionError>;
+
     /// Stops what [`connect`](Self::connect) started (nothing on hardware). Called once, after
     /// the arm was stopped.
     fn shutdown(&mut self) {}
@@ -89,26 +93,33 @@ impl RigBackend for HardwareRig {
 
     fn frame(
         &mut self,
-        _: &RigConfig,
+        config: &RigConfig,
         mode: InspectMode,
     ) -> Result<(RgbImage, Homography), MissionError> {
-        use crackbot_vision::camera::{grab_frame, CameraSource, DEFAULT_TIMEOUT};
+        let cal = self
+            .hardware
+            .homography
+            .clone()
+            .ok_or(MissionError::Missing {
+                mode: mode.as_str(),
+                what: "the camera's pixel → surface calibration (--camera-calibration FILE from \
+                   `crackbot calibrate camera` and `surface`, or --homography FILE from \
+                   `crackbot homography fit`)",
+            })?;
+        let image = self.image(config, mode)?;
+        let h = crackbot_vision::homography::HomographyCalibration::load(&cal)?.homography()?;
+        Ok((image, h))
+    }
+
+    fn image(&mut self, _: &RigConfig, mode: InspectMode) -> Result<RgbImage, MissionError> {
+        use crackbot_vision::camera::{grab, CameraSource, DEFAULT_TIMEOUT};
         let hw = &self.hardware;
-        let missing = |what| MissionError::Missing {
+        let camera = hw.camera.as_ref().ok_or(MissionError::Missing {
             mode: mode.as_str(),
-            what,
-        };
-        let camera = hw
-            .camera
-            .as_ref()
-            .ok_or_else(|| missing("a camera (--camera DEVICE|FILE|URL)"))?;
-        let cal = hw.homography.as_ref().ok_or_else(|| {
-            missing("the camera's pixel → surface calibration (--homography FILE, from `crackbot homography fit`)")
+            what: "a camera (--camera DEVICE|FILE|URL)",
         })?;
         let source = CameraSource::parse(&camera.to_string_lossy());
-        let image = grab_frame(&source, None, DEFAULT_TIMEOUT)?;
-        let h = crackbot_vision::homography::HomographyCalibration::load(cal)?.homography()?;
-        Ok((image, h))
+        Ok(grab(&source, None, &hw.capture, DEFAULT_TIMEOUT)?)
     }
 }
 

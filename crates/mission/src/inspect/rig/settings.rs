@@ -31,9 +31,13 @@ pub struct Hardware {
     /// ([`crackbot_vision::camera::CameraSource::parse`]).
     #[serde(default)]
     pub camera: Option<PathBuf>,
-    /// The camera's pixel → surface calibration (`crackbot homography fit`).
+    /// The camera's pixel → surface calibration (`crackbot homography fit`); or, in its place,
+    /// [`RigConfig::camera_calibration`].
     #[serde(default)]
     pub homography: Option<PathBuf>,
+    /// How frames are asked of the camera: mode, exposure, gain, frames dropped first.
+    #[serde(default)]
+    pub capture: crackbot_vision::camera::CaptureOptions,
 }
 
 /// This host's link address when none is given (`--bind`'s default).

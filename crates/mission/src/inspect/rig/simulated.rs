@@ -65,14 +65,7 @@ impl RigBackend for SimulatedRig {
         config: &RigConfig,
         mode: InspectMode,
     ) -> Result<(RgbImage, Homography), MissionError> {
-        use crackbot_sim::render::{render, CrackAssets, RenderOptions};
-        let assets = CrackAssets::load_default()?;
-        let frame = render(
-            scene_of(config, mode)?,
-            &assets,
-            &RenderOptions::default(),
-            config.seed,
-        )?;
+        let frame = render_scene(config, mode)?;
         let h = Homography::from_nalgebra(
             frame
                 .plate_to_image
@@ -83,11 +76,30 @@ impl RigBackend for SimulatedRig {
         Ok((frame.image, h))
     }
 
+    fn image(&mut self, config: &RigConfig, mode: InspectMode) -> Result<RgbImage, MissionError> {
+        Ok(render_scene(config, mode)?.image)
+    }
+
     fn shutdown(&mut self) {
         if let Some(c) = self.controller.take() {
             let _ = c.shutdown();
         }
     }
+}
+
+/// The camera's frame of the scene `config` simulates (its lens included).
+fn render_scene(
+    config: &RigConfig,
+    mode: InspectMode,
+) -> Result<crackbot_sim::render::Frame, MissionError> {
+    use crackbot_sim::render::{render, CrackAssets, RenderOptions};
+    let assets = CrackAssets::load_default()?;
+    Ok(render(
+        scene_of(config, mode)?,
+        &assets,
+        &RenderOptions::default(),
+        config.seed,
+    )?)
 }
 
 /// The scene `config` simulates, or an error saying it has none (naming `mode`).

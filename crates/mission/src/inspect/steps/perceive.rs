@@ -124,10 +124,9 @@ pub(crate) fn perceive(
     use crackbot_vision::model::{build_detector, DetectorChoice};
 
     std::fs::create_dir_all(out_dir).map_err(|e| io_err(out_dir, e))?;
-    let (image, h) = rig.frame(rig_config, mode)?;
     let (image, h) = match &rig_config.camera_calibration {
-        Some(path) => through_lens(path, &image)?,
-        None => (image, h),
+        Some(path) => through_lens(path, &rig.image(rig_config, mode)?)?,
+        None => rig.frame(rig_config, mode)?,
     };
     let frame_path = out_dir.join("frame.png");
     image
