@@ -22,30 +22,30 @@ import cv2
 import numpy as np
 
 
-def calibrate(path, width, height):
-    views = json.load(open(path))
+def fit(views, size):
+    """cv2.calibrateCamera on crackbot_calib::View-like dicts: the fit as a dict."""
     objects = [
         np.array([[x, y, 0.0] for x, y in v["target"]], dtype=np.float32) for v in views
     ]
     images = [np.array(v["image"], dtype=np.float32) for v in views]
     rms, k, dist, rvecs, tvecs = cv2.calibrateCamera(
-        objects, images, (width, height), None, None, flags=cv2.CALIB_FIX_K3
+        objects, images, size, None, None, flags=cv2.CALIB_FIX_K3
     )
     dist = dist.ravel().tolist()
-    print(
-        json.dumps(
-            {
-                "fx": k[0, 0],
-                "fy": k[1, 1],
-                "cx": k[0, 2],
-                "cy": k[1, 2],
-                "dist": (dist + [0.0] * 5)[:5],
-                "rms_px": rms,
-                "rvecs": [r.ravel().tolist() for r in rvecs],
-                "tvecs": [t.ravel().tolist() for t in tvecs],
-            }
-        )
-    )
+    return {
+        "fx": k[0, 0],
+        "fy": k[1, 1],
+        "cx": k[0, 2],
+        "cy": k[1, 2],
+        "dist": (dist + [0.0] * 5)[:5],
+        "rms_px": rms,
+        "rvecs": [r.ravel().tolist() for r in rvecs],
+        "tvecs": [t.ravel().tolist() for t in tvecs],
+    }
+
+
+def calibrate(path, width, height):
+    print(json.dumps(fit(json.load(open(path)), (width, height))))
 
 
 def target_corners(spec, tag_id):
@@ -87,23 +87,9 @@ def images(folder, target):
         tags.append(len(view["target"]) // 4)
         if len(view["target"]) >= 16:
             views.append(view)
-    objects = [np.array([[x, y, 0.0] for x, y in v["target"]], dtype=np.float32) for v in views]
-    points = [np.array(v["image"], dtype=np.float32) for v in views]
-    rms, k, dist, _, _ = cv2.calibrateCamera(objects, points, size, None, None, flags=cv2.CALIB_FIX_K3)
-    dist = dist.ravel().tolist()
-    print(
-        json.dumps(
-            {
-                "fx": k[0, 0],
-                "fy": k[1, 1],
-                "cx": k[0, 2],
-                "cy": k[1, 2],
-                "dist": (dist + [0.0] * 5)[:5],
-                "rms_px": rms,
-                "tags": tags,
-            }
-        )
-    )
+    result = fit(views, size)
+    result["tags"] = tags
+    print(json.dumps(result))
 
 
 def main():

@@ -19,7 +19,7 @@ use crackbot_calib::calibrate::pixel_to_plane;
 use crackbot_calib::CameraFile;
 use crackbot_sim::camera::Camera;
 use crackbot_sim::Scene;
-use crackbot_tests::{crackbot, text};
+use crackbot_tests::{confirmed, crackbot, text};
 
 fn webcam_scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/sim/scenes/webcam.toml")
@@ -124,15 +124,7 @@ fn mission(dir: &Path, name: &str, extra: &[&str]) -> Vec<[f64; 2]> {
         utf8(&out),
     ];
     args.extend(extra);
-    let report: serde_json::Value = serde_json::from_str(&ok(&args)).expect("one JSON report");
-    let mut at: Vec<[f64; 2]> = report["cracks"]
-        .as_array()
-        .expect("cracks")
-        .iter()
-        .map(|c| serde_json::from_value(c["position_mm"].clone()).expect("position_mm"))
-        .collect();
-    at.sort_by(|a, b| a[0].total_cmp(&b[0]));
-    at
+    confirmed(ok(&args).as_bytes())
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -7,7 +7,7 @@ use std::net::UdpSocket;
 use std::process::{Command, Stdio};
 
 use crackbot_testkit::DdsArm;
-use crackbot_tests::{binary, text};
+use crackbot_tests::{binary, confirmed, text};
 
 /// A small plate with one 10 mm crack, so that the tactile-only scan is a few short rows.
 const SCENE: &str = r#"
@@ -640,19 +640,6 @@ fn the_conformance_suite_passes_on_the_controller_process() {
         .filter(|r| r["passed"] == true)
         .count();
     assert_eq!(passed, 7, "{results}");
-}
-
-/// The confirmed cracks' positions in a robot's JSON report, sorted by x.
-fn confirmed(stdout: &[u8]) -> Vec<[f64; 2]> {
-    let report: serde_json::Value = serde_json::from_slice(stdout).expect("one JSON object");
-    let mut at: Vec<[f64; 2]> = report["cracks"]
-        .as_array()
-        .expect("cracks")
-        .iter()
-        .map(|c| serde_json::from_value(c["position_mm"].clone()).expect("position_mm"))
-        .collect();
-    at.sort_by(|a, b| a[0].total_cmp(&b[0]));
-    at
 }
 
 #[test]

@@ -205,3 +205,16 @@ pub fn read_all(
     }
     (samples, error, stream.stats())
 }
+
+/// The confirmed cracks' positions in a robot's JSON report, sorted by x.
+pub fn confirmed(stdout: &[u8]) -> Vec<[f64; 2]> {
+    let report: serde_json::Value = serde_json::from_slice(stdout).expect("one JSON object");
+    let mut at: Vec<[f64; 2]> = report["cracks"]
+        .as_array()
+        .expect("cracks")
+        .iter()
+        .map(|c| serde_json::from_value(c["position_mm"].clone()).expect("position_mm"))
+        .collect();
+    at.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    at
+}
