@@ -9,8 +9,9 @@ need_cmd() { command -v "$1" >/dev/null 2>&1; }
 
 # Debian packages the project needs at run or test time. The serial path uses pseudo-terminals from
 # the kernel and serialport without libudev. The tactile plots (crates/tactile/src/plots.rs) draw
-# their text with DejaVu Sans, read at run time.
-apt_packages=(fonts-dejavu-core valgrind)
+# their text with DejaVu Sans, read at run time. A camera's exposure and gain are set through
+# v4l2-ctl (`--camera-exposure`, `--camera-gain`).
+apt_packages=(fonts-dejavu-core valgrind v4l-utils)
 
 missing=()
 for pkg in "${apt_packages[@]}"; do

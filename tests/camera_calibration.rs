@@ -74,10 +74,9 @@ fn calibrate(dir: &Path) -> PathBuf {
     dir.join("camera.toml")
 }
 
-/// Worst and mean distance (mm) between plate points and where the file's calibration puts the
-/// pixels the scene's camera sees them at, over the plate (2.5 mm grid).
-fn plate_errors(file: &CameraFile, cam: &Camera) -> (f64, f64) {
-    let (lens, pose) = (file.lens(), file.surface_pose().expect("the plate's pose"));
+/// Worst and mean distance (mm) between plate points and where `to_plate` puts the pixels the
+/// scene's camera sees them at, over the plate (2.5 mm grid).
+fn plate_errors(cam: &Camera, to_plate: &dyn Fn([f64; 2]) -> Option<[f64; 2]>) -> (f64, f64) {
     let (mut worst, mut sum, mut n) = (0.0_f64, 0.0, 0.0);
     for iy in 0..=40 {
         for ix in 0..=80 {
@@ -88,7 +87,7 @@ fn plate_errors(file: &CameraFile, cam: &Camera) -> (f64, f64) {
             else {
                 continue;
             };
-            let q = pixel_to_plane(&lens, &pose, uv).expect("a point on the plate");
+            let q = to_plate(uv).expect("a point on the plate");
             let e = (q[0] - p[0]).hypot(q[1] - p[1]);
             worst = worst.max(e);
             sum += e;
@@ -148,7 +147,8 @@ fn a_webcam_calibrated_with_the_commands_maps_the_plate_and_confirms_the_same_cr
         (lens.distortion.k1 - t.distortion.k1).abs() < 0.01,
         "{lens:?}"
     );
-    let (worst, mean) = plate_errors(&file, &truth);
+    let pose = file.surface_pose().expect("the plate's pose");
+    let (worst, mean) = plate_errors(&truth, &|uv| pixel_to_plane(&lens, &pose, uv));
     eprintln!(
         "lens RMS {:.3} px, plate pose RMS {:.3} px; plate error mean {mean:.3} mm, worst {worst:.3} mm",
         file.lens.rms_px,
@@ -157,6 +157,14 @@ fn a_webcam_calibrated_with_the_commands_maps_the_plate_and_confirms_the_same_cr
     assert!(
         mean <= 0.3 && worst <= 1.0,
         "plate error mean {mean} mm, worst {worst} mm"
+    );
+    // What the calibration is for: the same camera taken for a pinhole (no lens model).
+    let h = truth.image_to_plate();
+    let (pw, pm) = plate_errors(&truth, &|uv| crackbot_sim::camera::apply_homography(&h, uv));
+    eprintln!("taken for a pinhole: plate error mean {pm:.2} mm, worst {pw:.2} mm");
+    assert!(
+        pw > 3.0,
+        "the webcam's lens moves the plate's edges by millimetres"
     );
 
     // OpenCV, from the same images with its own detector, finds the same lens.
