@@ -188,8 +188,8 @@ fn a_webcam_calibrated_with_the_commands_maps_the_plate_and_confirms_the_same_cr
     assert!((f("cy") + 0.5 - lens.intrinsics.cy).abs() < 3.0);
     assert!((d(0) - lens.distortion.k1).abs() < 0.02 && (d(1) - lens.distortion.k2).abs() < 0.03);
 
-    // Missions: the exact camera on the default scene, the webcam through its calibration, and
-    // the webcam taken for a pinhole (what the calibration is for).
+    // Missions: the exact camera on the default scene and the webcam through its calibration
+    // (alone in the test run, .config/nextest.toml: a starved simulated rig misreads cracks).
     let exact = mission(dir.path(), "exact", &[]);
     let scene_arg = utf8(&webcam_scene()).to_string();
     let cal = mission(
@@ -202,10 +202,7 @@ fn a_webcam_calibrated_with_the_commands_maps_the_plate_and_confirms_the_same_cr
             utf8(&file_path),
         ],
     );
-    let raw = mission(dir.path(), "pinhole", &["--scene", &scene_arg]);
-    eprintln!(
-        "exact camera: {exact:.2?}\ncalibrated webcam: {cal:.2?}\nwebcam as a pinhole: {raw:.2?}"
-    );
+    eprintln!("exact camera: {exact:.2?}\ncalibrated webcam: {cal:.2?}");
     assert_eq!(cal.len(), exact.len(), "{cal:?} vs {exact:?}");
     let apart: Vec<f64> = cal
         .iter()
