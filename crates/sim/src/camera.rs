@@ -82,8 +82,8 @@ fn lens_of(spec: &CameraSpec, f: [f64; 2], c: [f64; 2]) -> Result<Option<Lens>, 
         },
         distortion: Distortion::from_array(d),
     };
-    // Every pixel of the frame must come from one ray: undo the distortion at the corners and
-    // edge midpoints and check it distorts back.
+    // Every pixel of the frame must come from one ray: at the corners and edge midpoints the
+    // distortion must be undone (Newton converges) and still spread outwards (inside the fold).
     let [w, h] = spec.resolution.map(f64::from);
     for uv in [
         [0.0, 0.0],
@@ -93,7 +93,6 @@ fn lens_of(spec: &CameraSpec, f: [f64; 2], c: [f64; 2]) -> Result<Option<Lens>, 
         [w / 2.0, 0.0],
         [0.0, h / 2.0],
     ] {
-        // Undone, and still spreading outwards there (inside the fold).
         let ok = lens.unproject(uv).is_some_and(|n| {
             let out = lens.distortion.apply(n * 1.001).norm();
             let here = lens.distortion.apply(n).norm();

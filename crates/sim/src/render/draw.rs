@@ -6,7 +6,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
-use super::assets::{pick_strip, CrackAssets};
+use super::assets::{pick_strip, CrackAssets, CrackStrip};
 use super::frame::{BoxAcc, BoxKind, Frame, GroundTruthBox};
 use super::geometry::{mm_per_px, pixel_region, plate_points, Path2, Region};
 use super::texture::{lambert, material_texture, mix64, NoiseGen};
@@ -197,7 +197,7 @@ fn paint_plate(ctx: &Ctx<'_>, background: [u8; 3]) -> Canvas {
     let mut plate_mask = vec![false; w * h];
     for r in 0..h {
         for c in 0..w {
-            if let Some(p) = ctx.plate[r * ctx.cam.width() as usize + c].filter(|&p| on_plate(p)) {
+            if let Some(p) = ctx.plate[r * w + c].filter(|&p| on_plate(p)) {
                 let t = 1.0 + material_texture(p, tex_seed);
                 px[r * w + c] = [mat[0] * t, mat[1] * t, mat[2] * t];
                 plate_mask[r * w + c] = true;
@@ -229,7 +229,7 @@ fn shade_relief(ctx: &Ctx<'_>, canvas: &mut Canvas) {
                 if !canvas.plate_mask[r * w + c] {
                     continue;
                 }
-                let Some(p) = ctx.plate[r * ctx.cam.width() as usize + c] else {
+                let Some(p) = ctx.plate[r * w + c] else {
                     continue;
                 };
                 if !(p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1]) {
@@ -345,6 +345,176 @@ struct Line<'a> {
     ink: Option<f64>,
 }
 
+/// How a line's real crack strip is laid along its path in this frame: the strip picked for its
+/// width in pixels, its direction and starting point (drawn from the feature's seed), its scale
+/// and taper.
+struct Warp<'a> {
+    geo: Path2,
+    strip: &'a CrackStrip,
+    /// Millimetres per pixel at the line's middle.
+    px_mm: f64,
+    /// Half the drawn width (at least one pixel), mm.
+    half_w: f64,
+    /// How much of a pixel a thinner line covers.
+    coverage: f32,
+    flip_v: f64,
+    dir_u: f64,
+    mm_per_src: f64,
+    u0: f64,
+    /// The length over which the line narrows at each end, mm.
+    taper_len: f64,
+    /// The farthest from the path a pixel can be touched, mm.
+    d_max: f64,
+}
+
+/// Where a plate point falls in a line's warped strip.
+struct StripPoint {
+    /// Signed distance from the path, mm.
+    d: f64,
+    /// The path's segment nearest the point.
+    seg: usize,
+    /// The end taper there (1 in the middle).
+    taper: f64,
+    u: f64,
+    v: f64,
+    /// The strip's scale across at `u`.
+    g: f64,
+    /// The strip's mask there.
+    m: f32,
+}
+
+impl<'a> Warp<'a> {
+    /// The warp of `line` (feature `i`); `None` for a path of no length.
+    fn new(ctx: &Ctx<'_>, assets: &'a CrackAssets, i: usize, line: &Line<'_>) -> Option<Self> {
+        let geo = Path2::new(line.path);
+        if geo.a.is_empty() {
+            return None;
+        }
+        let px_mm = mm_per_px(&ctx.cam, geo.point_at(geo.total / 2.0));
+        // Draw at least one pixel wide; thinner cracks are fainter (their pixel coverage).
+        let w_eff = line.width.max(px_mm);
+        let coverage = (line.width.max(0.35 * px_mm) / w_eff).min(1.0) as f32;
+        let half_w = w_eff / 2.0;
+        let mut frng = ctx.feature_rng(i);
+        let strip = pick_strip(assets.strips(), w_eff / px_mm, &mut frng);
+        let flip_v = if frng.random::<bool>() { -1.0 } else { 1.0 };
+        let dir_u = if frng.random::<bool>() { -1.0 } else { 1.0 };
+        // Isotropic warp: one source pixel is as long along the crack as across it.
+        let mm_per_src = half_w / f64::from(strip.mean_half_width_px);
+        let needed = geo.total / mm_per_src;
+        let last = (strip.len - 1) as f64;
+        let u0 = if needed < last {
+            let start = frng.random_range(0.0..=(last - needed));
+            if dir_u > 0.0 {
+                start
+            } else {
+                start + needed
+            }
+        } else {
+            frng.random_range(0.0..=last)
+        };
+        // The crack narrows over its last few widths at each end.
+        let taper_len = (3.0 * w_eff).min(0.2 * geo.total).max(1e-9);
+        let d_max = 2.5 * half_w + 2.0 * px_mm;
+        Some(Warp {
+            geo,
+            strip,
+            px_mm,
+            half_w,
+            coverage,
+            flip_v,
+            dir_u,
+            mm_per_src,
+            u0,
+            taper_len,
+            d_max,
+        })
+    }
+
+    /// The strip at plate point `p`, or `None` beyond the path's ends, too far across it, or
+    /// where the strip's mask is empty.
+    fn at(&self, p: Point) -> Option<StripPoint> {
+        let geo = &self.geo;
+        let (s, d, seg) = geo.locate(p)?;
+        if s < 0.0 || s > geo.total || d.abs() > self.d_max {
+            return None;
+        }
+        let taper = ((s.min(geo.total - s) / self.taper_len).clamp(0.0, 1.0))
+            .powf(0.6)
+            .max(0.2);
+        let u = self.strip.fold(self.u0 + self.dir_u * s / self.mm_per_src);
+        let g = self.strip.across_scale(u);
+        let v = self.flip_v * d * g / (self.half_w * taper);
+        let m = self.strip.mask_at(u, v);
+        (m > 0.0).then_some(StripPoint {
+            d,
+            seg,
+            taper,
+            u,
+            v,
+            g,
+            m,
+        })
+    }
+
+    /// How opaque the line is at `q`: the mask's edge sharpened to about one rendered pixel,
+    /// times the line's pixel coverage.
+    fn alpha(&self, q: &StripPoint) -> f32 {
+        // Rendered pixels per source pixel across.
+        let sigma = (self.half_w * q.taper / q.g / self.px_mm) as f32;
+        let a = if sigma > 1.0 {
+            (0.5 + (q.m - 0.5) * sigma).clamp(0.0, 1.0)
+        } else {
+            q.m
+        };
+        a * self.coverage
+    }
+}
+
+/// How a crack darkens the plate: deeper is darker, and the wall on the light's side shades the
+/// floor next to it.
+struct CrackShade {
+    depth_factor: f32,
+    light_h: [f64; 2],
+    shadow_per_n: f64,
+    width: f64,
+}
+
+impl CrackShade {
+    fn new(ctx: &Ctx<'_>, line: &Line<'_>) -> Self {
+        CrackShade {
+            depth_factor: (0.6 + 0.4 * (1.0 - (-line.depth / 2.0).exp())) as f32,
+            light_h: [ctx.light.dir[0], ctx.light.dir[1]],
+            shadow_per_n: line.depth / ctx.light.elevation.tan(),
+            width: line.width,
+        }
+    }
+
+    /// Darkens `pix` at `q` of `warp` with opacity `alpha`.
+    fn apply(&self, pix: &mut [f32; 3], warp: &Warp<'_>, q: &StripPoint, alpha: f32) {
+        let ratio = warp.strip.ratio_at(q.u, q.v);
+        let mut dark = alpha * self.depth_factor * (0.25 + 0.9 * (1.0 - ratio)).clamp(0.2, 0.9);
+        let dir = warp.geo.dir[q.seg];
+        let nrm = [-dir[1], dir[0]];
+        let towards = nrm[0] * self.light_h[0] + nrm[1] * self.light_h[1];
+        let shadow_len = self.shadow_per_n * towards.abs();
+        if self.width > 0.0 && q.d * towards.signum() > warp.half_w * q.taper - shadow_len {
+            dark += 0.3 * alpha * (1.0 - dark);
+        }
+        for ch in pix.iter_mut() {
+            *ch *= 1.0 - dark.min(0.95);
+        }
+    }
+}
+
+/// Darkens `pix` by a decoy's ink of reflectivity `refl` with opacity `alpha`.
+fn apply_ink(pix: &mut [f32; 3], refl: f64, alpha: f32) {
+    let ink = [refl as f32, refl as f32, (refl as f32 * 1.08).min(1.0)];
+    for (ch, t) in pix.iter_mut().zip(ink) {
+        *ch *= 1.0 - alpha * (1.0 - t);
+    }
+}
+
 /// Draws feature `i` (a crack or decoy) and returns its box, if any of it is visible.
 fn draw_line(
     ctx: &Ctx<'_>,
@@ -355,118 +525,42 @@ fn draw_line(
     f: &Feature,
     line: &Line<'_>,
 ) -> Option<GroundTruthBox> {
-    let (width, depth, ink) = (line.width, line.depth, line.ink);
-    let cam = &ctx.cam;
-    let w = canvas.w;
-    let geo = Path2::new(line.path);
-    if geo.a.is_empty() {
-        return None;
-    }
-    let mid = geo.point_at(geo.total / 2.0);
-    let px_mm = mm_per_px(cam, mid);
-    // Draw at least one pixel wide; thinner cracks are fainter (their pixel coverage).
-    let w_eff = width.max(px_mm);
-    let coverage = (width.max(0.35 * px_mm) / w_eff).min(1.0) as f32;
-    let half_w = w_eff / 2.0;
-    let mut frng = ctx.feature_rng(i);
-    let strip = pick_strip(assets.strips(), w_eff / px_mm, &mut frng);
-    let flip_v = if frng.random::<bool>() { -1.0 } else { 1.0 };
-    let dir_u = if frng.random::<bool>() { -1.0 } else { 1.0 };
-    // Isotropic warp: one source pixel is as long along the crack as across it.
-    let mm_per_src = half_w / f64::from(strip.mean_half_width_px);
-    let needed = geo.total / mm_per_src;
-    let last = (strip.len - 1) as f64;
-    let u0 = if needed < last {
-        let start = frng.random_range(0.0..=(last - needed));
-        if dir_u > 0.0 {
-            start
-        } else {
-            start + needed
-        }
-    } else {
-        frng.random_range(0.0..=last)
-    };
-    // The crack narrows over its last few widths at each end.
-    let taper_len = (3.0 * w_eff).min(0.2 * geo.total).max(1e-9);
-    let d_max = 2.5 * half_w + 2.0 * px_mm;
-    let depth_factor = (0.6 + 0.4 * (1.0 - (-depth / 2.0).exp())) as f32;
-    let light_h = [ctx.light.dir[0], ctx.light.dir[1]];
-    let shadow_per_n = depth / ctx.light.elevation.tan();
+    let warp = Warp::new(ctx, assets, i, line)?;
+    let shade = CrackShade::new(ctx, line);
     let (mut lo, mut hi) = f.footprint();
-    lo = [lo[0] - d_max, lo[1] - d_max];
-    hi = [hi[0] + d_max, hi[1] + d_max];
+    lo = [lo[0] - warp.d_max, lo[1] - warp.d_max];
+    hi = [hi[0] + warp.d_max, hi[1] + warp.d_max];
     let mut acc = BoxAcc::new();
-    let (c0, c1, r0, r1) = pixel_region(cam, lo, hi, &[0.0])?;
+    let (c0, c1, r0, r1) = pixel_region(&ctx.cam, lo, hi, &[0.0])?;
+    let w = canvas.w;
     for r in r0..r1 {
         for c in c0..c1 {
             let k = r * w + c;
             if !canvas.plate_mask[k] {
                 continue;
             }
-            let Some(p) = ctx.plate[r * ctx.cam.width() as usize + c] else {
+            let Some(q) = ctx.plate[k].and_then(|p| warp.at(p)) else {
                 continue;
             };
-            let Some((s, d, seg)) = geo.locate(p) else {
-                continue;
-            };
-            if s < 0.0 || s > geo.total || d.abs() > d_max {
-                continue;
-            }
-            let taper = ((s.min(geo.total - s) / taper_len).clamp(0.0, 1.0))
-                .powf(0.6)
-                .max(0.2);
-            let u = strip.fold(u0 + dir_u * s / mm_per_src);
-            let g = strip.across_scale(u);
-            let v = flip_v * d * g / (half_w * taper);
-            let m = strip.mask_at(u, v);
-            if m <= 0.0 {
-                continue;
-            }
-            if m > 0.5 && cover.at[k] == 0 {
+            if q.m > 0.5 && cover.at[k] == 0 {
                 acc.add(c, r);
-                if ink.is_none() {
+                if line.ink.is_none() {
                     canvas.crack_mask[k] = 255;
                 }
             }
-            // Rendered pixels per source pixel across: sharpen the mask's edge to ~1 pixel.
-            let sigma = (half_w * taper / g / px_mm) as f32;
-            let alpha = if sigma > 1.0 {
-                (0.5 + (m - 0.5) * sigma).clamp(0.0, 1.0)
-            } else {
-                m
-            } * coverage;
-            let pix = &mut canvas.px[k];
-            match ink {
-                Some(refl) => {
-                    let ink = [refl as f32, refl as f32, (refl as f32 * 1.08).min(1.0)];
-                    for (ch, t) in pix.iter_mut().zip(ink) {
-                        *ch *= 1.0 - alpha * (1.0 - t);
-                    }
-                }
-                None => {
-                    let ratio = strip.ratio_at(u, v);
-                    let mut dark =
-                        alpha * depth_factor * (0.25 + 0.9 * (1.0 - ratio)).clamp(0.2, 0.9);
-                    // The wall on the light's side shades the floor next to it.
-                    let nrm = [-geo.dir[seg][1], geo.dir[seg][0]];
-                    let towards = nrm[0] * light_h[0] + nrm[1] * light_h[1];
-                    let shadow_len = shadow_per_n * towards.abs();
-                    if width > 0.0 && d * towards.signum() > half_w * taper - shadow_len {
-                        dark += 0.3 * alpha * (1.0 - dark);
-                    }
-                    for ch in pix.iter_mut() {
-                        *ch *= 1.0 - dark.min(0.95);
-                    }
-                }
+            let alpha = warp.alpha(&q);
+            match line.ink {
+                Some(refl) => apply_ink(&mut canvas.px[k], refl, alpha),
+                None => shade.apply(&mut canvas.px[k], &warp, &q, alpha),
             }
         }
     }
-    let kind = if ink.is_some() {
+    let kind = if line.ink.is_some() {
         BoxKind::Decoy
     } else {
         BoxKind::Crack
     };
-    acc.finish(kind, i, Some(width))
+    acc.finish(kind, i, Some(line.width))
 }
 
 /// Step 5: the screws on top, as domed metal discs with a slot; their boxes.
