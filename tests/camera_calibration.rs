@@ -220,28 +220,32 @@ fn a_webcam_calibrated_with_the_commands_maps_the_plate_and_confirms_the_same_cr
 fn bad_calibration_input_is_refused_with_what_is_wrong() {
     let dir = tempfile::tempdir().expect("tempdir");
     let d = dir.path();
+    // What `calibrate camera` and a vision mission say when they refuse their input.
+    let c_toml = d.join("c.toml");
+    let refused_camera =
+        |images: &str| refused(&["calibrate", "camera", images, "-o", utf8(&c_toml)]);
+    let m_dir = d.join("m");
+    let refused_mission = |cal: &str| {
+        refused(&[
+            "run",
+            "--mode",
+            "vision",
+            "--camera-calibration",
+            cal,
+            "--out",
+            utf8(&m_dir),
+        ])
+    };
     // No target: a blank frame.
     let blank = d.join("blank.png");
     image::GrayImage::from_pixel(640, 480, image::Luma([128]))
         .save(&blank)
         .expect("png");
-    let e = refused(&[
-        "calibrate",
-        "camera",
-        utf8(&blank),
-        "-o",
-        utf8(&d.join("c.toml")),
-    ]);
+    let e = refused_camera(utf8(&blank));
     assert!(e.contains("no target found"), "{e}");
     // Too few views: two images of the target.
     ok(&["calibrate", "views", "--out", utf8(d), "--count", "2"]);
-    let e = refused(&[
-        "calibrate",
-        "camera",
-        utf8(&d.join("views")),
-        "-o",
-        utf8(&d.join("c.toml")),
-    ]);
+    let e = refused_camera(utf8(&d.join("views")));
     assert!(
         e.contains("2 views of the target") && e.contains("at least 3"),
         "{e}"
@@ -249,13 +253,7 @@ fn bad_calibration_input_is_refused_with_what_is_wrong() {
     // Images of two sizes.
     let small = d.join("views/small.png");
     image::GrayImage::new(320, 240).save(&small).expect("png");
-    let e = refused(&[
-        "calibrate",
-        "camera",
-        utf8(&d.join("views")),
-        "-o",
-        utf8(&d.join("c.toml")),
-    ]);
+    let e = refused_camera(utf8(&d.join("views")));
     assert!(e.contains("320×240") && e.contains("640×480"), "{e}");
 
     // A good file, then spoiled copies of it.
@@ -295,26 +293,10 @@ fn bad_calibration_input_is_refused_with_what_is_wrong() {
         posed_text.replacen("width = 640", "width = 800", 1),
     )
     .expect("write");
-    let e = refused(&[
-        "run",
-        "--mode",
-        "vision",
-        "--camera-calibration",
-        utf8(&posed_wide),
-        "--out",
-        utf8(&d.join("m")),
-    ]);
+    let e = refused_mission(utf8(&posed_wide));
     assert!(e.contains("800×480") && e.contains("640×480"), "{e}");
     // Without the plate's pose, a mission says what to run.
-    let e = refused(&[
-        "run",
-        "--mode",
-        "vision",
-        "--camera-calibration",
-        utf8(&good),
-        "--out",
-        utf8(&d.join("m")),
-    ]);
+    let e = refused_mission(utf8(&good));
     assert!(e.contains("calibrate surface"), "{e}");
     // Another lens model; a corrupt file.
     let fisheye = spoil(

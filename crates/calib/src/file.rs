@@ -4,10 +4,12 @@
 
 use std::path::{Path, PathBuf};
 
+use image::RgbImage;
 use serde::{Deserialize, Serialize};
 
 use crate::lens::{Distortion, Intrinsics, Lens};
 use crate::pose::Pose;
+use crate::undistort::Undistorter;
 
 /// The value of `format` this version reads and writes.
 pub const FORMAT: &str = "crackbot-camera-calibration/1";
@@ -271,6 +273,14 @@ impl CameraFile {
             }
         }
         Ok(())
+    }
+
+    /// `frame` as the lens's pinhole sees it ([`crate::Undistorter`]); a frame of another size
+    /// than the calibration's is refused (`path` named).
+    pub fn undistort(&self, path: &Path, frame: &RgbImage) -> Result<RgbImage, FileError> {
+        self.check_frame(path, frame.width(), frame.height())?;
+        let size = [self.image.width, self.image.height];
+        Ok(Undistorter::new(&self.lens(), size).remap(frame))
     }
 
     /// Refuses a frame of another size than the calibration's.

@@ -56,12 +56,15 @@ impl Undistorter {
     /// The undistorted frame (black where no pixel of `frame` is seen). `frame` must be of
     /// [`size`](Self::size); otherwise `None`.
     pub fn apply(&self, frame: &RgbImage) -> Option<RgbImage> {
-        if frame.dimensions() != (self.width, self.height) {
-            return None;
-        }
+        (frame.dimensions() == (self.width, self.height)).then(|| self.remap(frame))
+    }
+
+    /// [`apply`](Self::apply) for a frame whose size the caller checked.
+    pub(crate) fn remap(&self, frame: &RgbImage) -> RgbImage {
         let (w, h) = (self.width as usize, self.height as usize);
         let src = frame.as_raw();
-        let mut out = vec![0u8; w * h * 3];
+        let mut image = RgbImage::new(self.width, self.height);
+        let out: &mut [u8] = &mut image;
         for (k, &[x, y]) in self.map.iter().enumerate() {
             // Pixel centres are at +0.5.
             let (fx, fy) = (x - 0.5, y - 0.5);
@@ -78,7 +81,7 @@ impl Undistorter {
                 out[k * 3 + ch] = (top * (1.0 - ay) + bottom * ay).round() as u8;
             }
         }
-        RgbImage::from_raw(self.width, self.height, out)
+        image
     }
 }
 

@@ -14,6 +14,26 @@ fn ffmpeg() -> Ffmpeg {
     Ffmpeg::locate().expect("ffmpeg: run `bash scripts/setup.sh` (installs imageio-ffmpeg)")
 }
 
+/// Encodes `input` (with ffmpeg's input options `before` and output options `after`) losslessly
+/// (PNG frames) into the video `out`.
+fn encode(before: &[&str], input: &std::path::Path, after: &[&str], out: &std::path::Path) {
+    let status = Command::new(&ffmpeg().0)
+        .args(["-nostdin", "-hide_banner", "-loglevel", "error"])
+        .args(before)
+        .arg("-i")
+        .arg(input)
+        .args(after)
+        .args(["-c:v", "png"])
+        .arg(out)
+        .status()
+        .expect("ffmpeg");
+    assert!(
+        status.success(),
+        "ffmpeg could not encode {}",
+        input.display()
+    );
+}
+
 /// A frame no codec could guess: pseudo-random pixels.
 fn pattern(w: u32, h: u32) -> RgbImage {
     let mut s: u32 = 12345;
@@ -54,22 +74,7 @@ fn a_video_file_gives_back_exactly_the_frame_encoded_into_it() {
     let png = dir.path().join("frame.png");
     frame.save(&png).unwrap();
     let video = dir.path().join("camera.mkv");
-    let status = Command::new(&ffmpeg().0)
-        .args([
-            "-nostdin",
-            "-hide_banner",
-            "-loglevel",
-            "error",
-            "-loop",
-            "1",
-            "-i",
-        ])
-        .arg(&png)
-        .args(["-frames:v", "5", "-c:v", "png"])
-        .arg(&video)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    encode(&["-loop", "1"], &png, &["-frames:v", "5"], &video);
     let source = CameraSource::parse(video.to_str().unwrap());
     let got = grab_frame(&source, None, DEFAULT_TIMEOUT).unwrap();
     assert_eq!(got.dimensions(), frame.dimensions());
@@ -172,22 +177,7 @@ fn ramp_video(dir: &std::path::Path, frames: u32) -> std::path::PathBuf {
             .expect("a frame");
     }
     let video = dir.join("ramp.mkv");
-    let status = Command::new(&ffmpeg().0)
-        .args([
-            "-nostdin",
-            "-hide_banner",
-            "-loglevel",
-            "error",
-            "-framerate",
-            "10",
-            "-i",
-        ])
-        .arg(dir.join("f%03d.png"))
-        .args(["-c:v", "png"])
-        .arg(&video)
-        .status()
-        .expect("ffmpeg");
-    assert!(status.success());
+    encode(&["-framerate", "10"], &dir.join("f%03d.png"), &[], &video);
     video
 }
 

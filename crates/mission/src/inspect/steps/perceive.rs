@@ -173,23 +173,13 @@ pub(crate) fn perceive(
 /// homography of the undistorted frame (from the file's plate pose). Refuses a frame of another
 /// size than the calibration's and a file without the plate's pose.
 fn through_lens(path: &Path, image: &RgbImage) -> Result<(RgbImage, Homography), MissionError> {
-    use crackbot_calib::{undistort::plate_to_undistorted, CameraFile, FileError, Undistorter};
+    use crackbot_calib::{undistort::plate_to_undistorted, CameraFile, FileError};
     let file = CameraFile::load(path)?;
-    file.check_frame(path, image.width(), image.height())?;
     let pose = file
         .surface_pose()
         .ok_or_else(|| FileError::NoSurface { path: path.into() })?;
-    let lens = file.lens();
-    let size = [file.image.width, file.image.height];
-    let undistorted =
-        Undistorter::new(&lens, size)
-            .apply(image)
-            .ok_or_else(|| FileError::ImageSize {
-                path: path.into(),
-                calibrated: size,
-                frame: [image.width(), image.height()],
-            })?;
-    let to_plate = plate_to_undistorted(&lens, &pose)
+    let undistorted = file.undistort(path, image)?;
+    let to_plate = plate_to_undistorted(&file.lens(), &pose)
         .try_inverse()
         .ok_or(MissionError::SingularHomography)?;
     let h = Homography::from_nalgebra(to_plate).map_err(|_| MissionError::SingularHomography)?;
