@@ -51,8 +51,8 @@ const LAYERS: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "pipelines: the emulated sensor, the tactile pipeline",
-        &["crackbot-emulator", "crackbot-tactile"],
+        "pipelines: the emulated sensor, the tactile pipeline, the reference plates",
+        &["crackbot-emulator", "crackbot-tactile", "crackbot-plates"],
     ),
     (
         "hardware: the manipulator controller (the simulated arm over the emulated sensor, the ROS 2 arm) and the link's conformance suite",

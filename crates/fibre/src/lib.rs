@@ -14,6 +14,8 @@
 //! # Ok::<(), crackbot_fibre::FibreError>(())
 //! ```
 
+pub mod fit;
+
 use serde::{Deserialize, Serialize};
 
 /// Relative intensity of a reflective fibre pair at distance `d_mm` whose curve peaks at
@@ -55,7 +57,7 @@ impl Default for ProximityFibre {
     }
 }
 
-/// A fibre setting out of its range.
+/// A fibre setting out of its range, or readings that give no fibre.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FibreError {
     /// One field's value is outside what it may be.
@@ -67,6 +69,12 @@ pub enum FibreError {
         value: f64,
         /// What it may be.
         allowed: &'static str,
+    },
+    /// A finger's approach readings that give no curve ([`fit::fit_approach`]).
+    #[error("the proximity fibre's approach: {what}")]
+    Approach {
+        /// What the readings lack.
+        what: String,
     },
 }
 
@@ -194,7 +202,7 @@ mod tests {
         ] {
             match fibre.checked() {
                 Err(FibreError::Setting { field: f, .. }) => assert_eq!(f, field),
-                Ok(f) => panic!("{f:?} accepted"),
+                other => panic!("{other:?}: not the setting {field}"),
             }
         }
         assert!(ProximityFibre {
