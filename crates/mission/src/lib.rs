@@ -8,6 +8,8 @@
 //! * [`inspect`]: the inspection mission (tactile, vision or fused) over the authenticated link,
 //!   on a rig ([`inspect::RigBackend`]): hardware, or with the cargo feature `sim` (on by
 //!   default) the simulated controller and sensor started in-process on a simulated scene.
+//! * [`commission`]: a new finger commissioned on the reference plates: its optics, its own
+//!   models, a finger profile that missions use.
 //! * [`sync`]: passive clock synchronisation of the sensor's and the controller's clocks.
 //! * `demo` (feature `sim`): the acquisition demo on a simulated scene: the simulated finger slides across a
 //!   crack, the real sensor firmware samples it on this host and streams 400 Hz frames into a new
@@ -18,6 +20,7 @@
 //! ([`crackbot_acquisition::RecordSession`], [`crackbot_acquisition::session::summarise_replay`]);
 //! detection in camera frames is `crackbot-vision`'s.
 
+pub mod commission;
 #[cfg(feature = "sim")]
 pub mod demo;
 mod error;

@@ -12,11 +12,14 @@
 //! * [`stroke`]: what one stroke's proximity channel says (a candidate's own dip among several, the ends' levels,
 //!   a row cut into stroke-long pieces); [`print_check`] and [`raised`]: prints told from cracks by raised passes;
 //!
-//! Cargo feature `research` (default off, never in the robot's build): the evaluation. `eval`,
-//! training and testing classifiers, slide verdicts, width regression; `evaluation`, the whole
-//! `crackbot-lab tactile eval` flow as one call returning a `Serialize` report; `metrics`; the
-//! paper's grid (`paper`, with its Kruskal–Wallis statistics in `stats`, `statrs`) and the random
-//! forest's accuracy/run-time sweep (`tradeoff`). Their figures are drawn by `crackbot-plots`,
+//! The evaluation, also in the robot's build (a finger's commissioning evaluates its models,
+//! `crackbot_mission::commission`): [`eval`], training and testing classifiers, slide verdicts,
+//! width regression; [`evaluation`], the whole `crackbot-lab tactile eval` flow as one call
+//! returning a `Serialize` report; [`metrics`].
+//!
+//! Cargo feature `research` (default off, never in the robot's build): the paper's grid
+//! (`paper`, with its Kruskal–Wallis statistics in `stats`, `statrs`) and the random forest's
+//! accuracy/run-time sweep (`tradeoff`). Their figures are drawn by `crackbot-plots`,
 //! passed in as closures.
 //!
 //! Nothing here draws progress bars: long calls take a progress callback and the binary draws.
@@ -24,12 +27,9 @@
 pub mod context;
 pub mod dataset;
 mod error;
-#[cfg(feature = "research")]
 pub mod eval;
-#[cfg(feature = "research")]
 pub mod evaluation;
 pub mod localise;
-#[cfg(feature = "research")]
 pub mod metrics;
 pub mod model;
 pub mod online;
