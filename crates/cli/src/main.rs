@@ -42,6 +42,8 @@ use crackbot_protocol::SAMPLE_RATE_HZ;
 use indicatif::{ProgressBar, ProgressStyle};
 
 mod calibrate;
+mod commission;
+mod finger;
 mod lab;
 mod run;
 mod vision;
@@ -79,6 +81,10 @@ enum Command {
     /// distortion), the plate's pose.
     #[command(subcommand)]
     Calibrate(calibrate::CalibrateCommand),
+    /// Commission a new finger: print the reference plates, let the arm slide over them, train
+    /// and install the finger's own models as a profile (`crackbot run --finger NAME`).
+    #[command(subcommand)]
+    Commission(commission::CommissionCommand),
     /// [research, runs crackbot-lab] Tactile recordings: convert, evaluate, the paper's tables.
     #[command(disable_help_flag = true)]
     Tactile(lab::Forwarded),
@@ -198,6 +204,7 @@ fn main() -> Result<()> {
         Command::Detect(args) => vision::detect(args),
         Command::Homography(cmd) => vision::homography(cmd),
         Command::Calibrate(cmd) => calibrate::calibrate(cmd),
+        Command::Commission(cmd) => commission::commission_cmd(cmd),
         Command::Tactile(args) => lab::run("tactile", args),
         Command::EvalDetector(args) => lab::run("eval-detector", args),
         Command::DetectorTradeoff(args) => lab::run("detector-tradeoff", args),

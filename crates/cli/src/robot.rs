@@ -10,6 +10,7 @@
 use anyhow::Result;
 use clap::Parser;
 
+mod finger;
 mod run;
 
 /// The headless crack-inspection robot.

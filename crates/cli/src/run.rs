@@ -126,6 +126,12 @@ pub struct RunArgs {
     #[cfg(feature = "foxglove")]
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = crackbot_mcap_live_addr())]
     pub foxglove: Option<std::net::SocketAddr>,
+    /// The finger's profile (`crackbot commission run --name NAME` installs one): its models
+    /// and its proximity fibre replace the shipped ones. A folder, or a name under
+    /// $CRACKBOT_FINGERS (default ~/.local/share/crackbot/fingers) [default: the shipped
+    /// models, the authors' finger].
+    #[arg(long, value_name = "PROFILE", conflicts_with_all = ["recognition_model", "width_model"])]
+    pub finger: Option<PathBuf>,
     /// Deployed recognition model.
     #[arg(long)]
     pub recognition_model: Option<PathBuf>,
@@ -312,6 +318,12 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
         config.output.out_dir = out.clone();
     }
     settings_from_flags(args, &mut config)?;
+    if let Some(finger) = &args.finger {
+        let profile = crate::finger::finger_profile(finger)?;
+        config.touch.recognition_model = profile.recognition_model;
+        config.touch.width_model = profile.width_model;
+        config.rig.site.fibre = profile.card.optics.fibre;
+    }
     if args.no_mcap {
         config.output.mcap = false;
     }

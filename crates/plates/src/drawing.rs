@@ -191,11 +191,13 @@ fn notes(s: &mut Sheet, plate: &ReferencePlate) {
             plate.name
         ),
     ];
-    if let Some(span) = plate.feature_span_mm() {
+    if let Some(span) = plate.footprint_mm() {
         lines.push(format!(
-            "The feature spans x = {:.1} to {:.1} mm and runs the plate's full length in y.",
+            "The feature spans x = {:.1} to {:.1} mm and y = {:.1} to {:.1} mm.",
             span[0].max(0.0),
-            span[1].min(plate.surface.size_mm[0])
+            span[1].min(plate.surface.size_mm[0]),
+            span[2].max(0.0),
+            span[3].min(plate.surface.size_mm[1])
         ));
     }
     lines.push(

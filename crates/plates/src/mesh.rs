@@ -12,6 +12,8 @@ use crate::set::{ReferencePlate, THICKNESS_MM};
 
 /// Grid spacing across a crack, mm (its rounded edges and walls).
 const CRACK_STEP_MM: f64 = 0.05;
+/// Grid spacing along a crack around its rounded ends, mm.
+const CRACK_END_STEP_MM: f64 = 0.25;
 /// Grid spacing over a bump, both ways, mm.
 const BUMP_STEP_MM: f64 = 0.25;
 /// Grid points per period of the wavy pattern.
@@ -32,6 +34,11 @@ fn grid(plate: &ReferencePlate) -> (Vec<f64>, Vec<f64>) {
         match f {
             Feature::Crack { path, width_mm, .. } => {
                 steps(lo[0] - 0.1, hi[0] + 0.1, CRACK_STEP_MM, &mut xs);
+                // Its rounded ends.
+                let r = (hi[0] - lo[0]) / 2.0 + 0.1;
+                for end in [path[0][1], path[path.len() - 1][1]] {
+                    steps(end - r, end + r, CRACK_END_STEP_MM, &mut ys);
+                }
                 // Both walls nearly vertical.
                 let x = path[0][0];
                 for side in [-1.0, 1.0] {
@@ -153,7 +160,7 @@ mod tests {
     use std::collections::HashMap;
 
     use super::*;
-    use crate::set::{by_name, reference_set, CRACK_DEPTH_MM, PLATE_SIZE_MM};
+    use crate::set::{by_name, reference_set, CRACK_DEPTH_MM, CRACK_Y_MM, PLATE_SIZE_MM};
 
     /// Volume of a closed mesh (divergence theorem), mm³.
     fn volume(mesh: &stl_io::IndexedMesh) -> f64 {
@@ -195,8 +202,12 @@ mod tests {
             // The volume: the slab less the groove, plus the bump or the waves.
             let slab = PLATE_SIZE_MM[0] * PLATE_SIZE_MM[1] * THICKNESS_MM;
             let v = volume(&mesh);
+            // A crack: its slot and the half-discs of its rounded ends.
             let want = match plate.width_label_mm {
-                Some(w) if w > 0.0 => slab - w * CRACK_DEPTH_MM * PLATE_SIZE_MM[1],
+                Some(w) if w > 0.0 => {
+                    let long = CRACK_Y_MM[1] - CRACK_Y_MM[0];
+                    slab - (w * long + std::f64::consts::PI * w * w / 4.0) * CRACK_DEPTH_MM
+                }
                 _ => slab,
             };
             let tol = if plate.name == "bump" { 0.01 } else { 0.002 } * slab;

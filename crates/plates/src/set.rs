@@ -17,13 +17,18 @@ pub const CRACK_EDGE_RADIUS_MM: f64 = 0.5;
 pub const WIDTHS_MM: [f64; 6] = [0.0, 1.0, 2.0, 5.0, 8.0, 10.0];
 /// The width of the surface-type experiment's crack plate, mm (one of [`WIDTHS_MM`]).
 pub const RECOGNITION_CRACK_MM: f64 = 5.0;
-/// The bump: base radius and height, mm (the simulator's calibrated bump).
-pub const BUMP_MM: [f64; 2] = [8.0, 1.5];
+/// The bump: base radius and height, mm (its footprint, 10 mm across, is the widest crack's:
+/// the papers' 16 mm stroke from 5–10 mm before it reaches over its top; the simulator's
+/// calibrated 8 mm bump was only ever climbed and read as the wavy plate's rising flank).
+pub const BUMP_MM: [f64; 2] = [5.0, 1.5];
 /// The wavy pattern: amplitude and period, mm (the paper: "sine waves of 1 mm amplitude and
 /// 5 mm" period), over x = 40–160 mm.
 pub const WAVE_MM: [f64; 2] = [1.0, 5.0];
 /// Where each plate's feature lies, mm along x (it runs across the plate, along y).
 pub const FEATURE_X_MM: f64 = 100.0;
+/// Where a crack's slot runs, mm along y (its ends rounded): 10 mm of sound plate beyond each
+/// end keep the plate in one piece and inside the simulator's plate.
+pub const CRACK_Y_MM: [f64; 2] = [10.0, 90.0];
 
 /// The surface-type experiment's classes, in label order.
 pub const RECOGNITION_CLASSES: [&str; 4] = ["no crack", "crack", "bump", "wavy"];
@@ -46,11 +51,16 @@ pub struct ReferencePlate {
 impl ReferencePlate {
     /// The x range (mm) where the surface departs from flat: the feature and its edges.
     pub fn feature_span_mm(&self) -> Option<[f64; 2]> {
+        self.footprint_mm().map(|f| [f[0], f[1]])
+    }
+
+    /// The feature's footprint, mm: `[x_min, x_max, y_min, y_max]`.
+    pub fn footprint_mm(&self) -> Option<[f64; 4]> {
         self.surface.features.iter().fold(None, |acc, f| {
             let (lo, hi) = f.footprint();
             Some(match acc {
-                None => [lo[0], hi[0]],
-                Some([a, b]) => [a.min(lo[0]), b.max(hi[0])],
+                None => [lo[0], hi[0], lo[1], hi[1]],
+                Some([a, b, c, d]) => [a.min(lo[0]), b.max(hi[0]), c.min(lo[1]), d.max(hi[1])],
             })
         })
     }
@@ -59,7 +69,7 @@ impl ReferencePlate {
 /// A crack of width `w` mm across the plate at [`FEATURE_X_MM`].
 fn crack(w: f64) -> Feature {
     Feature::Crack {
-        path: vec![[FEATURE_X_MM, 0.0], [FEATURE_X_MM, PLATE_SIZE_MM[1]]],
+        path: vec![[FEATURE_X_MM, CRACK_Y_MM[0]], [FEATURE_X_MM, CRACK_Y_MM[1]]],
         width_mm: w,
         depth_mm: CRACK_DEPTH_MM,
         edge_radius_mm: CRACK_EDGE_RADIUS_MM,

@@ -7,10 +7,9 @@ use crate::inspect::rig::context::Rig;
 use crate::inspect::rig::feel::Feel;
 use crate::MissionError;
 
-/// Heights of the staircase above contact, mm.
-pub const HOVERS_MM: [f64; 15] = [
-    0.1, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0, 1.3, 1.6, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0,
-];
+/// Heights of the staircase above contact, mm (from the lowest a controller holds the finger
+/// above the plate, `crackbot-controller`'s 0.5 mm).
+pub const HOVERS_MM: [f64; 12] = [0.5, 0.6, 0.8, 1.0, 1.3, 1.6, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0];
 /// Where the proximity channel reads its dark level, mm above the plate.
 pub const DARK_HOVER_MM: f64 = 40.0;
 /// Length of the contact slide and of each held pass, mm.
@@ -81,7 +80,8 @@ pub(crate) fn approach(
     let noise = std::array::from_fn(|c| step_noise(&channel(&samples, c)));
     let mut staircase = Vec::new();
     let mut lifted = [f64::NAN; 3];
-    let (mut a, mut b) = (at, end);
+    // The slide left the arm over `end`: each held pass runs back over the same line.
+    let (mut a, mut b) = (end, at);
     for &h in &HOVERS_MM {
         let held = held_pass(rig, (a, b), h)?;
         widen(&held);

@@ -7,9 +7,9 @@ use crate::MissionError;
 /// Why a commissioning stopped or refused its result.
 #[derive(Debug, thiserror::Error)]
 pub enum CommissionError {
-    /// The rig: the link, the sensor, a slide, the stop.
+    /// The rig: the link, the sensor, a slide, the stop (boxed: the mission's error is large).
     #[error(transparent)]
-    Rig(#[from] MissionError),
+    Rig(Box<MissionError>),
     /// Training or evaluating the models.
     #[error(transparent)]
     Tactile(#[from] crackbot_tactile::TactileError),
@@ -116,6 +116,12 @@ pub enum CommissionError {
         /// What differs.
         what: String,
     },
+}
+
+impl From<MissionError> for CommissionError {
+    fn from(e: MissionError) -> Self {
+        CommissionError::Rig(Box::new(e))
+    }
 }
 
 /// An I/O error's wrapper naming `path`.

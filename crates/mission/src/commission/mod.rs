@@ -123,7 +123,7 @@ pub fn commission(
     )?;
     let (recognition, width, evaluation) =
         train_step(&session, &recordings, &config.settings, &shipped, progress)?;
-    train::judge(&evaluation, &config.settings, session.dir().to_path_buf())?;
+    train::judge(&evaluation, &config.settings, session.dir())?;
     let s = &config.settings;
     let card = FingerCard {
         version: CARD_VERSION,
@@ -239,7 +239,11 @@ fn record_step(
         })?;
         robot += robot_s(started, rig.speedup);
         for (rep, rec) in recorded {
-            let samples: Vec<[f64; 4]> = rec.rows.iter().map(|r| r.channels()).collect();
+            let samples: Vec<[f64; 4]> = rec
+                .rows
+                .iter()
+                .map(crackbot_recording::Row::channels)
+                .collect();
             check_saturation(&plate.name, &samples)?;
             out.push((plate.clone(), rep, rec));
         }
@@ -265,11 +269,11 @@ fn train_step(
     };
     let recognition_figures =
         train::leave_one_repetition_out(&rec_set, Experiment::Recognition, s, &mut |r| {
-            fold("recognition", r)
+            fold("recognition", r);
         })?;
     let width_figures =
         train::leave_one_repetition_out(&width_set, Experiment::Width, s, &mut |r| {
-            fold("width", r)
+            fold("width", r);
         })?;
     progress(&CommissionProgress::Training(
         "both models on every repetition".into(),

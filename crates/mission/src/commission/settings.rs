@@ -39,8 +39,12 @@ pub struct CommissionSettings {
     pub speed_mm_s: f64,
     /// Seed of where each repetition's slides start and of the forests.
     pub seed: u64,
-    /// Trees of each forest.
+    /// Trees of each forest (the shipped models': 32).
     pub trees: usize,
+    /// Depth limit of every tree (`None`: fully grown; the shipped models': 10, trained on
+    /// far more slides). On a session's slides fully grown trees read 93.6 % of the held-out
+    /// windows, depth 24 92.3 %, 16 88.4 %, 10 85.4 % (one commissioning on the simulator).
+    pub max_depth: Option<usize>,
     /// Least window accuracy of the recognition model on held-out repetitions, 0–1.
     pub min_window_accuracy: f64,
     /// Least slide accuracy of the recognition model on held-out repetitions, 0–1.
@@ -58,9 +62,10 @@ impl Default for CommissionSettings {
             stroke_mm: STROKE_MM,
             speed_mm_s: SPEED_MM_S,
             seed: 1,
-            trees: 100,
-            min_window_accuracy: 0.90,
-            min_slide_accuracy: 0.95,
+            trees: 32,
+            max_depth: None,
+            min_window_accuracy: 0.85,
+            min_slide_accuracy: 0.85,
             max_width_mae_mm: 1.0,
         }
     }
@@ -109,7 +114,13 @@ impl CommissionSettings {
     }
 
     fn check_ranges(&self) -> Result<(), CommissionError> {
-        let checks: [(&'static str, f64, bool, &'static str); 6] = [
+        let checks: [(&'static str, f64, bool, &'static str); 7] = [
+            (
+                "max_depth",
+                self.max_depth.map_or(1.0, |d| d as f64),
+                self.max_depth.is_none_or(|d| (1..=64).contains(&d)),
+                "1–64 (or none: fully grown)",
+            ),
             (
                 "stroke_mm",
                 self.stroke_mm,

@@ -4,7 +4,7 @@
 //! deciding), evaluated leave-one-repetition-out, and the shipped models measured on the same
 //! recordings.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crackbot_plates::ReferencePlate;
 use crackbot_recording::{Experiment, Recording};
@@ -52,7 +52,10 @@ pub struct Evaluation {
 }
 
 /// The recordings of both models: every plate for recognition (labelled by its class), the
-/// width plates for width (labelled by their width).
+/// width plates for width (labelled by their width). The flat plate's recordings go into the
+/// recognition set twice, as in the authors' sets (the surface-type experiment's "no crack"
+/// and the width experiment's 0 mm plate were both flat): five crack plates against one flat
+/// one read 17 % of the flat plate's held-out windows as crack.
 pub fn labelled(recordings: &[SessionRecording]) -> (Labelled, Labelled) {
     let name = |p: &ReferencePlate, rep: u32| PathBuf::from(format!("{}-rep{rep}.csv", p.name));
     let relabel = |r: &Recording, label: f64| {
@@ -62,10 +65,21 @@ pub fn labelled(recordings: &[SessionRecording]) -> (Labelled, Labelled) {
         }
         r
     };
-    let recognition = recordings
+    let mut recognition: Labelled = recordings
         .iter()
         .map(|(p, rep, r)| (name(p, *rep), relabel(r, f64::from(p.recognition_label))))
         .collect();
+    recognition.extend(
+        recordings
+            .iter()
+            .filter(|(p, _, _)| p.width_label_mm == Some(0.0))
+            .map(|(p, rep, r)| {
+                (
+                    PathBuf::from(format!("{}-rep{rep}-as-0mm.csv", p.name)),
+                    r.clone(),
+                )
+            }),
+    );
     let width = recordings
         .iter()
         .filter_map(|(p, rep, r)| p.width_label_mm.map(|w| (name(p, *rep), relabel(r, w))))
@@ -76,7 +90,7 @@ pub fn labelled(recordings: &[SessionRecording]) -> (Labelled, Labelled) {
 fn train_config(s: &CommissionSettings, experiment: Experiment) -> TrainConfig {
     TrainConfig {
         n_trees: s.trees,
-        max_depth: None,
+        max_depth: s.max_depth,
         seed: s.seed,
         slide_vote: match experiment {
             Experiment::Recognition => SlideVote::Both,
@@ -166,14 +180,14 @@ pub fn leave_one_repetition_out(
 pub fn judge(
     e: &Evaluation,
     s: &CommissionSettings,
-    session: PathBuf,
+    session: &Path,
 ) -> Result<(), CommissionError> {
     let fail = |what, value: f64, least: f64| CommissionError::FailsEvaluation {
         model: "recognition",
         what,
         value: 100.0 * value,
         least: 100.0 * least,
-        session: session.clone(),
+        session: session.to_path_buf(),
     };
     if e.recognition.window_accuracy < s.min_window_accuracy {
         return Err(fail(
@@ -230,17 +244,21 @@ mod tests {
             shipped_recognition: good,
             shipped_width: good,
         };
-        assert!(judge(&e(good, good), &s, "s".into()).is_ok());
-        let msg = judge(&e(fig(0.97, 0.9, 10, 10, None), good), &s, "s".into())
+        assert!(judge(&e(good, good), &s, Path::new("s")).is_ok());
+        let msg = judge(&e(fig(0.97, 0.8, 10, 10, None), good), &s, Path::new("s"))
             .unwrap_err()
             .to_string();
         assert!(
-            msg.contains("slides 90.0 %") && msg.contains("95.0 %"),
+            msg.contains("slides 80.0 %") && msg.contains("85.0 %"),
             "{msg}"
         );
-        let msg = judge(&e(good, fig(0.9, 0.9, 10, 10, Some(1.4))), &s, "s".into())
-            .unwrap_err()
-            .to_string();
+        let msg = judge(
+            &e(good, fig(0.9, 0.9, 10, 10, Some(1.4))),
+            &s,
+            Path::new("s"),
+        )
+        .unwrap_err()
+        .to_string();
         assert!(msg.contains("1.40 mm"), "{msg}");
     }
 }
