@@ -33,6 +33,10 @@ const LAYERS: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "surface: a plate's features and their heights (the simulator's and the printed plates')",
+        &["crackbot-surface"],
+    ),
+    (
         "camera model: the lens and its calibration from a flat target's points",
         &["crackbot-calib"],
     ),
@@ -384,18 +388,14 @@ fn the_robots_default_build_compiles_no_evaluation_module() {
         );
     }
     // The evaluation modules are behind the feature: a crate that turns it on would compile
-    // them, and they are declared only under it.
+    // them, and they are declared only under it. The tactile models' own evaluation (`eval`,
+    // `evaluation`, `metrics`: held-out accuracy and width error, no statistics crate) is the
+    // robot's since a finger's commissioning judges its models (`crackbot commission`); the
+    // paper's grid, its statistics and the run-time sweep stay research.
     let sources = [
         (
             "crates/tactile/src/lib.rs",
-            &[
-                "eval",
-                "evaluation",
-                "metrics",
-                "paper",
-                "stats",
-                "tradeoff",
-            ][..],
+            &["paper", "stats", "tradeoff"][..],
         ),
         (
             "crates/vision/src/lib.rs",

@@ -1,7 +1,7 @@
 //! The reference plates a finger is commissioned on: the papers' set (a flat plate, cracks of
 //! 1, 2, 5, 8 and 10 mm, a bump, a wavy pattern) as files a user prints.
 //!
-//! * [`set`]: which plates, their geometry (the simulator's [`Surface`](crackbot_sim::Surface)s,
+//! * [`set`]: which plates, their geometry (the simulator's [`Surface`](crackbot_surface::Surface)s,
 //!   so a simulated commissioning slides over what is printed) and each plate's labels;
 //! * [`mesh`]: each plate as a closed, consistently wound STL mesh (mm);
 //! * [`drawing`]: each plate's sheet, an A4 PNG at true scale with its dimensions and mounting.

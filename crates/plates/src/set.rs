@@ -1,7 +1,7 @@
 //! The reference set: which plates, their geometry (the simulator's surfaces, so a simulated
 //! commissioning slides over exactly what is printed) and the labels each one's slides carry.
 
-use crackbot_sim::surface::{Feature, Surface};
+use crackbot_surface::{Feature, Surface};
 
 /// Size of every plate, mm (the simulator's plates: 200 × 100).
 pub const PLATE_SIZE_MM: [f64; 2] = [200.0, 100.0];
@@ -172,5 +172,18 @@ mod tests {
         let span = c10.feature_span_mm().unwrap();
         assert!(span[0] < 95.0 && span[1] > 105.0, "{span:?}");
         assert!(by_name("flat").unwrap().feature_span_mm().is_none());
+    }
+
+    #[test]
+    fn every_plate_is_a_valid_simulated_scene() {
+        for plate in reference_set() {
+            let mut scene = crackbot_sim::Scene::builtin_default();
+            scene.plate.size_mm = plate.surface.size_mm;
+            scene.features.clone_from(&plate.surface.features);
+            scene.camera = None;
+            scene
+                .validate()
+                .unwrap_or_else(|e| panic!("{}: {e}", plate.name));
+        }
     }
 }

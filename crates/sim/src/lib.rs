@@ -31,7 +31,8 @@ pub mod recordings;
 pub mod render;
 pub mod run;
 pub mod scene;
-pub mod surface;
+/// The plate's surface (`crackbot-surface`), as the simulator's own module.
+pub use crackbot_surface as surface;
 pub mod work_precision;
 
 use serde::{Deserialize, Serialize};
