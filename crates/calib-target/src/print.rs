@@ -2,7 +2,6 @@
 //! recorded in the file (PNG `pHYs`, pixels per metre), so a printer set to "actual size" prints
 //! the tags `tag_mm` wide.
 
-use std::io::BufWriter;
 use std::path::Path;
 
 use image::GrayImage;
@@ -37,27 +36,23 @@ pub fn write_png(spec: &TargetSpec, px_per_mm: f64, path: &Path) -> Result<GrayI
         });
     }
     let img = draw(spec, px_per_mm);
-    let io = |source| TargetError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let enc = |e: png::EncodingError| TargetError::Encode {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut encoder = png::Encoder::new(BufWriter::new(file), img.width(), img.height());
-    encoder.set_color(png::ColorType::Grayscale);
-    encoder.set_depth(png::BitDepth::Eight);
-    let per_metre = (px_per_mm * 1000.0).round() as u32;
-    encoder.set_pixel_dims(Some(png::PixelDimensions {
-        xppu: per_metre,
-        yppu: per_metre,
-        unit: png::Unit::Meter,
-    }));
-    let mut writer = encoder.write_header().map_err(enc)?;
-    writer.write_image_data(img.as_raw()).map_err(enc)?;
-    writer.finish().map_err(enc)?;
+    crackbot_imaging::scaled_png::write_scaled_png(
+        path,
+        [img.width(), img.height()],
+        png::ColorType::Grayscale,
+        img.as_raw(),
+        px_per_mm,
+    )
+    .map_err(|e| match e {
+        crackbot_imaging::scaled_png::ScaledPngError::Io(source) => TargetError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        crackbot_imaging::scaled_png::ScaledPngError::Encode(message) => TargetError::Encode {
+            path: path.to_path_buf(),
+            message,
+        },
+    })?;
     Ok(img)
 }
 

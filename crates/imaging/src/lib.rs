@@ -21,6 +21,7 @@ pub mod coco;
 mod error;
 pub mod geometry;
 pub mod homography;
+pub mod scaled_png;
 pub mod scene_truth;
 pub mod thinning;
 

@@ -3,7 +3,6 @@
 //! section along the slide at 1:1 and the feature's detail at 5:1, the dimensions and how the
 //! plate is mounted.
 
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 use ab_glyph::{Font, FontVec, PxScale, ScaleFont};
@@ -284,25 +283,21 @@ pub fn draw(plate: &ReferencePlate, px_per_mm: f64) -> Result<RgbImage, PlateErr
 /// Writes the plate's sheet to `path` as a PNG at `px_per_mm`, its scale in the file (`pHYs`).
 pub fn write_png(plate: &ReferencePlate, px_per_mm: f64, path: &Path) -> Result<(), PlateError> {
     let img = draw(plate, px_per_mm)?;
-    let io = |source| PlateError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let enc = |e: png::EncodingError| PlateError::Png {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    };
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut encoder = png::Encoder::new(BufWriter::new(file), img.width(), img.height());
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let per_metre = (px_per_mm * 1000.0).round() as u32;
-    encoder.set_pixel_dims(Some(png::PixelDimensions {
-        xppu: per_metre,
-        yppu: per_metre,
-        unit: png::Unit::Meter,
-    }));
-    let mut writer = encoder.write_header().map_err(enc)?;
-    writer.write_image_data(img.as_raw()).map_err(enc)?;
-    writer.finish().map_err(enc)
+    crackbot_imaging::scaled_png::write_scaled_png(
+        path,
+        [img.width(), img.height()],
+        png::ColorType::Rgb,
+        img.as_raw(),
+        px_per_mm,
+    )
+    .map_err(|e| match e {
+        crackbot_imaging::scaled_png::ScaledPngError::Io(source) => PlateError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        crackbot_imaging::scaled_png::ScaledPngError::Encode(reason) => PlateError::Png {
+            path: path.to_path_buf(),
+            reason,
+        },
+    })
 }
