@@ -123,7 +123,7 @@ impl Rig<'_> {
             }
             if let Some(e) = self.arm.errors.iter().find(|e| e.seq == seq) {
                 return Err(MissionError::Refused {
-                    what: "the print check's raised pass".into(),
+                    what: format!("the pass held {z} mm above the plate"),
                     reason: e.text.to_string(),
                 });
             }
@@ -135,7 +135,9 @@ impl Rig<'_> {
             if self.arm.restarted {
                 return Err(MissionError::ControllerRestarted);
             }
-            self.check_progress(deadline, budget, || "the print check's raised pass".into())?;
+            self.check_progress(deadline, budget, || {
+                format!("the pass held {z} mm above the plate")
+            })?;
         }
         Ok((reference, None))
     }
