@@ -540,7 +540,7 @@ fn level_within(x: &[f64], smooth: &[f64], [lo, hi]: [f64; 2]) -> f64 {
 /// dip is about 9 mm of flat floor; the noise put its deepest sample anywhere on it, and from
 /// its middle the 80th percentile within 5 mm read the floor itself: the crack kept 4–13 % of
 /// its dip instead of 78 % and was rejected as "neither a crack nor a print" in about one
-/// default-scene mission in twenty under load. A dip whose level near the floor lies at least
+/// default-scene mission in fifteen under load. A dip whose level near the floor lies at least
 /// halfway up to the median (every narrower dip) keeps the 5 mm reach.
 fn level_reach(x: &[f64], smooth: &[f64], m: usize) -> [f64; 2] {
     let reach = [x[m] - LEVEL_REACH_MM, x[m] + LEVEL_REACH_MM];
