@@ -45,7 +45,11 @@ pub struct CommissionSettings {
     /// far more slides). On a session's slides fully grown trees read 93.6 % of the held-out
     /// windows, depth 24 92.3 %, 16 88.4 %, 10 85.4 % (one commissioning on the simulator).
     pub max_depth: Option<usize>,
-    /// Least window accuracy of the recognition model on held-out repetitions, 0–1.
+    /// Least window accuracy of the recognition model on held-out repetitions, 0–1. The
+    /// thresholds are floors that catch a commissioning gone wrong, not the goal: on simulated
+    /// fingers the held-out figures came out 0.87–0.93 (windows, slides) and 0.75–1.10 mm (width
+    /// slide error) from run to run of the same settings, the shipped models' 0.82–0.86, 0.65–0.74
+    /// and 2.2–3.8 mm.
     pub min_window_accuracy: f64,
     /// Least slide accuracy of the recognition model on held-out repetitions, 0–1.
     pub min_slide_accuracy: f64,
@@ -64,9 +68,9 @@ impl Default for CommissionSettings {
             seed: 1,
             trees: 32,
             max_depth: None,
-            min_window_accuracy: 0.85,
-            min_slide_accuracy: 0.85,
-            max_width_mae_mm: 1.0,
+            min_window_accuracy: 0.80,
+            min_slide_accuracy: 0.80,
+            max_width_mae_mm: 1.5,
         }
     }
 }

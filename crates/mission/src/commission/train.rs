@@ -245,20 +245,20 @@ mod tests {
             shipped_width: good,
         };
         assert!(judge(&e(good, good), &s, Path::new("s")).is_ok());
-        let msg = judge(&e(fig(0.97, 0.8, 10, 10, None), good), &s, Path::new("s"))
+        let msg = judge(&e(fig(0.97, 0.75, 10, 10, None), good), &s, Path::new("s"))
             .unwrap_err()
             .to_string();
         assert!(
-            msg.contains("slides 80.0 %") && msg.contains("85.0 %"),
+            msg.contains("slides 75.0 %") && msg.contains("80.0 %"),
             "{msg}"
         );
         let msg = judge(
-            &e(good, fig(0.9, 0.9, 10, 10, Some(1.4))),
+            &e(good, fig(0.9, 0.9, 10, 10, Some(1.8))),
             &s,
             Path::new("s"),
         )
         .unwrap_err()
         .to_string();
-        assert!(msg.contains("1.40 mm"), "{msg}");
+        assert!(msg.contains("1.80 mm"), "{msg}");
     }
 }
