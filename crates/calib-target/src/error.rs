@@ -32,14 +32,9 @@ pub enum TargetError {
         /// What the parser said.
         message: String,
     },
-    /// An image that could not be encoded.
-    #[error("{}: {message}", path.display())]
-    Encode {
-        /// The file.
-        path: PathBuf,
-        /// What the encoder said.
-        message: String,
-    },
+    /// An image that could not be written.
+    #[error(transparent)]
+    Png(#[from] crackbot_imaging::scaled_png::ScaledPngError),
     /// The AprilTag detector could not be made.
     #[error("the AprilTag detector: {message}")]
     Detector {

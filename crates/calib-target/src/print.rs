@@ -42,17 +42,7 @@ pub fn write_png(spec: &TargetSpec, px_per_mm: f64, path: &Path) -> Result<GrayI
         png::ColorType::Grayscale,
         img.as_raw(),
         px_per_mm,
-    )
-    .map_err(|e| match e {
-        crackbot_imaging::scaled_png::ScaledPngError::Io(source) => TargetError::Io {
-            path: path.to_path_buf(),
-            source,
-        },
-        crackbot_imaging::scaled_png::ScaledPngError::Encode(message) => TargetError::Encode {
-            path: path.to_path_buf(),
-            message,
-        },
-    })?;
+    )?;
     Ok(img)
 }
 

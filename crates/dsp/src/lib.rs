@@ -86,6 +86,7 @@
 
 mod error;
 mod features;
+mod median;
 mod segment;
 mod streaming;
 
@@ -94,6 +95,7 @@ pub use features::{
     extract_features, extract_segment_features, mav, rms, Feature, FeatureExtractor, FeatureMatrix,
     FeatureSet, FeatureSpec, WindowConfig,
 };
+pub use median::median;
 pub use segment::{
     measure_segmentation, segment_paper, segment_robust, Extent, MarginBase, PaperSegmentation,
     RobustSegmentation, Segment, SegmentationMethod, SegmentationReport, SegmentationSummary,

@@ -5,6 +5,7 @@ use std::ops::Range;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_signal, DspError};
+use crate::median::median;
 use crate::Channel;
 
 /// The samples of one trial a segmentation kept.
@@ -405,20 +406,6 @@ fn moving_average(p: &[f64], w: usize) -> Vec<f64> {
             win.iter().sum::<f64>() / w as f64
         })
         .collect()
-}
-
-/// Median (mean of the two middle values for an even count); 0 for none. Reorders `v`.
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_unstable_by(f64::total_cmp);
-    let k = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[k]
-    } else {
-        (v[k - 1] + v[k]) / 2.0
-    }
 }
 
 /// A segmentation method, for comparing them with [`measure_segmentation`].

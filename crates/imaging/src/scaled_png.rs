@@ -3,17 +3,28 @@
 //! drawings).
 
 use std::io::BufWriter;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-/// Why a scaled PNG could not be written.
+/// Why a scaled PNG could not be written. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum ScaledPngError {
     /// Creating the file failed.
-    #[error("{0}")]
-    Io(#[from] std::io::Error),
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        #[source]
+        source: std::io::Error,
+    },
     /// The encoder refused the image or could not write it.
-    #[error("{0}")]
-    Encode(String),
+    #[error("{}: could not encode the PNG: {reason}", path.display())]
+    Encode {
+        /// The file.
+        path: PathBuf,
+        /// What the encoder said.
+        reason: String,
+    },
 }
 
 /// Writes 8-bit `data` (`color`: grey or RGB rows, top first) of `size` pixels to `path`, at
@@ -25,8 +36,14 @@ pub fn write_scaled_png(
     data: &[u8],
     px_per_mm: f64,
 ) -> Result<(), ScaledPngError> {
-    let enc = |e: png::EncodingError| ScaledPngError::Encode(e.to_string());
-    let file = std::fs::File::create(path)?;
+    let enc = |e: png::EncodingError| ScaledPngError::Encode {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    };
+    let file = std::fs::File::create(path).map_err(|source| ScaledPngError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
     encoder.set_color(color);
     encoder.set_depth(png::BitDepth::Eight);

@@ -290,14 +290,5 @@ pub fn write_png(plate: &ReferencePlate, px_per_mm: f64, path: &Path) -> Result<
         img.as_raw(),
         px_per_mm,
     )
-    .map_err(|e| match e {
-        crackbot_imaging::scaled_png::ScaledPngError::Io(source) => PlateError::Io {
-            path: path.to_path_buf(),
-            source,
-        },
-        crackbot_imaging::scaled_png::ScaledPngError::Encode(reason) => PlateError::Png {
-            path: path.to_path_buf(),
-            reason,
-        },
-    })
+    .map_err(PlateError::from)
 }

@@ -20,12 +20,7 @@ pub enum PlateError {
         /// The files tried.
         tried: String,
     },
-    /// Encoding the drawing's PNG failed.
-    #[error("{}: could not encode the PNG: {reason}", path.display())]
-    Png {
-        /// The file.
-        path: PathBuf,
-        /// What the encoder said.
-        reason: String,
-    },
+    /// Writing the drawing's PNG failed.
+    #[error(transparent)]
+    Png(#[from] crackbot_imaging::scaled_png::ScaledPngError),
 }

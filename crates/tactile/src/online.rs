@@ -13,7 +13,7 @@
 //! checks it on real recordings), its confidence, the width (the vote's posterior mean and
 //! standard deviation over the classes' widths, and the regressor's median with a robust spread) and, when the surface or the signals are unlike training, a [`Doubt`].
 
-use crackbot_dsp::{Segmenter, StreamingFeatures, WindowConfig};
+use crackbot_dsp::{median, Segmenter, StreamingFeatures, WindowConfig};
 use crackbot_forest::Classifier;
 use crackbot_recording::Recording;
 use serde::Serialize;
@@ -439,17 +439,6 @@ impl<'m> OnlineClassifier<'m> {
             regressor_mm: mm,
             regressor_spread_mm: 1.4826 * mad,
         })
-    }
-}
-
-/// Median (sorts `v`; mean of the two middle values for an even count; 0 when empty).
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    match n {
-        0 => 0.0,
-        _ if n % 2 == 1 => v[n / 2],
-        _ => (v[n / 2 - 1] + v[n / 2]) / 2.0,
     }
 }
 

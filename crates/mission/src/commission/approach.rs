@@ -3,6 +3,8 @@
 //! proximity fibre's distance curve, the deformation channels unloaded) and far above it (the
 //! proximity channel's dark level).
 
+use crackbot_dsp::median;
+
 use crate::inspect::rig::context::Rig;
 use crate::inspect::rig::feel::Feel;
 use crate::MissionError;
@@ -36,15 +38,6 @@ pub struct ApproachReadings {
     pub range: [[f64; 2]; 4],
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() {
-        f64::NAN
-    } else {
-        v[v.len() / 2]
-    }
-}
-
 /// The white noise of `x`: the standard deviation of its steps over √2 (drift and slow
 /// features cancel out of the steps).
 fn step_noise(x: &[f64]) -> f64 {
@@ -57,48 +50,66 @@ fn step_noise(x: &[f64]) -> f64 {
         / std::f64::consts::SQRT_2
 }
 
-/// Reads the optics over bare plate from `at` (mm, the plate frame) along +x.
+/// The lowest and highest count of each channel in `samples`.
+fn range_of(samples: &[[f64; 4]]) -> [[f64; 2]; 4] {
+    let mut range = [[f64::INFINITY, f64::NEG_INFINITY]; 4];
+    for v in samples {
+        for c in 0..4 {
+            range[c] = [range[c][0].min(v[c]), range[c][1].max(v[c])];
+        }
+    }
+    range
+}
+
+/// Reads the optics over bare plate from `at` (mm, the plate frame) along +x; the readings
+/// and every sample read (for the saturation check).
 pub(crate) fn approach(
     rig: &mut Rig<'_>,
     at: [f64; 2],
     speed_mm_s: f64,
     feel: &mut Feel<'_>,
-) -> Result<ApproachReadings, MissionError> {
+) -> Result<(ApproachReadings, Vec<[f64; 4]>), MissionError> {
     let end = [at[0] + PASS_MM, at[1]];
     let ((samples, _), _) = rig.slide_and_record(1, (at, end), speed_mm_s, 1, feel)?;
-    let mut range = [[f64::INFINITY, f64::NEG_INFINITY]; 4];
-    let mut widen = |s: &[[f64; 4]]| {
-        for v in s {
-            for c in 0..4 {
-                range[c] = [range[c][0].min(v[c]), range[c][1].max(v[c])];
-            }
-        }
-    };
-    widen(&samples);
+    enough(&samples, "the approach's slide in contact")?;
     let channel = |s: &[[f64; 4]], c: usize| s.iter().map(|v| v[c]).collect::<Vec<f64>>();
-    let contact = std::array::from_fn(|c| median(channel(&samples, c)));
+    let contact = std::array::from_fn(|c| median(&mut channel(&samples, c)));
     let noise = std::array::from_fn(|c| step_noise(&channel(&samples, c)));
+    let mut all = samples;
     let mut staircase = Vec::new();
     let mut lifted = [f64::NAN; 3];
     // The slide left the arm over `end`: each held pass runs back over the same line.
     let (mut a, mut b) = (end, at);
     for &h in &HOVERS_MM {
         let held = held_pass(rig, (a, b), h)?;
-        widen(&held);
-        staircase.push((h, median(channel(&held, 3))));
-        lifted = std::array::from_fn(|c| median(channel(&held, c)));
+        staircase.push((h, median(&mut channel(&held, 3))));
+        lifted = std::array::from_fn(|c| median(&mut channel(&held, c)));
+        all.extend(held);
         std::mem::swap(&mut a, &mut b);
     }
     let far = held_pass(rig, (a, b), DARK_HOVER_MM)?;
-    widen(&far);
-    Ok(ApproachReadings {
+    let dark = median(&mut channel(&far, 3));
+    all.extend(far);
+    let readings = ApproachReadings {
         contact,
         noise,
         lifted,
         staircase,
-        dark: median(channel(&far, 3)),
-        range,
-    })
+        dark,
+        range: range_of(&all),
+    };
+    Ok((readings, all))
+}
+
+/// Refuses a pass of fewer than [`MIN_HELD_SAMPLES`] samples (`what` names it).
+fn enough(samples: &[[f64; 4]], what: &str) -> Result<(), MissionError> {
+    if samples.len() < MIN_HELD_SAMPLES {
+        return Err(MissionError::Refused {
+            what: what.to_string(),
+            reason: format!("{} samples read, {MIN_HELD_SAMPLES} needed", samples.len()),
+        });
+    }
+    Ok(())
 }
 
 /// The samples of a pass from `a` to `b` held `h` mm above the plate.
@@ -108,15 +119,10 @@ fn held_pass(
     h: f64,
 ) -> Result<Vec<[f64; 4]>, MissionError> {
     let ((held, _), _) = rig.hover_and_record(a, b, h, HOVER_SPEED_MM_S, None)?;
-    if held.len() < MIN_HELD_SAMPLES {
-        return Err(MissionError::Refused {
-            what: format!("the approach's pass held {h} mm above the plate"),
-            reason: format!(
-                "{} samples at that height, {MIN_HELD_SAMPLES} needed",
-                held.len()
-            ),
-        });
-    }
+    enough(
+        &held,
+        &format!("the approach's pass held {h} mm above the plate"),
+    )?;
     Ok(held)
 }
 
@@ -136,6 +142,10 @@ mod tests {
             step_noise(&x)
         );
         assert!(step_noise(&[1.0]).is_nan());
-        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(
+            range_of(&[[1.0, 2.0, 3.0, 4.0], [0.0, 5.0, 3.0, 9.0]])[3],
+            [4.0, 9.0]
+        );
+        assert!(enough(&[[0.0; 4]; 3], "a short pass").is_err());
     }
 }

@@ -166,14 +166,11 @@ fn optics_step(
     let rig = mounts.mount(&flat)?;
     let started = Instant::now();
     let at = [30.0, flat.surface.size_mm[1] / 2.0];
-    let readings = on_rig::on_rig(&rig, &session.rig_dir("approach"), stop, |r| {
+    let (readings, samples) = on_rig::on_rig(&rig, &session.rig_dir("approach"), stop, |r| {
         approach::approach(r, at, SPEED_MM_S, feel)
     })?;
     let took = robot_s(started, rig.speedup);
-    let range: Vec<[f64; 4]> = (0..2)
-        .map(|k| std::array::from_fn(|c| readings.range[c][k]))
-        .collect();
-    check_saturation("the flat plate (the approach)", &range)?;
+    check_saturation("the flat plate (the approach)", &samples)?;
     let optics = fit_optics(&readings, rig.site.fibre)?;
     let file = Optics { readings, optics };
     session.save_optics(&file)?;
@@ -194,13 +191,7 @@ fn record_step(
     let total = plates.len() as u64 * u64::from(s.repetitions * s.slides);
     let (mut out, mut robot) = (Vec::new(), 0.0);
     for plate in plates {
-        let mut missing = Vec::new();
-        for rep in 1..=s.repetitions {
-            match session.recording(plate, rep)? {
-                Some(r) => out.push((plate.clone(), rep, r)),
-                None => missing.push(rep),
-            }
-        }
+        let missing = resumed(session, plate, s.repetitions, &mut out)?;
         let mut done = out.len() as u64 * u64::from(s.slides);
         let mut tell = |done: u64| {
             progress(&CommissionProgress::Slides {
@@ -224,32 +215,53 @@ fn record_step(
                     tell(done);
                 };
                 let rec = record::record_repetition(r, (plate, rep, label), s, feel, &mut slid)?;
-                got.push((rep, rec));
-                // Kept as each repetition ends: an interruption loses at most one.
-                if let Some((rep, rec)) = got.last() {
-                    session.save_recording(plate, *rep, rec).map_err(|e| {
-                        crate::MissionError::Refused {
-                            what: "keeping the recording".into(),
-                            reason: e.to_string(),
-                        }
-                    })?;
-                }
+                // Checked, then kept, as each repetition ends: an interruption loses at most
+                // one, and a saturated one is never kept.
+                check_recording(plate, &rec)?;
+                session.save_recording(plate, rep, &rec)?;
+                got.push((plate.clone(), rep, rec));
             }
-            Ok(got)
+            Ok::<_, CommissionError>(got)
         })?;
         robot += robot_s(started, rig.speedup);
-        for (rep, rec) in recorded {
-            let samples: Vec<[f64; 4]> = rec
-                .rows
-                .iter()
-                .map(crackbot_recording::Row::channels)
-                .collect();
-            check_saturation(&plate.name, &samples)?;
-            out.push((plate.clone(), rep, rec));
-        }
+        out.extend(recorded);
     }
     out.sort_by(|a, b| (a.0.name.as_str(), a.1).cmp(&(b.0.name.as_str(), b.1)));
     Ok((out, robot))
+}
+
+/// The repetitions of `plate` the session holds, checked as fresh ones are and added to
+/// `out`; those it lacks.
+fn resumed(
+    session: &Session,
+    plate: &ReferencePlate,
+    repetitions: u32,
+    out: &mut Vec<SessionRecording>,
+) -> Result<Vec<u32>, CommissionError> {
+    let mut missing = Vec::new();
+    for rep in 1..=repetitions {
+        match session.recording(plate, rep)? {
+            Some(r) => {
+                check_recording(plate, &r)?;
+                out.push((plate.clone(), rep, r));
+            }
+            None => missing.push(rep),
+        }
+    }
+    Ok(missing)
+}
+
+/// Refuses a recording of `plate` in which a channel saturates.
+fn check_recording(
+    plate: &ReferencePlate,
+    rec: &crackbot_recording::Recording,
+) -> Result<(), CommissionError> {
+    let samples: Vec<[f64; 4]> = rec
+        .rows
+        .iter()
+        .map(crackbot_recording::Row::channels)
+        .collect();
+    check_saturation(&plate.name, &samples)
 }
 
 /// Both models trained on everything, their held-out figures and the shipped models' beside
@@ -289,4 +301,48 @@ fn train_step(
     session.save_json("evaluation.json", &evaluation)?;
     progress(&CommissionProgress::Evaluated(evaluation.clone()));
     Ok((recognition, width, evaluation))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crackbot_recording::{Recording, Row};
+
+    fn recording(p: f64) -> Recording {
+        let row = |i: u32| Row {
+            x_mm: f64::from(i) * 0.01,
+            d1: 650.0,
+            d2: 430.0,
+            d3: 700.0,
+            p,
+            direction: 1,
+            slide: 1,
+            label: 0.0,
+            repetition: 1,
+        };
+        Recording {
+            rows: (0..200).map(row).collect(),
+            extra: None,
+        }
+    }
+
+    #[test]
+    fn a_resumed_repetition_that_saturates_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let settings = CommissionSettings::default();
+        let session = Session::open(dir.path(), &settings).unwrap();
+        let flat = crackbot_plates::by_name("flat").unwrap();
+        session.save_recording(&flat, 1, &recording(500.0)).unwrap();
+        let mut out = Vec::new();
+        let missing = resumed(&session, &flat, 3, &mut out).unwrap();
+        assert_eq!((out.len(), missing), (1, vec![2, 3]));
+        session
+            .save_recording(&flat, 2, &recording(1023.0))
+            .unwrap();
+        let e = resumed(&session, &flat, 3, &mut Vec::new()).unwrap_err();
+        assert!(
+            matches!(&e, CommissionError::Saturated { plate, channel: "P", .. } if plate == "flat"),
+            "{e}"
+        );
+    }
 }

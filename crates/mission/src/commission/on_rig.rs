@@ -12,13 +12,13 @@ use crate::inspect::{InspectMode, Progress, RigConfig};
 use crate::MissionError;
 
 /// Runs `step` on the rig `config` names, its link's state and recordings under `out_dir`;
-/// `stop` ends it (the arm is stopped).
-pub(crate) fn on_rig<T>(
+/// `stop` ends it (the arm is stopped). The step's own errors come back as they are.
+pub(crate) fn on_rig<T, E: From<MissionError>>(
     config: &RigConfig,
     out_dir: &Path,
     stop: &AtomicBool,
-    step: impl FnOnce(&mut Rig<'_>) -> Result<T, MissionError>,
-) -> Result<T, MissionError> {
+    step: impl FnOnce(&mut Rig<'_>) -> Result<T, E>,
+) -> Result<T, E> {
     let mode = InspectMode::Tactile;
     let mut backend = rig_of(config, mode)?;
     std::fs::create_dir_all(out_dir).map_err(|e| crate::error::io_err(out_dir, e))?;
@@ -26,7 +26,7 @@ pub(crate) fn on_rig<T>(
         Ok(parts) => parts,
         Err(e) => {
             backend.shutdown();
-            return Err(e);
+            return Err(E::from(e));
         }
     };
     let result = {
@@ -39,7 +39,9 @@ pub(crate) fn on_rig<T>(
             stop,
             &mut quiet,
         );
-        wait_for_streams(&mut rig).and_then(|()| step(&mut rig))
+        wait_for_streams(&mut rig)
+            .map_err(E::from)
+            .and_then(|()| step(&mut rig))
     };
     if result.is_err() {
         arm.stop();
