@@ -26,7 +26,11 @@ use crackbot_vision::preprocess::{letterbox, PostprocessParams};
 use crackbot_vision::Detector;
 use criterion::{criterion_group, criterion_main, Criterion};
 
-const MODELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/models/detector");
+/// The default model's folder.
+const MODELS: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/models/detector/crackseg-tiles"
+);
 
 /// The first validation image of `dataset`.
 fn val_image(dataset: &str) -> image::RgbImage {

@@ -10,7 +10,11 @@ use serde_json::Value;
 fn cracks() -> PathBuf {
     crackbot_datasets::require(crackbot_datasets::CRACKS)
 }
-const REFERENCE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/models/detector/reference");
+/// The default model's reference outputs.
+const REFERENCE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/models/detector/crackseg-tiles/reference"
+);
 
 fn ok_json(args: &[&str]) -> Value {
     let out = crackbot(args);
@@ -140,12 +144,12 @@ fn detect_with_calibration_annotation_and_fusion() {
 
 #[test]
 fn eval_detector_agrees_with_the_python_evaluation_of_the_model() {
-    // models/detector/metrics.json holds pycocotools' numbers for the same model and split,
+    // The default model's metrics.json holds pycocotools' numbers for the same model and split,
     // computed at export time with onnxruntime in Python (models/detector/eval.py).
     let python: Value = serde_json::from_str(
         &std::fs::read_to_string(concat!(
             env!("CARGO_MANIFEST_DIR"),
-            "/models/detector/metrics.json"
+            "/models/detector/crackseg-tiles/metrics.json"
         ))
         .expect("metrics.json"),
     )
@@ -173,7 +177,7 @@ fn eval_detector_agrees_with_the_python_evaluation_of_the_model() {
         let pixel = rust.get("pixel").and_then(Value::as_array);
         if dataset == "uav75" {
             let pixel = pixel.expect("pixel metrics on a split with masks");
-            assert_eq!(pixel.len(), 2);
+            assert_eq!(pixel.len(), 3);
             for p in pixel {
                 let f1 = p["ods"]["f1"].as_f64().expect("ods f1");
                 assert!(f1 > 0.0 && f1 <= 1.0, "{p}");
@@ -182,8 +186,16 @@ fn eval_detector_agrees_with_the_python_evaluation_of_the_model() {
                 assert_eq!(p["at_half"]["threshold"], 0.5);
                 assert_eq!(p["images"], rust["images"]);
             }
-            // A wider tolerance forgives more.
-            assert!(pixel[1]["ods"]["f1"].as_f64() >= pixel[0]["ods"]["f1"].as_f64());
+            // Pixel-exact, 2 px, 5 px: a wider tolerance forgives more.
+            assert_eq!(pixel[0]["tolerance_px"], 0.0);
+            for k in 1..3 {
+                assert!(pixel[k]["ods"]["f1"].as_f64() >= pixel[k - 1]["ods"]["f1"].as_f64());
+            }
+            // Crack-level recall over the same masks.
+            let c = &rust["cracks"];
+            let (found, cracks) = (c["found"].as_u64(), c["cracks"].as_u64());
+            assert!(found > Some(0) && found <= cracks, "{c}");
+            assert_eq!(c["images"], rust["images"]);
         } else {
             assert!(pixel.is_none(), "{rust}");
         }
@@ -254,7 +266,15 @@ fn eval_detector_on_rendered_plates_counts_cracks_found_and_decoys_proposed() {
         .sum();
     assert_eq!(by_width, cracks);
     // Rendered masks: pixel metrics too.
-    assert_eq!(r["pixel"].as_array().expect("pixel").len(), 2);
+    assert_eq!(
+        r["pixel"].as_array().expect("pixel").len(),
+        3,
+        "pixel-exact, 2 px, 5 px"
+    );
+    assert!(
+        r["cracks"]["cracks"].as_u64() > Some(0),
+        "cracks of the masks counted: {r}"
+    );
     // The text report says the same.
     let out = crackbot(&["eval-detector", "--coco", s(&coco)]);
     assert!(out.status.success(), "{}", text(&out.stderr));

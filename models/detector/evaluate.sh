@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Every figure of MODEL_CARD.md by crackbot's own (Rust) evaluator, release build, one ONNX Runtime thread:
-#   bash models/detector/evaluate.sh            # writes models/detector/out/rust/*.json and the trade-off tables
-#   MODELS=models/detector/crackseg-tiles OUT=/tmp/eval-tiles bash models/detector/evaluate.sh
+#   bash models/detector/evaluate.sh            # the default (crackseg-tiles/): models/detector/out/rust/*.json and the trade-off tables
+#   MODELS=models/detector OUT=/tmp/eval-scratch bash models/detector/evaluate.sh
 #                                               # the same figures for another folder of crack-detector-{256,320,416}.onnx
 #   DETECTORS=onnx TRADEOFF_THREADS= …          # the model's accuracy alone (no edge baseline, no timing runs)
 # The val splits of the photos and of the DeepCrack/CRACK500 tiles; unseen rendered scenes of three families (seeds 900000.. with the training
@@ -15,7 +15,7 @@ C="${CRACKS_DATA:-$(cd "$ROOT/../shared/data/cracks" && pwd)}"
 export CRACKBOT_CRACKS_DIR="${CRACKBOT_CRACKS_DIR:-$C}"
 TILES="${CRACK_TILES_DATA:-$(cd "$ROOT/../shared/data/cracks-tiles" && pwd)}"
 OUT="${OUT:-$HERE/out/rust}"
-MODELS="$(cd "${MODELS:-$HERE}" && pwd)"
+MODELS="$(cd "${MODELS:-$HERE/crackseg-tiles}" && pwd)"
 M320="$MODELS/crack-detector-320.onnx"
 [ -f "$M320" ] || { echo "evaluate.sh: no crack-detector-320.onnx in $MODELS" >&2; exit 2; }
 mkdir -p "$OUT"
@@ -54,10 +54,12 @@ done
 python3 - "$OUT" <<'PY'
 import json, sys, glob, os
 out = sys.argv[1]
-print(f"{'set':34s} {'mAP':>6s} {'mAP50':>6s} {'AR100':>6s} {'ODS2':>6s} {'ODS5':>6s} {'found':>9s} {'decoys':>7s} {'1 piece':>9s} {'split':>5s} {'joined':>6s}")
+print(f"{'set':34s} {'mAP':>6s} {'mAP50':>6s} {'AR100':>6s} {'ODS0':>6s} {'ODS2':>6s} {'ODS5':>6s} {'masks':>9s} {'found':>9s} {'decoys':>7s} {'1 piece':>9s} {'split':>5s} {'joined':>6s}")
 for p in sorted(glob.glob(os.path.join(out, "*.json"))):
     r = json.load(open(p))
     pix = {x["tolerance_px"]: x["ods"]["f1"] for x in r.get("pixel", [])}
+    cr = r.get("cracks")
+    masks = f"{cr['found']}/{cr['cracks']}" if cr else ""
     sc = r.get("scene")
     found = f"{sc['found']}/{sc['cracks']}" if sc else ""
     dec = f"{sc['decoys_proposed']}/{sc['decoys']}" if sc else ""
@@ -66,5 +68,5 @@ for p in sorted(glob.glob(os.path.join(out, "*.json"))):
     split = str(pc["in_pieces"]) if pc else ""
     joined = str(pc["joined"]) if pc else ""
     f = lambda v: f"{100*v:6.1f}" if v is not None else "     -"
-    print(f"{os.path.basename(p)[:-5]:34s} {f(r['map'])} {f(r['map50'])} {f(r['ar100'])} {f(pix.get(2.0))} {f(pix.get(5.0))} {found:>9s} {dec:>7s} {one:>9s} {split:>5s} {joined:>6s}")
+    print(f"{os.path.basename(p)[:-5]:34s} {f(r['map'])} {f(r['map50'])} {f(r['ar100'])} {f(pix.get(0.0))} {f(pix.get(2.0))} {f(pix.get(5.0))} {masks:>9s} {found:>9s} {dec:>7s} {one:>9s} {split:>5s} {joined:>6s}")
 PY

@@ -25,7 +25,7 @@ pub struct DetectorArgs {
             .try_map(|s| s.parse::<DetectorKind>())
     )]
     detector: DetectorKind,
-    /// ONNX model (default: models/detector/crack-detector-320.onnx of this repository).
+    /// ONNX model (default: models/detector/crackseg-tiles/crack-detector-320.onnx of this repository).
     #[arg(long)]
     model: Option<PathBuf>,
     /// ONNX Runtime threads.

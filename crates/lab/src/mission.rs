@@ -94,7 +94,7 @@ pub struct Common {
     /// report from 0.3).
     #[arg(long, default_value_t = 0.3)]
     proposal_min_score: f32,
-    /// ONNX crack detector (default: models/detector/crack-detector-320.onnx), e.g. the
+    /// ONNX crack detector (default: models/detector/crackseg-tiles/crack-detector-320.onnx), e.g. the
     /// 416-pixel export of the same weights.
     #[arg(long)]
     detector: Option<PathBuf>,

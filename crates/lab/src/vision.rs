@@ -27,7 +27,7 @@ pub struct DetectorArgs {
             .try_map(|s| s.parse::<DetectorKind>())
     )]
     detector: DetectorKind,
-    /// ONNX model (default: models/detector/crack-detector-320.onnx of this repository).
+    /// ONNX model (default: models/detector/crackseg-tiles/crack-detector-320.onnx of this repository).
     #[arg(long)]
     model: Option<PathBuf>,
     /// ONNX Runtime threads.
@@ -121,6 +121,18 @@ pub fn eval_detector(args: EvalDetectorArgs) -> Result<()> {
             p.at_half.f1
         );
     }
+    if let Some(c) = &report.cracks {
+        println!(
+            "  cracks of the masks: {}/{} found ({:.1}%: the map ≥ {} within {} px of more than half the centre line; {} specks under {} px left out)",
+            c.found,
+            c.cracks,
+            100.0 * c.recall,
+            crackbot_vision::crack_recall::MAP_THRESHOLD,
+            crackbot_vision::crack_recall::TOLERANCE_PX,
+            c.specks,
+            crackbot_vision::crack_recall::MIN_LINE_PX
+        );
+    }
     if let Some(s) = &report.scene {
         println!(
             "  rendered scenes: {}/{} cracks found ({:.1}%; {} by IoU ≥ 0.5 alone), {}/{} decoys proposed, {} other detections",
@@ -166,7 +178,7 @@ pub struct DetectorTradeoffArgs {
     /// Folder the COCO `file_name`s are relative to (default: the COCO file's folder).
     #[arg(long)]
     images: Option<PathBuf>,
-    /// ONNX models to compare (default: crack-detector-{256,320,416}.onnx in models/detector/).
+    /// ONNX models to compare (default: crack-detector-{256,320,416}.onnx beside the default model).
     #[arg(long, num_args = 1..)]
     models: Vec<PathBuf>,
     /// Leave out the classical baseline.

@@ -12,6 +12,7 @@ use crate::coco::{
     CocoResult, Progress,
 };
 use crate::crack_map::{CrackMap, CrackPiece};
+use crate::crack_recall::{CrackRecall, CrackRecallEvaluator};
 use crate::pixel::{PixelEvaluator, PixelMetrics};
 use crate::preprocess::PostprocessParams;
 use crate::scene_recall::{scene_recall, SceneRecall, SceneTruth};
@@ -72,8 +73,9 @@ impl Detector for Timed<'_> {
     }
 }
 
-/// Pixel tolerances the crack map is scored at: 2 px (the usual figure for CrackForest) and 5 px.
-pub const PIXEL_TOLERANCES_PX: [f64; 2] = [2.0, 5.0];
+/// Pixel tolerances the crack map is scored at: 0 (pixel-exact, the protocol of the published
+/// DeepCrack and CrackSCF figures), 2 px (the usual figure for CrackForest) and 5 px.
+pub const PIXEL_TOLERANCES_PX: [f64; 3] = [0.0, 2.0, 5.0];
 
 /// Reads a crack mask (any image; non-zero luma is crack), checking its size.
 fn read_mask(path: &Path, width: u32, height: u32) -> Result<Vec<bool>, VisionError> {
@@ -125,6 +127,8 @@ pub struct BenchmarkRun {
     /// Pixel-level metrics of the crack map at each of [`PIXEL_TOLERANCES_PX`], over the images
     /// with a `mask_file` (empty for detectors without a map, or without masks).
     pub pixel: Vec<PixelMetrics>,
+    /// Cracks of the masks found by the crack map (over the same images as `pixel`).
+    pub cracks: Option<CrackRecall>,
     /// Cracks found and decoys proposed at the `detect` threshold (rendered frames with a
     /// `features.json`).
     pub scene: Option<SceneRecall>,
@@ -181,6 +185,7 @@ impl Benchmark {
             .iter()
             .map(|&t| PixelEvaluator::new(t))
             .collect::<Result<_, _>>()?;
+        let mut cracks = CrackRecallEvaluator::default();
         let root = &self.root;
         let threshold = PostprocessParams::default().score_threshold;
         let mut pieces: HashMap<u64, Vec<CrackPiece>> = HashMap::new();
@@ -207,10 +212,11 @@ impl Benchmark {
             };
             let truth = read_mask(&root.join(mask_file), image.width, image.height)?;
             let prob = map.to_image();
+            let size = (image.width as usize, image.height as usize);
             for e in &mut pixel {
-                e.add(&prob, &truth, image.width as usize, image.height as usize)?;
+                e.add(&prob, &truth, size.0, size.1)?;
             }
-            Ok(())
+            cracks.add(&prob, &truth, size.0, size.1)
         };
         let results = detect_dataset_with_maps(
             &mut timed,
@@ -238,6 +244,7 @@ impl Benchmark {
             results,
             metrics,
             pixel: pixel.iter().filter_map(PixelEvaluator::finish).collect(),
+            cracks: cracks.finish(),
         })
     }
 }
@@ -265,6 +272,10 @@ pub struct EvalReport {
     /// Pixel-level precision/recall/F1 of the crack map where the ground truth has masks.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub pixel: Vec<PixelMetrics>,
+    /// Cracks of the masks the crack map covers (crack-level recall), where the ground truth
+    /// has masks.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cracks: Option<CrackRecall>,
     /// Cracks found and decoys proposed, on rendered frames with a `features.json`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub scene: Option<SceneRecall>,
@@ -283,6 +294,7 @@ impl EvalReport {
             ms_per_image: run.median_ms,
             ms_per_image_is: "median of one detect call, image decoding excluded",
             pixel: run.pixel.clone(),
+            cracks: run.cracks,
             scene: run.scene.clone(),
         }
     }

@@ -31,6 +31,7 @@ pub mod classical;
 #[cfg(feature = "research")]
 pub mod coco;
 pub mod crack_map;
+pub mod crack_recall;
 pub mod detect;
 mod error;
 pub mod fusion;

@@ -109,8 +109,10 @@ fn onnx_detector(
     ))
 }
 
-/// The default model, relative to the repository root.
-pub const DEFAULT_MODEL: &str = "models/detector/crack-detector-320.onnx";
+/// The default model, relative to the repository root: CrackSeg fine-tuned with the
+/// DeepCrack and CRACK500 tiles (`models/detector/MODEL_CARD.md`), the one that sees real cracks
+/// best; the from-scratch CrackSeg it started from is `models/detector/crack-detector-320.onnx`.
+pub const DEFAULT_MODEL: &str = "models/detector/crackseg-tiles/crack-detector-320.onnx";
 
 /// The input sizes of the models trained in `models/detector/` (`crack-detector-<size>.onnx`).
 pub const TRAINED_INPUT_SIZES: [usize; 3] = [256, 320, 416];
@@ -166,6 +168,6 @@ mod tests {
         assert!("yolo".parse::<DetectorKind>().unwrap_err().contains("onnx"));
         let all = trained_models();
         assert_eq!(all.len(), 3);
-        assert!(all[1].ends_with("crack-detector-320.onnx"));
+        assert!(all[1].ends_with("crackseg-tiles/crack-detector-320.onnx"));
     }
 }

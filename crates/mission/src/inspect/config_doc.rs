@@ -39,7 +39,7 @@ pub(crate) const COMMENTS: &[(&str, &str)] = &[
     ("rig.site.fibre.offset_mm", "How far ahead of the tip the fibre looks, mm."),
     ("rig.site.fibre.spot_mm", "The fibre's spot on the surface, mm."),
     ("perceive", "The camera and the detector."),
-    ("perceive.detector_model", "The ONNX detector (left out: models/detector/crack-detector-320.onnx)."),
+    ("perceive.detector_model", "The ONNX detector (left out: models/detector/crackseg-tiles/crack-detector-320.onnx)."),
     ("perceive.min_score", "Vision missions: detections below this score are not reported."),
     ("perceive.proposal_min_score", "Fused missions: detections below this score are not touched (the finger confirms or rejects the rest)."),
     ("perceive.candidates", "cracks: every crack a detection holds, on its centre line; detections: each detection once across its main axis."),
