@@ -4,13 +4,19 @@
 //!   front end's progress callback sees anyway), nothing written;
 //! * `mcap/log_400`: the same samples logged to an open `mission.mcap` (JSON on `/tactile`, the
 //!   Foxglove SDK's MCAP sink, zstd chunks), plus the arm's 100 states as transforms;
-//! * `mcap/open_and_close`: creating a log (13 channels) and writing its summary.
+//! * `mcap/open_and_close`: creating a log (13 channels) and writing its summary;
+//! * `mcap/log_file_400`: a whole log of that second: created, the samples and transforms logged,
+//!   closed (the baseline of the next);
+//! * `mcap/ros2_bag_400`: the same second, as `crackbot log to-ros2` handles it once read back:
+//!   converted to ROS 2 messages (CDR) and written as a bag folder (MCAP storage and
+//!   `metadata.yaml`).
 //!
-//! The ratio log / baseline is what logging adds; `taskset -c 1 cargo bench --bench mcap`.
+//! The ratio log / baseline is what logging adds; bag / log file what the ROS 2 bag costs beside
+//! the log. `taskset -c 1 cargo bench --bench mcap`.
 
 use std::hint::black_box;
 
-use crackbot_mcap::{JsonTopic, LogWriter};
+use crackbot_mcap::{JsonTopic, LogWriter, LoggedMessage, MissionLog, Payload};
 use criterion::{criterion_group, criterion_main, Criterion};
 
 /// One second of samples: (t_s, D1, D2, D3, P).
@@ -62,8 +68,58 @@ fn bench(c: &mut Criterion) {
             black_box(log.finish().expect("closed"));
         });
     });
+    g.bench_function("log_file_400", |b| {
+        let path = dir.path().join("second.mcap");
+        b.iter(|| {
+            let log = LogWriter::create(&path, 0).expect("the log");
+            for (i, &(t, raw)) in samples.iter().enumerate() {
+                log.json(JsonTopic::Tactile, t, &value(t, raw))
+                    .expect("logged");
+                if i % 4 == 0 {
+                    log.finger_at(t, [t * 4.6, 10.0, 0.0]);
+                }
+            }
+            black_box(log.finish().expect("closed"));
+        });
+    });
+    let read_back = MissionLog {
+        path: dir.path().join("second.mcap"),
+        messages: logged_second(&samples),
+    };
+    g.bench_function("ros2_bag_400", |b| {
+        let mut k = 0u64;
+        b.iter(|| {
+            k += 1;
+            let bag = dir.path().join(format!("bag{k}"));
+            let messages = crackbot_rosbag::convert(&read_back).expect("converted");
+            black_box(crackbot_rosbag::write_bag(&bag, &messages).expect("written"));
+            std::fs::remove_dir_all(&bag).expect("removed");
+        });
+    });
     g.finish();
     log.finish().expect("closed");
+}
+
+/// The second as the log reads back: the samples on `/tactile`, the arm's poses on `/arm/pose`.
+fn logged_second(samples: &[(f64, [u16; 4])]) -> Vec<LoggedMessage> {
+    let mut out = Vec::new();
+    for (i, &(t, raw)) in samples.iter().enumerate() {
+        let ns = (t * 1e9) as u64;
+        out.push(LoggedMessage {
+            topic: JsonTopic::Tactile.topic().into(),
+            log_time_ns: ns,
+            payload: Payload::Json(value(t, raw)),
+        });
+        if i % 4 == 0 {
+            let pose = serde_json::json!({"t_s": t, "x_mm": t * 4.6, "y_mm": 10.0, "z_mm": 0.0});
+            out.push(LoggedMessage {
+                topic: JsonTopic::ArmPose.topic().into(),
+                log_time_ns: ns,
+                payload: Payload::Json(pose),
+            });
+        }
+    }
+    out
 }
 
 criterion_group!(benches, bench);

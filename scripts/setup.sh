@@ -79,6 +79,9 @@ bash "$crackbot_root/scripts/forest_to_onnx.sh" --setup
 # The independent MCAP reader and Foxglove live-view client the tests use (scripts/mcap_check.sh),
 # pinned in scripts/mcap_check.requirements.txt, in $crackbot_cache/mcap-venv.
 bash "$crackbot_root/scripts/mcap_check.sh" --setup
+# The independent ROS 2 bag readers (rosbags, mcap-ros2-support) the tests use (scripts/ros2_bag_check.sh),
+# pinned in scripts/ros2_bag_check.requirements.txt, in $crackbot_cache/ros2-venv.
+bash "$crackbot_root/scripts/ros2_bag_check.sh" --setup
 # The ROS 2 tests' arm: Eclipse Cyclone DDS's Python binding, an independent DDS (scripts/dds_arm.sh).
 bash "$crackbot_root/scripts/dds_arm.sh" --setup
 # OpenCV's Python binding, the independent check of the camera calibration (scripts/opencv_check.sh),

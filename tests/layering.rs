@@ -55,8 +55,8 @@ const LAYERS: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "pipelines: the emulated sensor, the tactile pipeline, the reference plates",
-        &["crackbot-emulator", "crackbot-tactile", "crackbot-plates"],
+        "pipelines: the emulated sensor, the tactile pipeline, the reference plates, the log as a ROS 2 bag",
+        &["crackbot-emulator", "crackbot-tactile", "crackbot-plates", "crackbot-rosbag"],
     ),
     (
         "hardware: the manipulator controller (the simulated arm over the emulated sensor, the ROS 2 arm) and the link's conformance suite",

@@ -1,25 +1,36 @@
 //! A mission's MCAP log (`mission.mcap`), checked by an independent reader (the Python `mcap`
 //! package, `scripts/mcap_check.py`), watched live over the Foxglove WebSocket protocol
 //! (`--foxglove`, a Python client: `scripts/foxglove_live_check.py`), replayed by `crackbot
-//! replay`, and refused with a clear error when it is cut short or corrupt.
+//! replay`, and refused with a clear error when it is cut short or corrupt; and the same log as a
+//! ROS 2 bag (`crackbot log to-ros2`), read by independent ROS 2 readers (`rosbags`,
+//! `mcap-ros2-support`: `scripts/ros2_bag_check.py`).
 
 use std::path::Path;
 use std::process::{Command, Stdio};
 
 use crackbot_tests::{binary, crackbot, text};
 
-/// Runs `bash scripts/mcap_check.sh ARGS` (the venv `scripts/setup.sh` made) and returns its
-/// exit status and JSON line.
-fn python_check(args: &[&str]) -> (bool, serde_json::Value) {
+/// Runs `bash scripts/SCRIPT ARGS` (the venvs `scripts/setup.sh` made) and returns its exit
+/// status and JSON line.
+fn script_json<S: AsRef<std::ffi::OsStr>>(script: &str, args: &[S]) -> (bool, serde_json::Value) {
     let out = Command::new("bash")
-        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mcap_check.sh"))
+        .arg(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("scripts")
+                .join(script),
+        )
         .args(args)
         .output()
-        .expect("running scripts/mcap_check.sh");
+        .unwrap_or_else(|e| panic!("running scripts/{script}: {e}"));
     let stdout = text(&out.stdout);
     let json = serde_json::from_str(stdout.trim())
         .unwrap_or_else(|e| panic!("{e}: stdout {stdout}\nstderr {}", text(&out.stderr)));
     (out.status.success(), json)
+}
+
+/// Runs `bash scripts/mcap_check.sh ARGS`.
+fn python_check(args: &[&str]) -> (bool, serde_json::Value) {
+    script_json("mcap_check.sh", args)
 }
 
 /// A fused mission on the built-in default scene at 8× real time, into `dir`.
@@ -83,6 +94,68 @@ fn a_default_scene_mission_writes_an_mcap_the_python_reader_validates() {
         Some(rows.len() as u64),
         "{replay}"
     );
+}
+
+/// Runs `bash scripts/ros2_bag_check.sh BAG MISSION --json`.
+fn ros2_check(bag: &Path, mission: &Path) -> (bool, serde_json::Value) {
+    script_json(
+        "ros2_bag_check.sh",
+        &[bag.as_os_str(), mission.as_os_str(), "--json".as_ref()],
+    )
+}
+
+#[test]
+fn a_default_scene_mission_becomes_a_ros2_bag_that_independent_readers_read_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = default_scene_mission(dir.path(), &[]);
+    let mission = dir.path().to_str().unwrap();
+    let out = crackbot(&["log", "to-ros2", mission, "--json"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let bag: serde_json::Value = serde_json::from_str(&text(&out.stdout)).unwrap();
+    let bag_dir = dir.path().join("ros2");
+    assert_eq!(bag["bag"].as_str(), bag_dir.to_str());
+    let (ok, check) = ros2_check(&bag_dir, dir.path());
+    assert!(ok, "{check}");
+    assert_eq!(check["rosbags_errors"], 0, "{check}");
+    assert_eq!(check["mcap_ros2_errors"], 0, "{check}");
+    // The counts the readers found are the writer's, and the report's.
+    assert_eq!(check["topics"], bag["topics"], "{check}");
+    let topics = &check["topics"];
+    let passes = report["passes"].as_array().unwrap().len() as u64;
+    assert!(passes > 0);
+    assert_eq!(topics["/crackbot/verdicts"].as_u64(), Some(passes));
+    assert_eq!(topics["/crackbot/strokes"].as_u64(), Some(passes));
+    assert_eq!(topics["/crackbot/mission/report"].as_u64(), Some(1));
+    assert_eq!(
+        topics["/tf"], topics["/crackbot/arm/pose"],
+        "one transform per pose"
+    );
+    assert!(check["sliding_samples_with_position"].as_u64() > Some(0));
+    // The bag costs no more bytes than the log it came from (the bound: 1.5×).
+    let size = |p: &Path| std::fs::metadata(p).unwrap().len() as f64;
+    let mcap = std::path::PathBuf::from(bag["mcap"].as_str().unwrap());
+    let ratio = size(&mcap) / size(&dir.path().join("mission.mcap"));
+    assert!(ratio <= 1.5, "the bag is {ratio:.2}× the log");
+    // A bag is a folder of its own: writing it again is refused, naming the folder.
+    let again = crackbot(&["log", "to-ros2", mission]);
+    assert!(!again.status.success());
+    assert!(
+        text(&again.stderr).contains("already exists"),
+        "{}",
+        text(&again.stderr)
+    );
+}
+
+#[test]
+fn a_log_that_is_not_one_is_refused_by_the_bag_writer_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let fake = dir.path().join("mission.mcap");
+    std::fs::write(&fake, b"not an mcap file at all").unwrap();
+    let out = crackbot(&["log", "to-ros2", fake.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = text(&out.stderr);
+    assert!(err.contains("mission.mcap"), "{err}");
+    assert!(!dir.path().join("ros2").exists(), "no bag begun: {err}");
 }
 
 #[test]

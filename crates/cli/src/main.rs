@@ -45,6 +45,7 @@ mod calibrate;
 mod commission;
 mod finger;
 mod lab;
+mod log;
 mod run;
 mod vision;
 
@@ -81,6 +82,10 @@ enum Command {
     /// distortion), the plate's pose.
     #[command(subcommand)]
     Calibrate(calibrate::CalibrateCommand),
+    /// A mission's log in other forms: `crackbot log to-ros2 out/mission` writes the ROS 2 bag
+    /// that `ros2 bag play` plays.
+    #[command(subcommand)]
+    Log(log::LogCommand),
     /// Commission a new finger: print the reference plates, let the arm slide over them, train
     /// and install the finger's own models as a profile (`crackbot run --finger NAME`).
     #[command(subcommand)]
@@ -205,6 +210,7 @@ fn main() -> Result<()> {
         Command::Homography(cmd) => vision::homography(cmd),
         Command::Calibrate(cmd) => calibrate::calibrate(cmd),
         Command::Commission(cmd) => commission::commission_cmd(cmd),
+        Command::Log(cmd) => log::log_cmd(cmd),
         Command::Tactile(args) => lab::run("tactile", args),
         Command::EvalDetector(args) => lab::run("eval-detector", args),
         Command::DetectorTradeoff(args) => lab::run("detector-tradeoff", args),

@@ -121,6 +121,10 @@ pub struct RunArgs {
     /// written by default beside the report).
     #[arg(long)]
     pub no_mcap: bool,
+    /// Also write the log as a ROS 2 bag, `ros2/` beside it, once the mission ends (what
+    /// `crackbot log to-ros2` writes; `ros2 bag play` plays it).
+    #[arg(long, conflicts_with = "no_mcap")]
+    pub ros2_bag: bool,
     /// Serve the mission live over the Foxglove WebSocket protocol, on ADDR (default
     /// 127.0.0.1:8765; port 0 picks a free one): open it in Foxglove with "Open connection".
     #[cfg(feature = "foxglove")]
@@ -138,7 +142,7 @@ pub struct RunArgs {
     /// Deployed width model.
     #[arg(long)]
     pub width_model: Option<PathBuf>,
-    /// ONNX detector (default: models/detector/crack-detector-320.onnx).
+    /// ONNX detector (default: models/detector/crackseg-tiles/crack-detector-320.onnx).
     #[arg(long)]
     pub detector: Option<PathBuf>,
     /// Simulated controller: clock offset, µs (the robot synchronises to it).
@@ -282,7 +286,13 @@ pub fn run(args: RunArgs) -> Result<()> {
         return Ok(());
     }
     if args.fleet.telemetry.is_some() {
+        if args.ros2_bag {
+            anyhow::bail!("--ros2-bag is for a mission run here, not with --telemetry: convert the log afterwards with `crackbot log to-ros2`");
+        }
         return fleet(&args, config);
+    }
+    if args.ros2_bag && !config.output.mcap {
+        anyhow::bail!("--ros2-bag needs the mission's log, and the configuration turns it off (output.mcap = false)");
     }
     let stop = Arc::new(AtomicBool::new(false));
     {
@@ -300,6 +310,16 @@ pub fn run(args: RunArgs) -> Result<()> {
         )
     })?;
     bar.finish_and_clear();
+    if args.ros2_bag {
+        let out = &config.output.out_dir;
+        let bag = crackbot_rosbag::log_to_bag(&out.join("mission.mcap"), &out.join("ros2"))
+            .context("writing the mission's log as a ROS 2 bag")?;
+        eprintln!(
+            "ROS 2 bag: {} ({} messages)",
+            bag.dir.display(),
+            bag.messages()
+        );
+    }
     print_report(&report, args.json)
 }
 

@@ -1,5 +1,7 @@
 //! A mission as an [MCAP](https://mcap.dev) log that robotics tools open: Foxglove, PlotJuggler,
-//! `ros2 bag` (whose default storage is MCAP), the `mcap` CLI and its Python reader.
+//! the `mcap` CLI and its Python reader. Not `ros2 bag`: rosbag2 plays only CDR-encoded ROS 2
+//! messages, and these channels are Foxglove protobuf and JSON; `crackbot-rosbag` (`crackbot log
+//! to-ros2`) turns a log into the bag `ros2 bag play` plays.
 //!
 //! * **Writing** ([`LogWriter`]): each channel has its schema in the file — the Foxglove
 //!   well-known schemas where one fits (`foxglove.CompressedImage` for the camera frame,
