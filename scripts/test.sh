@@ -11,10 +11,10 @@ python3 crates/link/golden/generate.py --check
 image_log="$(mktemp)"
 bash firmware/image.sh >"$image_log" 2>&1 &
 image_pid=$!
-# The robot's fleet telemetry and Foxglove live-view features and the controller's ROS 2 arm are on for the whole
+# The robot's fleet telemetry, Foxglove live view and live ROS 2 topics and the controller's ROS 2 arm are on for the whole
 # run: the end-to-end tests build the binaries with them (tests/support, FEATURES), and one feature set means
 # everything compiles once.
-features=crackbot-cli/telemetry,crackbot-cli/foxglove,crackbot-controller/ros2
+features=crackbot-cli/telemetry,crackbot-cli/foxglove,crackbot-cli/ros2,crackbot-controller/ros2
 # cargo-nextest runs the tests of every binary side by side (settings: .config/nextest.toml);
 # arguments go to it, e.g. `bash scripts/test.sh -E 'package(crackbot-link)'` or `-E 'test(stop)'`.
 # The examples are not built here (25 CPU-seconds cold, no tests in them): CI's clippy stage

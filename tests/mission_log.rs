@@ -146,6 +146,97 @@ fn a_default_scene_mission_becomes_a_ros2_bag_that_independent_readers_read_whol
     );
 }
 
+/// `scripts/ros2_live_check.sh` subscribed on DDS domain `domain` (Cyclone DDS), once READY.
+fn live_subscriber(domain: u16, late_s: f64) -> std::process::Child {
+    use std::io::BufRead;
+    let mut child = Command::new("bash")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/ros2_live_check.sh"))
+        .args([
+            "--domain",
+            &domain.to_string(),
+            "--late",
+            &late_s.to_string(),
+        ])
+        .args(["--timeout", "120"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("starting scripts/ros2_live_check.sh (bash scripts/setup.sh)");
+    let mut line = String::new();
+    let stdout = child.stdout.as_mut().expect("stdout");
+    std::io::BufReader::new(stdout)
+        .read_line(&mut line)
+        .expect("READY");
+    assert_eq!(line.trim(), "READY", "the subscriber did not start");
+    child
+}
+
+#[test]
+fn a_mission_at_twice_real_time_is_received_live_over_dds_by_cyclone() {
+    let dir = tempfile::tempdir().unwrap();
+    let domain = 90 + (std::process::id() % 50) as u16;
+    // A second set of readers joins 4 s in, mid-mission.
+    let sub = live_subscriber(domain, 4.0);
+    let out = Command::new(binary("crackbot-robot"))
+        .args([
+            "--speedup",
+            "2",
+            "--json",
+            "--ros2",
+            &domain.to_string(),
+            "--out",
+        ])
+        .arg(dir.path())
+        .output()
+        .expect("running crackbot-robot");
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let report: serde_json::Value = serde_json::from_str(&text(&out.stdout)).unwrap();
+    let got = sub.wait_with_output().expect("the subscriber's output");
+    let got: serde_json::Value = serde_json::from_str(text(&got.stdout).trim())
+        .unwrap_or_else(|e| panic!("{e}: {}", text(&got.stdout)));
+    // Every sample the log holds, against those received (best effort, loopback).
+    let log = crackbot_mcap::read_log(&dir.path().join("mission.mcap")).unwrap();
+    let sent = crackbot_mcap::tactile_rows(&log).unwrap().len() as f64;
+    let received = got["tactile"].as_f64().unwrap();
+    assert!(
+        received >= 0.99 * sent && received <= sent,
+        "{received} of {sent} samples: {got}"
+    );
+    assert_eq!(got["tactile_stamps_monotonic"], true, "{got}");
+    // Every verdict and stroke, in order; the report whole.
+    let ids: Vec<u64> = report["passes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["id"].as_u64().unwrap())
+        .collect();
+    assert!(!ids.is_empty());
+    let as_ids = |v: &serde_json::Value| -> Vec<u64> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_u64().unwrap())
+            .collect()
+    };
+    assert_eq!(as_ids(&got["verdicts"]), ids, "{got}");
+    assert_eq!(as_ids(&got["strokes"]), ids, "{got}");
+    assert_eq!(got["report"]["json"], report, "the report as report.json");
+    assert_eq!(
+        got["stages"].as_array().unwrap().last(),
+        Some(&serde_json::json!("finished"))
+    );
+    // The late joiner: the last status published before it joined, then the report, and
+    // every verdict (transient local).
+    let late = &got["late"];
+    let first = &late["first_status"];
+    assert!(
+        first["stamp_ns"].as_u64() < late["joined_ns"].as_u64(),
+        "a status from before it joined: {late}"
+    );
+    assert_eq!(late["report"], true, "{late}");
+    assert_eq!(as_ids(&late["verdicts"]), ids, "{late}");
+}
+
 #[test]
 fn a_log_that_is_not_one_is_refused_by_the_bag_writer_naming_it() {
     let dir = tempfile::tempdir().unwrap();

@@ -7,8 +7,9 @@ use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::{Mutex, OnceLock};
 
 /// The features every test build has (`scripts/test.sh`'s): the robot's fleet telemetry and
-/// Foxglove live view, and the controller's ROS 2 arm.
-pub const FEATURES: &str = "crackbot-cli/telemetry,crackbot-cli/foxglove,crackbot-controller/ros2";
+/// Foxglove live view, its live ROS 2 topics, and the controller's ROS 2 arm.
+pub const FEATURES: &str =
+    "crackbot-cli/telemetry,crackbot-cli/foxglove,crackbot-cli/ros2,crackbot-controller/ros2";
 
 /// Path of a workspace binary, built (once per test process) with the profile of the running
 /// test, so `cargo test` alone is enough. Every test gets the binaries built with the robot's

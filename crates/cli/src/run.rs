@@ -121,6 +121,12 @@ pub struct RunArgs {
     /// written by default beside the report).
     #[arg(long)]
     pub no_mcap: bool,
+    /// Publish the mission live on ROS 2 topics over DDS domain DOMAIN (default 0):
+    /// `/crackbot/tactile`, `/crackbot/verdicts`, `/crackbot/mission/report`, … (the types of
+    /// `ros/crackbot_msgs`; crates/rosbag/docs/ros2.md).
+    #[cfg(feature = "ros2")]
+    #[arg(long, value_name = "DOMAIN", num_args = 0..=1, default_missing_value = "0", conflicts_with = "no_mcap")]
+    pub ros2: Option<u16>,
     /// Also write the log as a ROS 2 bag, `ros2/` beside it, once the mission ends (what
     /// `crackbot log to-ros2` writes; `ros2 bag play` plays it).
     #[arg(long, conflicts_with = "no_mcap")]
@@ -350,6 +356,10 @@ fn config_from(args: &RunArgs) -> Result<InspectConfig> {
     #[cfg(feature = "foxglove")]
     if args.foxglove.is_some() {
         config.output.foxglove = args.foxglove;
+    }
+    #[cfg(feature = "ros2")]
+    if args.ros2.is_some() {
+        config.output.ros2_domain = args.ros2;
     }
     link_faults_from_flags(args, &mut config);
     Ok(config)

@@ -102,6 +102,19 @@ pub enum LogLevel {
     Error,
 }
 
+impl LogLevel {
+    /// Its `foxglove.Log.Level` number (2 info, 3 warning, 4 error), as [`crate::Payload::Log`]
+    /// carries it.
+    pub fn foxglove_level(self) -> i32 {
+        let level = match self {
+            LogLevel::Info => log::Level::Info,
+            LogLevel::Warning => log::Level::Warning,
+            LogLevel::Error => log::Level::Error,
+        };
+        level as i32
+    }
+}
+
 /// A mission's log being written: every channel of [`Topic`] and [`JsonTopic`], stamped with
 /// the host's clock.
 pub struct LogWriter {
@@ -357,14 +370,9 @@ impl LogWriter {
     /// A log line at `t_s`.
     pub fn log(&self, t_s: f64, level: LogLevel, message: &str) {
         let (timestamp, meta) = self.stamp(t_s);
-        let level = match level {
-            LogLevel::Info => log::Level::Info,
-            LogLevel::Warning => log::Level::Warning,
-            LogLevel::Error => log::Level::Error,
-        };
         let msg = Log {
             timestamp,
-            level: level as i32,
+            level: level.foxglove_level(),
             message: message.into(),
             name: "crackbot".into(),
             ..Default::default()

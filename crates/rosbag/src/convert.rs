@@ -9,10 +9,11 @@ use crackbot_mcap::{JsonTopic, LoggedMessage, MissionLog, Payload};
 use serde_json::Value;
 
 use crate::error::RosbagError;
+use crate::message::RosMessage;
 use crate::msgs::{
-    to_cdr, Candidate, CompressedImage, Crack, Header, MissionReport, MissionStatus, Point,
-    PoseStamped, RosLog, StreamHealth, Stroke, TactileSample, TfMessage, Time, TransformStamped,
-    Verdict, IDENTITY, KIND_PASS, KIND_RUNNING,
+    Candidate, CompressedImage, Crack, Header, MissionReport, MissionStatus, Point, PoseStamped,
+    RosLog, StreamHealth, Stroke, TactileSample, TfMessage, Time, TransformStamped, Verdict,
+    IDENTITY, KIND_PASS, KIND_RUNNING,
 };
 use crate::topics::RosTopic;
 
@@ -122,12 +123,10 @@ fn header(ns: u64, frame: &str) -> Header {
     }
 }
 
-fn encode<T: serde::Serialize>(
-    topic: RosTopic,
-    ns: u64,
-    msg: &T,
-) -> Result<BagMessage, RosbagError> {
-    let data = to_cdr(msg).map_err(|source| RosbagError::Cdr {
+/// `msg` encoded for a bag, logged at `ns`.
+fn encode(ns: u64, msg: &RosMessage) -> Result<BagMessage, RosbagError> {
+    let topic = msg.topic();
+    let data = msg.to_cdr().map_err(|source| RosbagError::Cdr {
         topic: topic.name(),
         source,
     })?;
@@ -150,7 +149,7 @@ fn sample(f: &Fields<'_>, ns: u64) -> Result<TactileSample, RosbagError> {
     })
 }
 
-fn arm_pose(f: &Fields<'_>, ns: u64) -> Result<Vec<BagMessage>, RosbagError> {
+fn arm_pose(f: &Fields<'_>, ns: u64) -> Result<Vec<RosMessage>, RosbagError> {
     let at = Point::from_mm([f.f64("x_mm")?, f.f64("y_mm")?, f.f64("z_mm")?]);
     let pose = PoseStamped {
         header: header(ns, SURFACE_FRAME),
@@ -165,13 +164,10 @@ fn arm_pose(f: &Fields<'_>, ns: u64) -> Result<Vec<BagMessage>, RosbagError> {
             rotation: IDENTITY,
         }],
     };
-    Ok(vec![
-        encode(RosTopic::ArmPose, ns, &pose)?,
-        encode(RosTopic::Tf, ns, &tf)?,
-    ])
+    Ok(vec![RosMessage::ArmPose(pose), RosMessage::Tf(tf)])
 }
 
-fn pass(f: &Fields<'_>, ns: u64) -> Result<Vec<BagMessage>, RosbagError> {
+fn pass(f: &Fields<'_>, ns: u64) -> Result<Vec<RosMessage>, RosbagError> {
     let (id, candidate, samples) = (f.u32("id")?, f.opt_u32("candidate")?, f.u32("samples")?);
     let stroke = Stroke {
         header: header(ns, SURFACE_FRAME),
@@ -193,8 +189,8 @@ fn pass(f: &Fields<'_>, ns: u64) -> Result<Vec<BagMessage>, RosbagError> {
         count: samples,
     };
     Ok(vec![
-        encode(RosTopic::Strokes, ns, &stroke)?,
-        encode(RosTopic::Verdicts, ns, &verdict)?,
+        RosMessage::Stroke(stroke),
+        RosMessage::Verdict(verdict),
     ])
 }
 
@@ -287,24 +283,24 @@ fn report(f: &Fields<'_>, ns: u64) -> Result<MissionReport, RosbagError> {
 }
 
 /// The ROS 2 messages of one JSON message of the log.
-fn json(m: &LoggedMessage, v: &Value, topic: JsonTopic) -> Result<Vec<BagMessage>, RosbagError> {
+fn json(m: &LoggedMessage, v: &Value, topic: JsonTopic) -> Result<Vec<RosMessage>, RosbagError> {
     let (f, ns) = (Fields { m, v }, m.log_time_ns);
     let msg = match topic {
         JsonTopic::ArmPose => return arm_pose(&f, ns),
         JsonTopic::Verdict => return pass(&f, ns),
-        JsonTopic::Tactile => encode(RosTopic::Tactile, ns, &sample(&f, ns)?)?,
-        JsonTopic::Slide => encode(RosTopic::StrokeSamples, ns, &sample(&f, ns)?)?,
-        JsonTopic::Feeling => encode(RosTopic::Feeling, ns, &feeling(&f, ns)?)?,
-        JsonTopic::Health => encode(RosTopic::Health, ns, &health(&f, ns)?)?,
+        JsonTopic::Tactile => RosMessage::Tactile(sample(&f, ns)?),
+        JsonTopic::Slide => RosMessage::StrokeSample(sample(&f, ns)?),
+        JsonTopic::Feeling => RosMessage::Feeling(feeling(&f, ns)?),
+        JsonTopic::Health => RosMessage::Health(health(&f, ns)?),
         JsonTopic::Status => {
             let status = MissionStatus {
                 header: header(ns, SURFACE_FRAME),
                 stage: f.str("stage")?,
                 detail: f.str("detail")?,
             };
-            encode(RosTopic::Status, ns, &status)?
+            RosMessage::Status(status)
         }
-        JsonTopic::Report => encode(RosTopic::Report, ns, &report(&f, ns)?)?,
+        JsonTopic::Report => RosMessage::Report(report(&f, ns)?),
     };
     Ok(vec![msg])
 }
@@ -314,8 +310,9 @@ fn ros_level(foxglove: i32) -> u8 {
     (foxglove.clamp(1, 5) * 10) as u8
 }
 
-/// The ROS 2 messages of one message of the log (none for the Foxglove-only channels).
-pub fn convert_message(m: &LoggedMessage) -> Result<Vec<BagMessage>, RosbagError> {
+/// The ROS 2 messages of one message of the log (none for the Foxglove-only channels), typed:
+/// what a live node publishes.
+pub fn ros_messages(m: &LoggedMessage) -> Result<Vec<RosMessage>, RosbagError> {
     let ns = m.log_time_ns;
     match &m.payload {
         Payload::Image { format, data } => {
@@ -324,7 +321,7 @@ pub fn convert_message(m: &LoggedMessage) -> Result<Vec<BagMessage>, RosbagError
                 format: format.clone(),
                 data: data.clone(),
             };
-            Ok(vec![encode(RosTopic::Image, ns, &image)?])
+            Ok(vec![RosMessage::Image(image)])
         }
         Payload::Log { level, message } => {
             let log = RosLog {
@@ -336,7 +333,7 @@ pub fn convert_message(m: &LoggedMessage) -> Result<Vec<BagMessage>, RosbagError
                 function: String::new(),
                 line: 0,
             };
-            Ok(vec![encode(RosTopic::Rosout, ns, &log)?])
+            Ok(vec![RosMessage::Log(log)])
         }
         Payload::Json(v) => match JsonTopic::of_topic(&m.topic) {
             Some(topic) => json(m, v, topic),
@@ -344,6 +341,14 @@ pub fn convert_message(m: &LoggedMessage) -> Result<Vec<BagMessage>, RosbagError
         },
         Payload::Decoded | Payload::Unknown => Ok(Vec::new()),
     }
+}
+
+/// The ROS 2 messages of one message of the log, encoded for a bag.
+pub fn convert_message(m: &LoggedMessage) -> Result<Vec<BagMessage>, RosbagError> {
+    ros_messages(m)?
+        .iter()
+        .map(|r| encode(m.log_time_ns, r))
+        .collect()
 }
 
 /// Every ROS 2 message of `log`, in the log's order.

@@ -9,18 +9,25 @@
 //! `tf2_msgs/TFMessage`, `rcl_interfaces/Log`) where one does; and writes them as rosbag2 writes
 //! a bag ([`write_bag`]: the MCAP storage, `ros2msg` schemas, `cdr` channels with their QoS, and
 //! `metadata.yaml`). The topics and their QoS are in [`RosTopic`]; the format is specified in
-//! `crates/rosbag/docs/ros2.md`.
+//! `crates/rosbag/docs/ros2.md`. Feature `live`: the same messages published on ROS 2 topics over
+//! DDS while a mission runs (`LiveRos2`, ros2-client).
 
 mod convert;
 mod error;
+#[cfg(feature = "live")]
+mod live;
+mod message;
 pub mod msgs;
 mod topics;
 mod write;
 
 pub use convert::{
-    convert, convert_message, BagMessage, CAMERA_FRAME, FINGER_FRAME, SURFACE_FRAME,
+    convert, convert_message, ros_messages, BagMessage, CAMERA_FRAME, FINGER_FRAME, SURFACE_FRAME,
 };
 pub use error::RosbagError;
+#[cfg(feature = "live")]
+pub use live::{LiveError, LiveRos2};
+pub use message::RosMessage;
 pub use topics::{qos_yaml, Qos, RosTopic, EVENTS, LATCHED, LATCHED_ALL, STREAM};
 pub use write::{metadata_yaml, write_bag, BagSummary, METADATA_VERSION};
 

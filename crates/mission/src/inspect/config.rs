@@ -115,6 +115,15 @@ impl InspectConfig {
         self.print_check.check()?;
         self.judge.check()?;
         self.pieces.check()?;
+        #[cfg(feature = "ros2")]
+        if let (Some(domain), false) = (self.output.ros2_domain, self.output.mcap) {
+            return Err(MissionError::Setting {
+                field: "output.ros2_domain",
+                value: f64::from(domain),
+                allowed:
+                    "only with the log on (output.mcap = true): the live topics are its messages",
+            });
+        }
         Ok(CheckedConfig(self.clone()))
     }
 

@@ -101,6 +101,7 @@ pub(crate) const COMMENTS: &[(&str, &str)] = &[
     ("output.out_dir", "The mission's folder: report.json, frame.png, one CSV per pass, mission.mcap."),
     ("output.mcap", "Write mission.mcap, the log Foxglove opens."),
     ("output.foxglove", "Serve the log live over the Foxglove WebSocket protocol on this address (feature foxglove)."),
+    ("output.ros2_domain", "Publish the log's messages live on ROS 2 topics over DDS on this domain (feature ros2)."),
 ];
 
 /// The top-level sections in the order a mission uses them.
@@ -219,6 +220,7 @@ mod tests {
             "plan.planner.start_mm",
             "plan.planner.raised_pass",
             "output.foxglove",
+            "output.ros2_domain",
         ];
         let stale: Vec<&str> = COMMENTS
             .iter()

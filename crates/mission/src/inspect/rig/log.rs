@@ -35,6 +35,9 @@ pub(crate) struct MissionLog {
     surface_to_image: Option<[[f64; 3]; 3]>,
     /// The first error met while logging (reported when the log is finished).
     failed: Option<crackbot_mcap::LogError>,
+    /// The same messages live on ROS 2 topics (`OutputConfig::ros2_domain`).
+    #[cfg(feature = "ros2")]
+    ros2: Option<super::ros2::Ros2Tap>,
 }
 
 impl MissionLog {
@@ -62,11 +65,18 @@ impl MissionLog {
             tracing::info!("Foxglove live view on ws://{at}");
             writer.log(0.0, LogLevel::Info, &format!("live view on ws://{at}"));
         }
+        #[cfg(feature = "ros2")]
+        let ros2 = match config.ros2_domain {
+            Some(domain) => Some(super::ros2::Ros2Tap::open(domain)?),
+            None => None,
+        };
         Ok(Some(MissionLog {
             writer,
             t0,
             surface_to_image: None,
             failed: None,
+            #[cfg(feature = "ros2")]
+            ros2,
         }))
     }
 
@@ -79,18 +89,33 @@ impl MissionLog {
         if let Err(e) = self.writer.json(topic, t_s, value) {
             self.failed.get_or_insert(e);
         }
+        #[cfg(feature = "ros2")]
+        if let (Some(tap), Ok(v)) = (&mut self.ros2, serde_json::to_value(value)) {
+            let ns = self.writer.ns(t_s);
+            tap.tap(topic.topic(), ns, crackbot_mcap::Payload::Json(v));
+        }
     }
 
     fn sample(&mut self, topic: JsonTopic, m: &SampleMessage) {
-        if let Err(e) = self.writer.sample(topic, m) {
-            self.failed.get_or_insert(e);
+        self.json(topic, m.t_s, m);
+    }
+
+    /// A log line at `t_s`.
+    fn line(&mut self, t_s: f64, level: LogLevel, text: &str) {
+        self.writer.log(t_s, level, text);
+        #[cfg(feature = "ros2")]
+        if let Some(tap) = &mut self.ros2 {
+            let payload = crackbot_mcap::Payload::Log {
+                level: level.foxglove_level(),
+                message: text.to_string(),
+            };
+            tap.tap("/log", self.writer.ns(t_s), payload);
         }
     }
 
     fn stage(&mut self, stage: &str, detail: String) {
         let t = self.now_s();
-        self.writer
-            .log(t, LogLevel::Info, &format!("{stage}: {detail}"));
+        self.line(t, LogLevel::Info, &format!("{stage}: {detail}"));
         self.json(JsonTopic::Status, t, &Status { stage, detail });
     }
 
@@ -145,7 +170,7 @@ impl MissionLog {
                 let t = self.now_s();
                 self.json(JsonTopic::Verdict, t, pass.as_ref());
                 let text = format!("slide {} ({done}/{of}): {class}", pass.id);
-                self.writer.log(t, LogLevel::Info, &text);
+                self.line(t, LogLevel::Info, &text);
             }
         }
     }
@@ -154,10 +179,20 @@ impl MissionLog {
         self.surface_to_image = Some(f.surface_to_image);
         let t = self.now_s();
         match std::fs::read(&f.path) {
-            Ok(png) => self.writer.frame(t, &png),
+            Ok(png) => {
+                self.writer.frame(t, &png);
+                #[cfg(feature = "ros2")]
+                if let Some(tap) = &mut self.ros2 {
+                    let payload = crackbot_mcap::Payload::Image {
+                        format: "png".into(),
+                        data: png,
+                    };
+                    tap.tap("/camera/image", self.writer.ns(t), payload);
+                }
+            }
             Err(e) => {
                 let text = format!("the frame {}: {e}", f.path);
-                self.writer.log(t, LogLevel::Warning, &text);
+                self.line(t, LogLevel::Warning, &text);
             }
         }
         self.stage("perceiving", format!("frame {}×{}", f.width, f.height));
@@ -240,7 +275,7 @@ impl MissionLog {
                 self.stage("finished", format!("{n} cracks reported"));
             }
             Err(e) => {
-                self.writer.log(t, LogLevel::Error, &e.to_string());
+                self.line(t, LogLevel::Error, &e.to_string());
                 self.json(
                     JsonTopic::Status,
                     t,
@@ -253,6 +288,14 @@ impl MissionLog {
         }
         let failed = self.failed.take();
         self.writer.finish()?;
+        #[cfg(feature = "ros2")]
+        if let Some(tap) = self.ros2.take() {
+            // Reliable readers get the report and the last status before the node goes.
+            std::thread::sleep(super::ros2::LINGER);
+            if tap.failed() > 0 {
+                tracing::warn!("ROS 2 live topics: {} messages not published", tap.failed());
+            }
+        }
         match failed {
             Some(e) => Err(e.into()),
             None => Ok(()),

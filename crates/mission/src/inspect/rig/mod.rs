@@ -20,6 +20,8 @@ pub(crate) mod hover;
 pub(crate) mod live;
 pub(crate) mod log;
 pub(crate) mod recording;
+#[cfg(feature = "ros2")]
+pub(crate) mod ros2;
 pub(crate) mod sensor;
 pub(crate) mod settings;
 #[cfg(feature = "sim")]

@@ -157,6 +157,11 @@ pub struct OutputConfig {
     #[cfg(feature = "foxglove")]
     #[serde(default)]
     pub foxglove: Option<SocketAddr>,
+    /// Publish the log's messages live on ROS 2 topics over DDS on this domain (the feature
+    /// `ros2`; `crates/rosbag/docs/ros2.md`). `None`: none. Needs the log ([`mcap`](Self::mcap)).
+    #[cfg(feature = "ros2")]
+    #[serde(default)]
+    pub ros2_domain: Option<u16>,
 }
 
 impl OutputConfig {
@@ -167,6 +172,8 @@ impl OutputConfig {
             mcap: true,
             #[cfg(feature = "foxglove")]
             foxglove: None,
+            #[cfg(feature = "ros2")]
+            ros2_domain: None,
         }
     }
 }
