@@ -16,100 +16,14 @@ import argparse
 import json
 import sys
 import time
-from dataclasses import dataclass
-
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
-from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import float32, float64, int32, sequence, uint8, uint16, uint32, uint64
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 
-@dataclass
-class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: int32
-    nanosec: uint32
-
-@dataclass
-class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time
-    frame_id: str
-
-@dataclass
-class Point(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
-    x: float64
-    y: float64
-    z: float64
-
-@dataclass
-class TactileSample(IdlStruct, typename="crackbot_msgs::msg::dds_::TactileSample_"):
-    header: Header
-    d1: uint16
-    d2: uint16
-    d3: uint16
-    p: uint16
-    slide: uint32
-    along_mm: float64
-
-@dataclass
-class Verdict(IdlStruct, typename="crackbot_msgs::msg::dds_::Verdict_"):
-    header: Header
-    kind: uint8
-    stroke: uint32
-    candidate: uint32
-    surface: str
-    confidence: float64
-    width_mm: float64
-    count: uint32
-
-@dataclass
-class Stroke(IdlStruct, typename="crackbot_msgs::msg::dds_::Stroke_"):
-    header: Header
-    id: uint32
-    candidate: uint32
-    start: Point
-    end: Point
-    samples: uint32
-    recording: str
-
-@dataclass
-class MissionStatus(IdlStruct, typename="crackbot_msgs::msg::dds_::MissionStatus_"):
-    header: Header
-    stage: str
-    detail: str
-
-@dataclass
-class Candidate(IdlStruct, typename="crackbot_msgs::msg::dds_::Candidate_"):
-    id: uint32
-    centre: Point
-    axis_deg: float64
-    length_mm: float64
-    width_mm: float64
-    score: float32
-
-@dataclass
-class Crack(IdlStruct, typename="crackbot_msgs::msg::dds_::Crack_"):
-    candidate: uint32
-    position: Point
-    width_mm: float64
-    width_low_mm: float64
-    width_high_mm: float64
-    confidence: float64
-
-@dataclass
-class MissionReport(IdlStruct, typename="crackbot_msgs::msg::dds_::MissionReport_"):
-    header: Header
-    mode: str
-    scene: str
-    candidates: sequence[Candidate]
-    cracks: sequence[Crack]
-    rejected: uint32
-    passes: uint32
-    elapsed_s: float64
-    exploration_s: float64
-    report_json: str
+from ros2_idl import Header, MissionReport, MissionStatus, Stroke, TactileSample, Verdict
 
 
 def ns(h: Header) -> int:

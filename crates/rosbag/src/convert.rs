@@ -11,9 +11,9 @@ use serde_json::Value;
 use crate::error::RosbagError;
 use crate::message::RosMessage;
 use crate::msgs::{
-    Candidate, CompressedImage, Crack, Header, MissionReport, MissionStatus, Point, PoseStamped,
-    RosLog, StreamHealth, Stroke, TactileSample, TfMessage, Time, TransformStamped, Verdict,
-    IDENTITY, KIND_PASS, KIND_RUNNING,
+    Candidate, CompressedImage, Crack, Header, MissionReport, MissionStatus, Point, Pose,
+    PoseStamped, RosLog, StreamHealth, Stroke, TactileSample, TfMessage, Time, Transform,
+    TransformStamped, Verdict, IDENTITY, KIND_PASS, KIND_RUNNING,
 };
 use crate::topics::RosTopic;
 
@@ -153,15 +153,19 @@ fn arm_pose(f: &Fields<'_>, ns: u64) -> Result<Vec<RosMessage>, RosbagError> {
     let at = Point::from_mm([f.f64("x_mm")?, f.f64("y_mm")?, f.f64("z_mm")?]);
     let pose = PoseStamped {
         header: header(ns, SURFACE_FRAME),
-        position: at,
-        orientation: IDENTITY,
+        pose: Pose {
+            position: at,
+            orientation: IDENTITY,
+        },
     };
     let tf = TfMessage {
         transforms: vec![TransformStamped {
             header: header(ns, SURFACE_FRAME),
             child_frame_id: FINGER_FRAME.into(),
-            translation: at,
-            rotation: IDENTITY,
+            transform: Transform {
+                translation: at,
+                rotation: IDENTITY,
+            },
         }],
     };
     Ok(vec![RosMessage::ArmPose(pose), RosMessage::Tf(tf)])

@@ -1,14 +1,15 @@
-//! The ROS 2 messages a bag holds, as CDR-serialisable types (fields in their `.msg` order), and
-//! each type's definition as rosbag2 embeds it (`ros2msg`: the type's own text, then every type
+//! The ROS 2 messages crackbot speaks (a bag's, the live topics', the ROS 2 arm's), as serde
+//! types whose fields follow the `.msg` definitions in order (CDR encodes by order), and
+//! each written type's definition as rosbag2 embeds it (`ros2msg`: the type's own text, then every type
 //! it uses, each once, after a line of 80 `=` and `MSG: package/Type`).
 //!
 //! crackbot's own types are read from `ros/crackbot_msgs/msg/` (the interface package a ROS 2
 //! workspace builds), so the bag and the package cannot disagree.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// `builtin_interfaces/Time`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct Time {
     /// Seconds since the Unix epoch.
     pub sec: i32,
@@ -25,10 +26,21 @@ impl Time {
             nanosec: (ns % 1_000_000_000) as u32,
         }
     }
+
+    /// The wall clock now (ROS time).
+    pub fn now() -> Self {
+        let d = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        Time {
+            sec: i32::try_from(d.as_secs()).unwrap_or(i32::MAX),
+            nanosec: d.subsec_nanos(),
+        }
+    }
 }
 
 /// `std_msgs/Header`.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct Header {
     /// When.
     pub stamp: Time,
@@ -37,7 +49,7 @@ pub struct Header {
 }
 
 /// `geometry_msgs/Point` (and `Vector3`: the same fields), m.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Point {
     /// x, m.
     pub x: f64,
@@ -59,7 +71,7 @@ impl Point {
 }
 
 /// `geometry_msgs/Quaternion`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Quaternion {
     /// x.
     pub x: f64,
@@ -79,35 +91,67 @@ pub const IDENTITY: Quaternion = Quaternion {
     w: 1.0,
 };
 
-/// `geometry_msgs/PoseStamped` (a `Pose` of a `Point` and a `Quaternion`, inline).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct PoseStamped {
-    /// When and where.
-    pub header: Header,
+/// `geometry_msgs/Pose`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Pose {
     /// Position, m.
     pub position: Point,
     /// Orientation.
     pub orientation: Quaternion,
 }
 
-/// `geometry_msgs/TransformStamped` (its `Transform`: a `Vector3` and a `Quaternion`, inline).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct TransformStamped {
-    /// When, and the parent frame.
+/// `geometry_msgs/PoseStamped`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct PoseStamped {
+    /// When and where.
     pub header: Header,
-    /// The child frame.
-    pub child_frame_id: String,
+    /// The pose.
+    pub pose: Pose,
+}
+
+/// `geometry_msgs/Transform`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Transform {
     /// Translation, m.
     pub translation: Point,
     /// Rotation.
     pub rotation: Quaternion,
 }
 
+/// `geometry_msgs/TransformStamped`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct TransformStamped {
+    /// When, and the parent frame.
+    pub header: Header,
+    /// The child frame.
+    pub child_frame_id: String,
+    /// The child in the parent.
+    pub transform: Transform,
+}
+
 /// `tf2_msgs/TFMessage`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct TfMessage {
     /// The transforms.
     pub transforms: Vec<TransformStamped>,
+}
+
+/// `geometry_msgs/Wrench`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Wrench {
+    /// N.
+    pub force: Point,
+    /// N·m.
+    pub torque: Point,
+}
+
+/// `geometry_msgs/WrenchStamped`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct WrenchStamped {
+    /// Stamp and frame.
+    pub header: Header,
+    /// The wrench.
+    pub wrench: Wrench,
 }
 
 /// `sensor_msgs/CompressedImage`.

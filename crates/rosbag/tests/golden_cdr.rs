@@ -96,8 +96,10 @@ fn a_transform_an_image_and_a_log_line() {
         transforms: vec![TransformStamped {
             header: header(7, 8, "surface"),
             child_frame_id: "finger".into(),
-            translation: point(0.1, 0.2, 0.003),
-            rotation: IDENTITY,
+            transform: Transform {
+                translation: point(0.1, 0.2, 0.003),
+                rotation: IDENTITY,
+            },
         }],
     };
     assert_eq!(

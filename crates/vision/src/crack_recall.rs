@@ -105,15 +105,7 @@ impl CrackRecallEvaluator {
         width: usize,
         height: usize,
     ) -> Result<(), VisionError> {
-        for (what, got) in [("the crack map", prob.len()), ("the mask", truth.len())] {
-            if got != width * height {
-                return Err(VisionError::Shape {
-                    what,
-                    got,
-                    expected: width * height,
-                });
-            }
-        }
+        crate::error::check_sizes(prob.len(), truth.len(), width, height)?;
         let (label, n) = label_pieces(truth, width, height);
         let mut line = truth.to_vec();
         crackbot_imaging::thinning::thin(&mut line, width);

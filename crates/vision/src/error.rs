@@ -164,3 +164,22 @@ impl From<crackbot_imaging::ImagingError> for VisionError {
         }
     }
 }
+
+/// Refuses a crack map of `prob` or a mask of `truth` values that is not `width × height`.
+pub(crate) fn check_sizes(
+    prob: usize,
+    truth: usize,
+    width: usize,
+    height: usize,
+) -> Result<(), VisionError> {
+    for (what, got) in [("the crack map", prob), ("the mask", truth)] {
+        if got != width * height {
+            return Err(VisionError::Shape {
+                what,
+                got,
+                expected: width * height,
+            });
+        }
+    }
+    Ok(())
+}

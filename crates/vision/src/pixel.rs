@@ -166,16 +166,7 @@ impl PixelEvaluator {
         width: usize,
         height: usize,
     ) -> Result<(), VisionError> {
-        for (what, got) in [("the crack map", prob.len()), ("the mask", truth.len())] {
-            if got != width * height {
-                let expected = width * height;
-                return Err(VisionError::Shape {
-                    what,
-                    got,
-                    expected,
-                });
-            }
-        }
+        crate::error::check_sizes(prob.len(), truth.len(), width, height)?;
         if let Some(v) = prob
             .iter()
             .find(|v| !(v.is_finite() && (0.0..=1.0).contains(*v)))

@@ -4,7 +4,7 @@
 //!
 //! * [`config`]: the ROS 2 configuration file (topics, frames, rates, tolerances).
 //! * [`site`]: the arm's limits and the registered surface, from the site file.
-//! * [`msgs`]: the ROS 2 messages as serde structs.
+//! * `msgs` (feature `ros2`): the ROS 2 messages as serde structs (`crackbot_rosbag::msgs`).
 //! * `dds` and [`Ros2Arm`] (feature `ros2`): the DDS node (ros2-client on RustDDS, no ROS
 //!   installation) driving [`crate::motion::cartesian::CartesianArm`] as an [`crate::Arm`];
 //!   `touch`: guarded touches for registering the plate.
@@ -12,7 +12,9 @@
 pub mod config;
 #[cfg(feature = "ros2")]
 mod dds;
-pub mod msgs;
+/// The ROS 2 messages, shared with the mission's bags and live topics (`crackbot-rosbag`).
+#[cfg(feature = "ros2")]
+pub use crackbot_rosbag::msgs;
 pub mod site;
 #[cfg(feature = "ros2")]
 mod touch;
