@@ -313,7 +313,7 @@ impl Component {
 }
 
 /// Binary dilation by a disk of radius `r` cells (offsets with `dx² + dy² ≤ r²`).
-fn dilate(mask: &[bool], rows: usize, cols: usize, r: usize) -> Vec<bool> {
+pub(crate) fn dilate(mask: &[bool], rows: usize, cols: usize, r: usize) -> Vec<bool> {
     let r = r as isize;
     let offsets: Vec<(isize, isize)> = (-r..=r)
         .flat_map(|dy| (-r..=r).map(move |dx| (dy, dx)))
@@ -337,7 +337,7 @@ fn dilate(mask: &[bool], rows: usize, cols: usize, r: usize) -> Vec<bool> {
 }
 
 /// 8-connected components, labelled `1..` in raster order of their first cell (0: background).
-fn label_components(mask: &[bool], rows: usize, cols: usize) -> Vec<u32> {
+pub(crate) fn label_components(mask: &[bool], rows: usize, cols: usize) -> Vec<u32> {
     let mut labels = vec![0u32; mask.len()];
     let mut next = 0u32;
     let mut stack = Vec::new();

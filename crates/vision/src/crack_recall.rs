@@ -42,57 +42,11 @@ pub struct CrackRecallEvaluator {
     specks: usize,
 }
 
-/// Each pixel's 8-connected piece of `mask` (`0`: background; pieces from 1), and their count.
-fn label_pieces(mask: &[bool], width: usize, height: usize) -> (Vec<u32>, u32) {
-    let mut label = vec![0u32; mask.len()];
-    let mut n = 0;
-    let mut stack = Vec::new();
-    for start in 0..mask.len() {
-        if !mask[start] || label[start] != 0 {
-            continue;
-        }
-        n += 1;
-        label[start] = n;
-        stack.push(start);
-        while let Some(i) = stack.pop() {
-            let (x, y) = ((i % width) as isize, (i / width) as isize);
-            for (dx, dy) in crackbot_imaging::thinning::NEIGHBOUR_OFFSETS {
-                let (xx, yy) = (x + dx, y + dy);
-                if xx < 0 || yy < 0 || xx as usize >= width || yy as usize >= height {
-                    continue;
-                }
-                let j = yy as usize * width + xx as usize;
-                if mask[j] && label[j] == 0 {
-                    label[j] = n;
-                    stack.push(j);
-                }
-            }
-        }
-    }
-    (label, n)
-}
-
-/// Whether the map reaches [`MAP_THRESHOLD`] within [`TOLERANCE_PX`] of each pixel.
+/// Whether the map reaches [`MAP_THRESHOLD`] within [`TOLERANCE_PX`] of each pixel: the
+/// thresholded map dilated by that disk (the crack map's own dilation).
 fn covered(prob: &[f32], width: usize, height: usize) -> Vec<bool> {
-    let r = TOLERANCE_PX.floor() as isize;
-    let disk: Vec<(isize, isize)> = (-r..=r)
-        .flat_map(|dy| (-r..=r).map(move |dx| (dx, dy)))
-        .filter(|&(dx, dy)| ((dx * dx + dy * dy) as f64) <= TOLERANCE_PX * TOLERANCE_PX)
-        .collect();
-    let mut out = vec![false; prob.len()];
-    for (i, p) in prob.iter().enumerate() {
-        if *p < MAP_THRESHOLD {
-            continue;
-        }
-        let (x, y) = ((i % width) as isize, (i / width) as isize);
-        for &(dx, dy) in &disk {
-            let (xx, yy) = (x + dx, y + dy);
-            if xx >= 0 && yy >= 0 && (xx as usize) < width && (yy as usize) < height {
-                out[yy as usize * width + xx as usize] = true;
-            }
-        }
-    }
-    out
+    let hot: Vec<bool> = prob.iter().map(|p| *p >= MAP_THRESHOLD).collect();
+    crate::crack_map::dilate(&hot, height, width, TOLERANCE_PX.floor() as usize)
 }
 
 impl CrackRecallEvaluator {
@@ -106,7 +60,8 @@ impl CrackRecallEvaluator {
         height: usize,
     ) -> Result<(), VisionError> {
         crate::error::check_sizes(prob.len(), truth.len(), width, height)?;
-        let (label, n) = label_pieces(truth, width, height);
+        let label = crate::crack_map::label_components(truth, height, width);
+        let n = label.iter().copied().max().unwrap_or(0);
         let mut line = truth.to_vec();
         crackbot_imaging::thinning::thin(&mut line, width);
         let near = covered(prob, width, height);
